@@ -1,0 +1,127 @@
+#include "commands.hpp"
+
+#include <cstdio>
+#include <iostream>
+
+#include "prt/bake_file.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/progress.hpp"
+
+#ifndef PRT_SOURCE_DIR
+#define PRT_SOURCE_DIR "."
+#endif
+
+namespace prt::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+void print_times(const StageTimes& times) { std::cout << "timings:\n" << times.table(); }
+
+std::string describe_shape(Eigen::Index rows, Eigen::Index cols) {
+  return std::to_string(rows) + " x " + std::to_string(cols);
+}
+
+}  // namespace
+
+int bake(Context& context, const BakeArgs& args) {
+  Stopwatch clock;
+  const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  StageTimes times;
+  times.add("parse + validate scene", clock.seconds());
+  const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
+  BakeData data = bake(scene, context.registry, {context.quiet}, times);
+  clock = Stopwatch();
+  write_bake(output, data);
+  times.add("write bake file", clock.seconds());
+  std::cout << "baked " << data.mesh.vertex_count() << " vertices x "
+            << data.transfer.dimension() << " coefficients (" << data.basis.name << ", "
+            << data.transport << ") -> " << output.string() << "\n"
+            << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
+  print_times(times);
+  return 0;
+}
+
+int render(Context& context, const RenderArgs& args) {
+  Stopwatch clock;
+  const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  StageTimes times;
+  times.add("parse + validate scene", clock.seconds());
+  const fs::path output = args.output.empty() ? scene.image_path() : fs::path(args.output);
+  const fs::path bake_file = args.bake.empty() ? scene.bake_path() : fs::path(args.bake);
+
+  Rendered result;
+  if (args.ground_truth) {
+    const Mesh mesh = scene.load_mesh();
+    result = render_ground_truth(scene, mesh, context.registry, {context.quiet}, times);
+  } else {
+    clock = Stopwatch();
+    const BakeData data = read_bake(bake_file);
+    times.add("read bake file", clock.seconds());
+    result = render(scene, data, context.registry, times);
+    if (args.compare) {
+      const Rendered truth =
+          render_ground_truth(scene, data.mesh, context.registry, {context.quiet}, times);
+      const ErrorStats e = vertex_error(result.vertex_radiance, truth.vertex_radiance);
+      std::printf(
+          "error against ground truth (%lld samples/vertex): RMS per vertex %.6g (relative %.4f),"
+          " 99th percentile %.6g, max %.6g\n",
+          static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms,
+          e.p99, e.max);
+    }
+  }
+  clock = Stopwatch();
+  write_png(result.image, output, args.exposure);
+  times.add("write PNG", clock.seconds());
+  std::cout << "rendered " << result.image.width << " x " << result.image.height << " -> "
+            << output.string() << "\n";
+  print_times(times);
+  return 0;
+}
+
+int info(const std::string& file) {
+  const BakeData data = read_bake(file);
+  const CompressedTransfer& c = data.compressed;
+  std::cout << "bake file:    " << file << " (format version " << kBakeFormatVersion << ")\n"
+            << "scene:        " << data.scene_file << "\n"
+            << "mesh:         " << data.mesh.vertex_count() << " vertices, "
+            << data.mesh.triangle_count() << " triangles\n"
+            << "transport:    " << data.transport << "\n"
+            << "basis:        " << data.basis.name << " " << data.basis.version << " ("
+            << data.basis.parameters.substr(0, data.basis.parameters.size() ? data.basis.parameters.size() - 1 : 0)
+            << ")\n"
+            << "transfer:     " << data.transfer.kind << ", "
+            << describe_shape(data.transfer.vertices(), data.transfer.dimension()) << "\n"
+            << "compressor:   " << data.compressor.name << " " << data.compressor.version
+            << ": " << c.clusters() << " cluster(s), " << c.components
+            << " component(s), " << c.stored_floats() << " floats stored\n"
+            << "albedo:       " << data.albedo.transpose() << "\n"
+            << "metrics:\n";
+  for (const auto& [name, value] : data.metrics) std::cout << "  " << name << " = " << value << "\n";
+  return 0;
+}
+
+int plugins(Context& context) {
+  for (const auto& p : context.registry.plugins()) {
+    std::cout << to_string(p.kind()) << " " << p.name() << " " << p.info.version << "  ("
+              << p.file.string() << ")\n    " << p.info.description << "\n";
+    for (const auto& spec : p.schema().specs) {
+      std::cout << "    " << spec.name << " : " << to_string(spec.type);
+      if (spec.default_value[0]) std::cout << " = " << spec.default_value;
+      if (spec.type == ParamType::integer || spec.type == ParamType::real)
+        std::cout << "  in [" << spec.min << ", " << spec.max << "]";
+      if (spec.choices[0]) std::cout << "  one of " << spec.choices;
+      std::cout << "  -- " << spec.help << "\n";
+    }
+  }
+  return 0;
+}
+
+int demo(Context& context, const DemoArgs& args) {
+  const std::string scene =
+      args.scene.empty() ? std::string(PRT_SOURCE_DIR) + "/scenes/bunny.toml" : args.scene;
+  if (int code = bake(context, {scene, ""})) return code;
+  return render(context, {scene, "", "", false, false, 1.0f});
+}
+
+}  // namespace prt::cli

@@ -1,0 +1,36 @@
+// The prt command-line tool's subcommands. Each returns the process exit code;
+// errors are thrown as prt::Error and reported by main.
+#pragma once
+#include <string>
+
+#include "prt/registry.hpp"
+
+namespace prt::cli {
+
+// Owned by main: the plug-in registry and global options.
+struct Context {
+  PluginRegistry registry;
+  bool quiet = false;
+};
+
+struct BakeArgs {
+  std::string scene, output;
+};
+int bake(Context& context, const BakeArgs& args);
+
+struct RenderArgs {
+  std::string scene, bake, output;
+  bool ground_truth = false, compare = false;
+  float exposure = 1.0f;
+};
+int render(Context& context, const RenderArgs& args);
+
+int info(const std::string& bake_file);
+int plugins(Context& context);
+
+struct DemoArgs {
+  std::string scene;
+};
+int demo(Context& context, const DemoArgs& args);
+
+}  // namespace prt::cli

@@ -1,0 +1,56 @@
+// prt: bake, render and inspect precomputed radiance transfer.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "commands.hpp"
+#include "prt/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"prt: precomputed radiance transfer with plug-in bases, compressors and renderers"};
+  app.require_subcommand(1);
+  bool quiet = false;
+  app.add_flag("-q,--quiet", quiet, "no progress bars");
+
+  prt::cli::BakeArgs bake;
+  auto* bake_cmd = app.add_subcommand("bake", "trace, project and compress a scene's transfer");
+  bake_cmd->add_option("scene", bake.scene, "scene description (.toml)")->required();
+  bake_cmd->add_option("-o,--output", bake.output, "bake file (default: from the scene)");
+
+  prt::cli::RenderArgs render;
+  auto* render_cmd = app.add_subcommand("render", "relight a bake and write an image");
+  render_cmd->add_option("scene", render.scene, "scene description (.toml)")->required();
+  render_cmd->add_option("-b,--bake", render.bake, "bake file (default: from the scene)");
+  render_cmd->add_option("-o,--output", render.output, "PNG image (default: from the scene)");
+  render_cmd->add_flag("--ground-truth", render.ground_truth,
+                       "render the Monte Carlo ground truth instead of the bake");
+  render_cmd->add_flag("--compare", render.compare,
+                       "also compute the ground truth and print per-vertex RMS error");
+  render_cmd->add_option("--exposure", render.exposure, "exposure scale of the PNG")
+      ->check(CLI::PositiveNumber);
+
+  std::string info_file;
+  auto* info_cmd = app.add_subcommand("info", "print a bake file's contents");
+  info_cmd->add_option("bake", info_file, "bake file (.h5)")->required();
+
+  auto* plugins_cmd =
+      app.add_subcommand("plugins", "list plug-ins: kind, name, version, parameters");
+
+  prt::cli::DemoArgs demo;
+  auto* demo_cmd = app.add_subcommand("demo", "bake and render the default scene");
+  demo_cmd->add_option("scene", demo.scene, "scene (default: scenes/bunny.toml)");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    prt::cli::Context context{prt::PluginRegistry(prt::PluginRegistry::default_directories()),
+                              quiet};
+    if (*bake_cmd) return prt::cli::bake(context, bake);
+    if (*render_cmd) return prt::cli::render(context, render);
+    if (*info_cmd) return prt::cli::info(info_file);
+    if (*plugins_cmd) return prt::cli::plugins(context);
+    if (*demo_cmd) return prt::cli::demo(context, demo);
+  } catch (const std::exception& e) {
+    std::cerr << "prt: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

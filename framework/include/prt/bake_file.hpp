@@ -1,0 +1,42 @@
+// HDF5 bake files: one file per bake, written atomically (temp + rename) and
+// refused with a clear message when damaged or of another format version.
+#pragma once
+#include <Eigen/Core>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+
+#include "prt/basis.hpp"
+#include "prt/mesh.hpp"
+#include "prt/transfer.hpp"
+
+namespace prt {
+
+constexpr int kBakeFormatVersion = 1;
+
+struct PluginRecord {
+  std::string name, version, parameters;
+};
+
+struct BakeData {
+  std::string scene_file, scene_text;
+  PluginRecord basis, compressor;
+  std::string transport;  // e.g. "fibonacci 1024 shadowed seed=1"
+  Mesh mesh;
+  Eigen::Vector3f albedo{1, 1, 1};
+  TransferSignal transfer;
+  CompressedTransfer compressed;
+  BasisState basis_state;
+  std::map<std::string, double> metrics;  // timings (s), squared error, ...
+};
+
+void write_bake(const std::filesystem::path& file, const BakeData& data);
+BakeData read_bake(const std::filesystem::path& file);
+
+// Writes through a temporary file in the same folder and renames it into
+// place only after `write` returns; on any exception the temporary is removed.
+void write_atomically(const std::filesystem::path& file,
+                      const std::function<void(const std::filesystem::path&)>& write);
+
+}  // namespace prt

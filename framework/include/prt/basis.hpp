@@ -1,0 +1,53 @@
+// The basis interface: a set of functions over the sphere (or hemisphere).
+#pragma once
+#include <Eigen/Core>
+#include <map>
+#include <string>
+
+#include "prt/direction_set.hpp"
+#include "prt/plugin.hpp"
+
+namespace prt {
+
+enum class Domain { sphere, hemisphere };
+
+// Fitted state of a data-driven basis, stored in the bake file.
+struct BasisState {
+  std::map<std::string, Eigen::MatrixXd> matrices;
+};
+
+class Basis : public PluginObject {
+ public:
+  static constexpr PluginKind plugin_kind = PluginKind::basis;
+
+  // Number of coefficients.
+  virtual int size() const = 0;
+  virtual Domain domain() const { return Domain::sphere; }
+  // True if the basis is orthonormal over its domain (checked by conformance tests).
+  virtual bool orthonormal() const = 0;
+
+  // Basis values at the directions: s x size().
+  virtual Eigen::MatrixXd evaluate(const Directions& directions) const = 0;
+
+  // The s x size() matrix P with coefficients = samples * P for functions
+  // sampled on `set` (one row per function). Default: diag(weights) * evaluate,
+  // the quadrature of an orthonormal basis. Least-squares bases override it.
+  virtual Eigen::MatrixXd projection_matrix(const DirectionSet& set) const;
+
+  // Projects a batch of functions sampled on `set` (m x s) to m x size().
+  Eigen::MatrixXd project(const Eigen::MatrixXd& samples, const DirectionSet& set) const;
+
+  // Capability: rotation of coefficient vectors. rotation_matrix(R) returns the
+  // size() x size() matrix that maps coefficients of f to those of f(R^T .).
+  virtual bool can_rotate() const { return false; }
+  virtual Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& rotation) const;
+
+  // Capability: fitting to data (data-driven bases such as eigentransport).
+  virtual bool can_fit() const { return false; }
+
+  // Fitted state, saved to and restored from the bake file.
+  virtual BasisState save() const { return {}; }
+  virtual void load(const BasisState&) {}
+};
+
+}  // namespace prt

@@ -1,0 +1,30 @@
+// Errors thrown by the framework and by plug-ins. Only `main` decides to exit.
+#pragma once
+#include <stdexcept>
+#include <string>
+
+namespace prt {
+
+// Where a value came from: a file and, when known, a line and column.
+struct SourceLocation {
+  std::string file;
+  int line = 0;
+  int column = 0;
+
+  // "file:line:col" (parts that are unknown are left out).
+  std::string str() const;
+};
+
+// An error with an optional source location, printed in compiler style:
+// "scene.toml:14:9: error: basis "sh": unknown parameter ...".
+class Error : public std::runtime_error {
+ public:
+  explicit Error(const std::string& message) : std::runtime_error(message) {}
+  Error(const SourceLocation& where, const std::string& message)
+      : std::runtime_error(format(where, message)) {}
+
+ private:
+  static std::string format(const SourceLocation& where, const std::string& message);
+};
+
+}  // namespace prt

@@ -1,0 +1,26 @@
+// Linear RGB images and PNG output.
+#pragma once
+#include <filesystem>
+#include <vector>
+
+namespace prt {
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> rgb;  // linear, row-major, top row first
+
+  Image() = default;
+  Image(int w, int h) : width(w), height(h), rgb(static_cast<std::size_t>(w) * h * 3, 0.f) {}
+  float* at(int x, int y) { return &rgb[(static_cast<std::size_t>(y) * width + x) * 3]; }
+  const float* at(int x, int y) const {
+    return &rgb[(static_cast<std::size_t>(y) * width + x) * 3];
+  }
+};
+
+// Writes exposure-scaled, sRGB-encoded 8-bit PNG atomically (temp + rename).
+void write_png(const Image& image, const std::filesystem::path& file, float exposure = 1.0f);
+
+// Mean absolute difference of two images of the same size (linear values).
+double mean_absolute_difference(const Image& a, const Image& b);
+
+}  // namespace prt

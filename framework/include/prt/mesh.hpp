@@ -1,0 +1,42 @@
+// Triangle meshes: loaded through OpenMesh (OFF, OBJ, PLY, STL) or generated.
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+struct Mesh {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<Eigen::Vector3f> normals;  // unit length, one per vertex
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::size_t skipped_degenerate_faces = 0;
+
+  std::size_t vertex_count() const { return positions.size(); }
+  std::size_t triangle_count() const { return triangles.size(); }
+  Eigen::Vector3f bounds_min() const;
+  Eigen::Vector3f bounds_max() const;
+
+  // Area-weighted vertex normals from the triangles.
+  void compute_normals();
+  // Throws prt::Error naming the first NaN/Inf coordinate, out-of-range index or
+  // missing normal; `source` is used in the message.
+  void validate(const std::string& source) const;
+};
+
+// Loads a mesh; keeps normals stored in the file, else computes them.
+// Degenerate faces (zero area, repeated vertex) are skipped and counted.
+Mesh load_mesh(const std::filesystem::path& file);
+
+// Generated meshes for tests that need no download.
+Mesh make_sphere(int subdivisions, float radius = 1.0f);  // icosphere, exact normals
+Mesh make_plane(int cells, float size = 2.0f);            // in y = 0, normal +y
+Mesh make_box(float size = 2.0f);                         // closed cube, outward normals
+
+// Builds one of the generated meshes by name ("sphere", "plane", "box").
+Mesh make_generated(const std::string& name, int detail);
+
+}  // namespace prt

@@ -1,0 +1,53 @@
+// The bake and view pipelines composed from a scene: the same code serves the
+// CLI, the tests and the benchmarks.
+#pragma once
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "prt/bake_file.hpp"
+#include "prt/image.hpp"
+#include "prt/registry.hpp"
+#include "prt/scene.hpp"
+
+namespace prt {
+
+// Named wall-clock timings of the stages of one run, in order.
+struct StageTimes {
+  std::vector<std::pair<std::string, double>> stages;
+  void add(const std::string& name, double seconds) { stages.emplace_back(name, seconds); }
+  std::string table() const;
+};
+
+struct RunOptions {
+  bool quiet = false;  // no progress bars
+};
+
+// Mesh -> rays -> projection -> compression. Fills times per stage.
+BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
+              StageTimes& times);
+
+// Checks that `data` was baked with the scene's basis and parameters.
+void check_bake_matches(const BakeData& data, const SceneSpec& scene);
+
+struct Rendered {
+  Image image;
+  Eigen::MatrixX3f vertex_radiance;  // v x 3 including albedo
+};
+
+// Light projection -> per-cluster constants -> per-vertex sums -> image.
+Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
+                StageTimes& times);
+
+// Renders the Monte Carlo ground truth with the scene's renderer.
+Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
+                             const RunOptions& options, StageTimes& times);
+
+// Per-vertex error statistics of `approximation` against `reference` (v x 3).
+struct ErrorStats {
+  double rms = 0, relative_rms = 0, p99 = 0, max = 0;
+};
+ErrorStats vertex_error(const Eigen::MatrixX3f& approximation, const Eigen::MatrixX3f& reference);
+
+}  // namespace prt

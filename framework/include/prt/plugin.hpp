@@ -1,0 +1,158 @@
+// What a plug-in includes to export itself: PRT_EXPORT_PLUGIN(Class, "name").
+//
+// The exported info record is constant data (no pointers, no constructors), so
+// the host reads kind, name, version, build key and parameter schema from the
+// file before it loads any plug-in code. `create` and `destroy` are plain C
+// functions; exceptions from a constructor are caught here and turned into a
+// message, so none crosses the library boundary.
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <cstring>
+#include <exception>
+
+#include "prt/params.hpp"
+#include "prt/plugin_record.hpp"
+
+#define PRT_STRINGIFY_(x) #x
+#define PRT_STRINGIFY(x) PRT_STRINGIFY_(x)
+#if defined(__clang__)
+#define PRT_COMPILER "clang-" PRT_STRINGIFY(__clang_major__)
+#elif defined(__GNUC__)
+#define PRT_COMPILER "gcc-" PRT_STRINGIFY(__GNUC__)
+#else
+#define PRT_COMPILER "unknown"
+#endif
+#ifdef NDEBUG
+#define PRT_BUILD_MODE "release"
+#else
+#define PRT_BUILD_MODE "debug"
+#endif
+// Everything that must agree between host and plug-in for C++ objects and
+// Eigen matrices to cross the boundary safely.
+#define PRT_BUILD_KEY                                                                   \
+  PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(_GLIBCXX_USE_CXX11_ABI) ";eigen=" PRT_STRINGIFY( \
+      EIGEN_WORLD_VERSION) "." PRT_STRINGIFY(EIGEN_MAJOR_VERSION) ";align=" PRT_STRINGIFY(  \
+      EIGEN_MAX_ALIGN_BYTES) ";" PRT_BUILD_MODE
+
+#define PRT_PLUGIN_API __attribute__((visibility("default")))
+
+namespace prt {
+
+// Base of every object a plug-in creates; destroyed only by its own module.
+class PluginObject {
+ public:
+  virtual ~PluginObject() = default;
+};
+
+namespace schema {
+
+constexpr void copy_text(char* dst, std::size_t capacity, const char* src) {
+  std::size_t i = 0;
+  for (; src && src[i] != '\0' && i + 1 < capacity; ++i) dst[i] = src[i];
+  dst[i] = '\0';
+}
+
+constexpr ParamSpecRecord make(const char* name, ParamType type, const char* default_value,
+                               double min, double max, const char* choices, const char* help,
+                               std::uint32_t list_length = 0, bool required = false) {
+  ParamSpecRecord r{};
+  copy_text(r.name, sizeof r.name, name);
+  r.type = type;
+  r.required = required ? 1u : 0u;
+  r.list_length = list_length;
+  r.min = min;
+  r.max = max;
+  copy_text(r.default_value, sizeof r.default_value, default_value);
+  copy_text(r.choices, sizeof r.choices, choices);
+  copy_text(r.help, sizeof r.help, help);
+  return r;
+}
+
+constexpr double kHuge = 1e300;
+
+constexpr ParamSpecRecord integer(const char* name, const char* default_value, double min,
+                                  double max, const char* help) {
+  return make(name, ParamType::integer, default_value, min, max, "", help);
+}
+constexpr ParamSpecRecord real(const char* name, const char* default_value, double min,
+                               double max, const char* help) {
+  return make(name, ParamType::real, default_value, min, max, "", help);
+}
+constexpr ParamSpecRecord boolean(const char* name, const char* default_value, const char* help) {
+  return make(name, ParamType::boolean, default_value, 0, 1, "", help);
+}
+constexpr ParamSpecRecord choice(const char* name, const char* default_value,
+                                 const char* choices, const char* help) {
+  return make(name, ParamType::string, default_value, 0, 0, choices, help);
+}
+constexpr ParamSpecRecord text(const char* name, const char* default_value, const char* help) {
+  return make(name, ParamType::string, default_value, 0, 0, "", help);
+}
+// A file that must exist; relative paths are resolved against the scene file.
+constexpr ParamSpecRecord path(const char* name, bool required, const char* help) {
+  return make(name, ParamType::path, "", 0, 0, "", help, 0, required);
+}
+// A list of reals of a fixed length (0 = any); a single number is broadcast.
+constexpr ParamSpecRecord reals(const char* name, const char* default_value,
+                                std::uint32_t length, double min, double max,
+                                const char* help) {
+  return make(name, ParamType::reals, default_value, min, max, "", help, length);
+}
+
+}  // namespace schema
+
+template <class Plugin>
+constexpr PluginInfoRecord make_plugin_info(const char* name, const char* build_key) {
+  constexpr auto params = Plugin::parameters();
+  static_assert(params.size() <= kMaxParams, "too many parameters for one plug-in");
+  PluginInfoRecord r{};
+  r.abi_version = PRT_ABI_VERSION;
+  r.record_size = sizeof(PluginInfoRecord);
+  r.kind = Plugin::plugin_kind;
+  schema::copy_text(r.name, sizeof r.name, name);
+  schema::copy_text(r.version, sizeof r.version, Plugin::plugin_version);
+  schema::copy_text(r.build_key, sizeof r.build_key, build_key);
+  schema::copy_text(r.description, sizeof r.description, Plugin::plugin_description);
+  r.param_count = static_cast<std::uint32_t>(params.size());
+  for (std::size_t i = 0; i < params.size(); ++i) r.params[i] = params[i];
+  return r;
+}
+
+namespace detail {
+
+inline void write_error(char* buffer, std::size_t size, const char* message) {
+  if (!buffer || size == 0) return;
+  std::strncpy(buffer, message, size - 1);
+  buffer[size - 1] = '\0';
+}
+
+template <class Plugin>
+PluginObject* create_guarded(const Params* params, char* error, std::size_t error_size) noexcept {
+  try {
+    return new Plugin(*params);
+  } catch (const std::exception& e) {
+    write_error(error, error_size, e.what());
+  } catch (...) {
+    write_error(error, error_size, "unknown exception");
+  }
+  return nullptr;
+}
+
+}  // namespace detail
+}  // namespace prt
+
+using PrtCreateFunction = prt::PluginObject*(const prt::Params*, char*, std::size_t) noexcept;
+using PrtDestroyFunction = void(prt::PluginObject*) noexcept;
+
+#define PRT_EXPORT_PLUGIN(Class, name)                                                      \
+  extern "C" PRT_PLUGIN_API const prt::PluginInfoRecord prt_plugin_info =                  \
+      prt::make_plugin_info<Class>(name, PRT_BUILD_KEY);                                    \
+  extern "C" PRT_PLUGIN_API prt::PluginObject* prt_plugin_create(                          \
+      const prt::Params* params, char* error, std::size_t error_size) noexcept {            \
+    return prt::detail::create_guarded<Class>(params, error, error_size);                   \
+  }                                                                                         \
+  extern "C" PRT_PLUGIN_API void prt_plugin_destroy(prt::PluginObject* object) noexcept {  \
+    delete object;                                                                          \
+  }

@@ -1,0 +1,42 @@
+// A progress bar on stderr for long work: fraction, rate and ETA.
+#pragma once
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <string>
+
+namespace prt {
+
+class Progress {
+ public:
+  // Counts `total` items; the rate shown is of `rate_unit` (e.g. "rays"), fed
+  // by the second argument of add(), or of the items when rate_unit is empty.
+  // Quiet bars print nothing.
+  Progress(std::string label, double total, std::string rate_unit = "", bool quiet = false);
+  ~Progress();
+  void add(double items, double work = 0);
+  void finish();
+
+ private:
+  void draw(bool final);
+  std::string label_, unit_;
+  double total_;
+  bool quiet_, finished_ = false;
+  std::atomic<double> done_{0}, work_{0};
+  std::chrono::steady_clock::time_point start_, last_draw_;
+  std::mutex mutex_;
+};
+
+// Wall-clock seconds since construction.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace prt

@@ -1,0 +1,75 @@
+// Discovers plug-ins, reads their info records from the files without loading
+// them, and loads a library only when an object of it is created.
+#pragma once
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "prt/params.hpp"
+#include "prt/plugin.hpp"
+#include "prt/plugin_record.hpp"
+
+namespace boost::dll {
+class shared_library;
+}
+
+namespace prt {
+
+struct PluginDescriptor {
+  std::filesystem::path file;
+  PluginInfoRecord info;
+
+  PluginKind kind() const { return info.kind; }
+  std::string name() const { return info.name; }
+  ParamSchema schema() const;
+};
+
+// The build key of the host, to compare with each plug-in's.
+const char* host_build_key();
+
+class PluginRegistry {
+ public:
+  // Scans `directories` in order for files named libprt-*.so. Any malformed
+  // candidate (not a plug-in, wrong ABI or build key, missing symbol) or a
+  // duplicate name throws prt::Error naming the file.
+  explicit PluginRegistry(const std::vector<std::filesystem::path>& directories);
+  ~PluginRegistry();
+  PluginRegistry(const PluginRegistry&) = delete;
+  PluginRegistry& operator=(const PluginRegistry&) = delete;
+
+  // The build's plug-in directory followed by every entry of PRT_PLUGIN_PATH.
+  static std::vector<std::filesystem::path> default_directories();
+
+  const std::vector<PluginDescriptor>& plugins() const { return plugins_; }
+  std::vector<std::string> names(PluginKind kind) const;
+
+  // Throws with the list of available names of that kind when absent.
+  const PluginDescriptor& find(PluginKind kind, const std::string& name,
+                               const SourceLocation& where = {}) const;
+
+  // Validates `params` against the plug-in's schema, loads the library if
+  // needed and creates the object. The returned pointer keeps the library
+  // mapped for as long as it lives.
+  template <class Interface>
+  std::shared_ptr<Interface> create(const std::string& name, Params& params,
+                                    const SourceLocation& where = {}) {
+    auto object = create_object(Interface::plugin_kind, name, params, where);
+    auto* typed = dynamic_cast<Interface*>(object.get());
+    if (!typed) throw Error(where, "plug-in \"" + name + "\" does not implement its interface");
+    return std::shared_ptr<Interface>(object, typed);
+  }
+
+  // Number of libraries mapped so far (lazy loading is observable).
+  std::size_t loaded_count() const { return modules_.size(); }
+
+ private:
+  std::shared_ptr<PluginObject> create_object(PluginKind kind, const std::string& name,
+                                              Params& params, const SourceLocation& where);
+  void scan(const std::filesystem::path& directory);
+  std::vector<PluginDescriptor> plugins_;
+  std::map<std::filesystem::path, std::shared_ptr<boost::dll::shared_library>> modules_;
+};
+
+}  // namespace prt

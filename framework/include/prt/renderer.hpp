@@ -1,0 +1,32 @@
+// The renderer interface: compressed transfer + light vector + camera -> image.
+#pragma once
+#include <Eigen/Core>
+
+#include "prt/camera.hpp"
+#include "prt/environment.hpp"
+#include "prt/image.hpp"
+#include "prt/mesh.hpp"
+#include "prt/plugin.hpp"
+#include "prt/transfer.hpp"
+
+namespace prt {
+
+struct RenderInput {
+  const Mesh* mesh = nullptr;
+  // Either a compressed transfer with its light vector (n x 3)...
+  const CompressedTransfer* transfer = nullptr;
+  Eigen::MatrixX3d light;
+  // ...or exit radiance given directly per vertex (v x 3), e.g. ground truth.
+  const Eigen::MatrixX3f* vertex_radiance = nullptr;
+  Eigen::Vector3f albedo{1, 1, 1};
+  Camera camera;
+  const Environment* background = nullptr;  // drawn behind the mesh when set
+};
+
+class Renderer : public PluginObject {
+ public:
+  static constexpr PluginKind plugin_kind = PluginKind::renderer;
+  virtual Image render(const RenderInput& input) = 0;
+};
+
+}  // namespace prt

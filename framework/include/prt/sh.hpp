@@ -1,0 +1,41 @@
+// Real spherical harmonics, shared by the SH basis plug-ins and renderers.
+//
+// Conventions (pinned by tests against closed forms):
+//  - index i = l (l + 1) + m, l = 0..order-1 ("order" counts bands: order^2
+//    coefficients);
+//  - orthonormal over the sphere;
+//  - NO Condon-Shortley phase: y_{1,-1} = c y, y_{1,0} = c z, y_{1,1} = c x with
+//    c = sqrt(3 / 4 pi), so the l = 1 rotation block is the Cartesian rotation
+//    in (y, z, x) order;
+//  - y_{l,m} = sqrt(2) K_l^m P_l^|m|(z) cos(m phi) for m > 0 and
+//    sqrt(2) K_l^|m| P_l^|m|(z) sin(|m| phi) for m < 0.
+// Evaluation uses the normalised associated-Legendre recurrence with the
+// sin^m(theta) factor folded into Re/Im (x + i y)^m, so no factorials appear
+// and nothing overflows (tested to l = 100 and beyond).
+#pragma once
+#include <Eigen/Core>
+
+#include "prt/direction_set.hpp"
+
+namespace prt::sh {
+
+inline int index(int l, int m) { return l * (l + 1) + m; }
+inline int coefficient_count(int order) { return order * order; }
+
+// Writes the order^2 values at unit direction (x, y, z) into `out`.
+void evaluate(int order, double x, double y, double z, double* out);
+
+// s x order^2 matrix of values at the directions.
+Eigen::MatrixXd evaluate(int order, const Directions& directions);
+
+// Block-diagonal order^2 x order^2 matrix mapping the coefficients of f to
+// those of g(d) = f(R^T d), by the Ivanic-Ruedenberg recurrence.
+Eigen::MatrixXd rotation(int order, const Eigen::Matrix3d& rotation);
+
+// Zonal coefficients z_l of the clamped cosine max(cos theta, 0) about +z.
+Eigen::VectorXd clamped_cosine_zonal(int order);
+
+// Coefficients of max(n . d, 0) for unit n (Funk-Hecke: sqrt(4 pi/(2l+1)) z_l y_lm(n)).
+Eigen::VectorXd clamped_cosine(int order, const Eigen::Vector3d& normal);
+
+}  // namespace prt::sh

@@ -1,0 +1,53 @@
+// Per-vertex transfer and its compressed form: the values passed from the bake
+// stage to compression and on to rendering.
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// v x n transfer, one row per vertex. For diffuse transfer n is the basis size
+// and the exit radiance is row . light (per colour channel of the light); the
+// material's RGB albedo multiplies the result.
+struct TransferSignal {
+  MatrixXfRow coefficients;
+  std::string kind = "diffuse";  // "diffuse" (vectors); glossy matrices later
+
+  Eigen::Index vertices() const { return coefficients.rows(); }
+  Eigen::Index dimension() const { return coefficients.cols(); }
+};
+
+// One form for every compressor: per vertex a cluster index and n' weights;
+// per cluster a mean and n' representative vectors. VQ is n' = 0, PCA is one
+// cluster, "none" is one cluster with zero mean and the identity as
+// representatives (weights = the signal itself).
+struct CompressedTransfer {
+  std::string compressor;
+  Eigen::Index dimension = 0;                 // n
+  int components = 0;                         // n' (the same for every cluster here)
+  std::vector<std::int32_t> cluster_of_vertex;  // v
+  MatrixXfRow weights;                        // v x n'
+  MatrixXfRow means;                          // clusters x n
+  std::vector<MatrixXfRow> representatives;   // per cluster: n' x n
+
+  Eigen::Index vertices() const { return static_cast<Eigen::Index>(cluster_of_vertex.size()); }
+  Eigen::Index clusters() const { return means.rows(); }
+
+  // Reconstructs the v x n signal (for error measurement).
+  MatrixXfRow decode() const;
+  // Floats stored: m_p n' + m_c (n' + 1) n.
+  double stored_floats() const;
+};
+
+// Per-vertex exit radiance (v x 3, linear RGB) for a light vector (n x 3):
+// per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki.
+Eigen::MatrixX3f relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light);
+
+// Squared error sum over vertices of |t_p - reconstruction_p|^2.
+double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation);
+
+}  // namespace prt

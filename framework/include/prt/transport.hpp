@@ -1,0 +1,92 @@
+// Transport sampling with Embree: per-vertex visibility over a direction set,
+// kept as bits, fused with the projection of cosine-weighted visibility.
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "prt/direction_set.hpp"
+#include "prt/mesh.hpp"
+#include "prt/transfer.hpp"
+
+namespace prt {
+
+class Progress;
+
+// One bit per (vertex, direction): 1 = the ray escapes (unoccluded).
+class VisibilityBits {
+ public:
+  VisibilityBits() = default;
+  VisibilityBits(std::size_t vertices, std::size_t directions)
+      : directions_(directions), words_per_vertex_((directions + 63) / 64),
+        bits_(vertices * words_per_vertex_, 0) {}
+  bool get(std::size_t vertex, std::size_t direction) const {
+    return (bits_[vertex * words_per_vertex_ + direction / 64] >> (direction % 64)) & 1u;
+  }
+  void set(std::size_t vertex, std::size_t direction) {
+    bits_[vertex * words_per_vertex_ + direction / 64] |= std::uint64_t(1) << (direction % 64);
+  }
+  std::size_t directions() const { return directions_; }
+  std::size_t vertices() const { return words_per_vertex_ ? bits_.size() / words_per_vertex_ : 0; }
+  std::size_t count_visible(std::size_t vertex) const;
+
+ private:
+  std::size_t directions_ = 0, words_per_vertex_ = 0;
+  std::vector<std::uint64_t> bits_;
+};
+
+// Embree device + scene over a mesh; shared by bake, ground truth and benchmarks.
+class RayCaster {
+ public:
+  explicit RayCaster(const Mesh& mesh);
+  ~RayCaster();
+  RayCaster(const RayCaster&) = delete;
+  RayCaster& operator=(const RayCaster&) = delete;
+
+  // Origin offset (world units) that keeps rays off their own surface.
+  float offset() const { return offset_; }
+  // True where the ray from origin toward direction hits nothing. Batched
+  // through Embree's stream API.
+  void occluded(const float* origins, const float* directions, std::size_t count,
+                std::uint8_t* escaped) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  float offset_ = 1e-4f;
+};
+
+struct TransportOptions {
+  bool shadowed = true;  // false: unshadowed transfer (no rays cast)
+  bool keep_visibility = false;
+};
+
+struct TransportResult {
+  TransferSignal transfer;        // v x n, (1/pi) int V max(n.s, 0) y(s) ds
+  VisibilityBits visibility;      // when keep_visibility
+  std::uint64_t rays_cast = 0;
+  double trace_seconds = 0;       // wall time of the fused trace + project pass
+};
+
+// Diffuse transfer per vertex: traces only directions above the tangent plane,
+// then multiplies each vertex block's cosine-weighted visibility by the
+// basis's projection matrix P (s x n). Multithreaded with TBB; results do not
+// depend on the thread count.
+TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& directions,
+                                 const Eigen::MatrixXd& projection,
+                                 const TransportOptions& options, Progress* progress);
+
+// Traces exactly the rays diffuse_transfer would, and nothing else: the
+// yardstick of the bake benchmark.
+std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& directions, Progress* progress);
+
+// Ground truth: per-vertex exit radiance (v x 3) for albedo 1, by Monte Carlo
+// over the environment with cosine-weighted stratified samples and ray-cast
+// visibility; no basis involved.
+class Environment;
+Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
+                                       int samples, std::uint64_t seed, Progress* progress);
+
+}  // namespace prt

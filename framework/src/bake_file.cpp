@@ -1,0 +1,267 @@
+#include "prt/bake_file.hpp"
+
+#include <H5Cpp.h>
+#include <unistd.h>
+
+#include "prt/error.hpp"
+
+namespace prt {
+namespace fs = std::filesystem;
+
+void write_atomically(const fs::path& file, const std::function<void(const fs::path&)>& write) {
+  const fs::path folder = file.parent_path();
+  if (!folder.empty()) fs::create_directories(folder);
+  const fs::path temporary =
+      folder / ("." + file.filename().string() + ".tmp-" + std::to_string(getpid()));
+  try {
+    write(temporary);
+    fs::rename(temporary, file);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw;
+  }
+}
+
+namespace {
+
+const char* kFormatName = "prt-bake";
+
+void write_text(H5::H5Object& object, const std::string& name, const std::string& value) {
+  H5::StrType type(H5::PredType::C_S1, std::max<std::size_t>(value.size(), 1));
+  H5::Attribute a = object.createAttribute(name, type, H5::DataSpace(H5S_SCALAR));
+  a.write(type, value.empty() ? std::string(" ") : value);
+}
+
+std::string read_text(const H5::H5Object& object, const std::string& name) {
+  if (!object.attrExists(name)) throw Error("attribute \"" + name + "\" is missing");
+  H5::Attribute a = object.openAttribute(name);
+  std::string value;
+  a.read(a.getStrType(), value);
+  return value == " " ? std::string() : value;
+}
+
+void write_number(H5::H5Object& object, const std::string& name, double value) {
+  H5::Attribute a =
+      object.createAttribute(name, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(H5S_SCALAR));
+  a.write(H5::PredType::NATIVE_DOUBLE, &value);
+}
+
+double read_number(const H5::H5Object& object, const std::string& name) {
+  if (!object.attrExists(name)) throw Error("attribute \"" + name + "\" is missing");
+  double value = 0;
+  object.openAttribute(name).read(H5::PredType::NATIVE_DOUBLE, &value);
+  return value;
+}
+
+template <class T>
+const H5::PredType& h5_type() {
+  if constexpr (std::is_same_v<T, float>) return H5::PredType::NATIVE_FLOAT;
+  else if constexpr (std::is_same_v<T, double>) return H5::PredType::NATIVE_DOUBLE;
+  else if constexpr (std::is_same_v<T, std::int32_t>) return H5::PredType::NATIVE_INT32;
+  else return H5::PredType::NATIVE_UINT32;
+}
+
+// Writes rows x cols values (row-major) as a 2-D dataset, compressed.
+template <class T>
+void write_array(H5::Group& group, const std::string& name, const T* data, hsize_t rows,
+                 hsize_t cols) {
+  const hsize_t dims[2] = {rows, cols};
+  H5::DSetCreatPropList properties;
+  if (rows > 0 && cols > 0) {
+    const hsize_t chunk[2] = {std::min<hsize_t>(rows, 4096), cols};
+    properties.setChunk(2, chunk);
+    properties.setDeflate(1);
+  }
+  H5::DataSet set = group.createDataSet(name, h5_type<T>(), H5::DataSpace(2, dims), properties);
+  if (rows > 0 && cols > 0) set.write(data, h5_type<T>());
+}
+
+template <class T>
+std::vector<T> read_array(const H5::Group& group, const std::string& name, hsize_t& rows,
+                          hsize_t& cols) {
+  if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
+  H5::DataSet set = group.openDataSet(name);
+  H5::DataSpace space = set.getSpace();
+  if (space.getSimpleExtentNdims() != 2) throw Error("dataset \"" + name + "\" is not 2-D");
+  hsize_t dims[2];
+  space.getSimpleExtentDims(dims);
+  rows = dims[0], cols = dims[1];
+  std::vector<T> values(rows * cols);
+  if (!values.empty()) set.read(values.data(), h5_type<T>());
+  return values;
+}
+
+void write_matrix(H5::Group& group, const std::string& name, const MatrixXfRow& m) {
+  write_array(group, name, m.data(), m.rows(), m.cols());
+}
+
+MatrixXfRow read_matrix(const H5::Group& group, const std::string& name) {
+  hsize_t rows, cols;
+  auto values = read_array<float>(group, name, rows, cols);
+  return Eigen::Map<MatrixXfRow>(values.data(), rows, cols);
+}
+
+template <class V, class T>
+void write_vectors(H5::Group& group, const std::string& name, const std::vector<V>& items) {
+  std::vector<T> flat;
+  flat.reserve(items.size() * 3);
+  for (const auto& item : items)
+    for (int c = 0; c < 3; ++c) flat.push_back(static_cast<T>(item[c]));
+  write_array(group, name, flat.data(), items.size(), 3);
+}
+
+template <class V, class T>
+std::vector<V> read_vectors(const H5::Group& group, const std::string& name) {
+  hsize_t rows, cols;
+  auto flat = read_array<T>(group, name, rows, cols);
+  if (cols != 3) throw Error("dataset \"" + name + "\" must have 3 columns");
+  std::vector<V> items(rows);
+  for (hsize_t r = 0; r < rows; ++r)
+    for (int c = 0; c < 3; ++c) items[r][c] = flat[r * 3 + c];
+  return items;
+}
+
+void write_plugin(H5::H5Object& object, const std::string& prefix, const PluginRecord& p) {
+  write_text(object, prefix + "_plugin", p.name);
+  write_text(object, prefix + "_version", p.version);
+  write_text(object, prefix + "_parameters", p.parameters);
+}
+
+PluginRecord read_plugin(const H5::H5Object& object, const std::string& prefix) {
+  return {read_text(object, prefix + "_plugin"), read_text(object, prefix + "_version"),
+          read_text(object, prefix + "_parameters")};
+}
+
+}  // namespace
+
+void write_bake(const fs::path& file, const BakeData& data) {
+  H5::Exception::dontPrint();
+  write_atomically(file, [&](const fs::path& temporary) {
+    try {
+      H5::H5File h5(temporary.string(), H5F_ACC_TRUNC);
+      H5::Group root = h5.openGroup("/");
+      write_text(root, "format", kFormatName);
+      write_number(root, "format_version", kBakeFormatVersion);
+      write_text(root, "scene_file", data.scene_file);
+      write_text(root, "scene_text", data.scene_text);
+      write_text(root, "transport", data.transport);
+      write_plugin(root, "basis", data.basis);
+      write_plugin(root, "compressor", data.compressor);
+      for (int c = 0; c < 3; ++c) write_number(root, "albedo_" + std::string(1, "rgb"[c]), data.albedo[c]);
+
+      H5::Group mesh = h5.createGroup("mesh");
+      write_vectors<Eigen::Vector3f, float>(mesh, "positions", data.mesh.positions);
+      write_vectors<Eigen::Vector3f, float>(mesh, "normals", data.mesh.normals);
+      write_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles",
+                                                                 data.mesh.triangles);
+
+      H5::Group transfer = h5.createGroup("transfer");
+      write_text(transfer, "kind", data.transfer.kind);
+      write_matrix(transfer, "coefficients", data.transfer.coefficients);
+
+      const CompressedTransfer& c = data.compressed;
+      H5::Group compressed = h5.createGroup("compressed");
+      write_text(compressed, "compressor", c.compressor);
+      write_number(compressed, "components", c.components);
+      write_number(compressed, "dimension", static_cast<double>(c.dimension));
+      write_array(compressed, "cluster_of_vertex", c.cluster_of_vertex.data(),
+                  c.cluster_of_vertex.size(), 1);
+      write_matrix(compressed, "weights", c.weights);
+      write_matrix(compressed, "means", c.means);
+      MatrixXfRow stacked(c.clusters() * c.components, c.dimension);
+      for (Eigen::Index k = 0; k < c.clusters(); ++k)
+        stacked.middleRows(k * c.components, c.components) = c.representatives[k];
+      write_matrix(compressed, "representatives", stacked);
+
+      H5::Group state = h5.createGroup("basis_state");
+      for (const auto& [name, m] : data.basis_state.matrices) {
+        const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> row_major = m;
+        write_array(state, name, row_major.data(), m.rows(), m.cols());
+      }
+      H5::Group metrics = h5.createGroup("metrics");
+      for (const auto& [name, value] : data.metrics) write_number(metrics, name, value);
+    } catch (const H5::Exception& e) {
+      throw Error(file.string() + ": cannot write bake file: " + e.getDetailMsg());
+    }
+  });
+}
+
+BakeData read_bake(const fs::path& file) {
+  H5::Exception::dontPrint();
+  if (!fs::is_regular_file(file)) throw Error(file.string() + ": bake file not found");
+  if (!H5::H5File::isHdf5(file.string()))
+    throw Error(file.string() + ": not a PRT bake file (not HDF5, or damaged)");
+  BakeData data;
+  try {
+    H5::H5File h5(file.string(), H5F_ACC_RDONLY);
+    H5::Group root = h5.openGroup("/");
+    if (!root.attrExists("format") || read_text(root, "format") != kFormatName)
+      throw Error("it is an HDF5 file but not a PRT bake");
+    const int version = static_cast<int>(read_number(root, "format_version"));
+    if (version != kBakeFormatVersion)
+      throw Error("format version " + std::to_string(version) + ", but this build reads version " +
+                  std::to_string(kBakeFormatVersion) + "; re-bake the scene");
+    data.scene_file = read_text(root, "scene_file");
+    data.scene_text = read_text(root, "scene_text");
+    data.transport = read_text(root, "transport");
+    data.basis = read_plugin(root, "basis");
+    data.compressor = read_plugin(root, "compressor");
+    for (int c = 0; c < 3; ++c)
+      data.albedo[c] = static_cast<float>(read_number(root, "albedo_" + std::string(1, "rgb"[c])));
+
+    H5::Group mesh = h5.openGroup("mesh");
+    data.mesh.positions = read_vectors<Eigen::Vector3f, float>(mesh, "positions");
+    data.mesh.normals = read_vectors<Eigen::Vector3f, float>(mesh, "normals");
+    data.mesh.triangles =
+        read_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles");
+    data.mesh.validate("mesh");
+
+    H5::Group transfer = h5.openGroup("transfer");
+    data.transfer.kind = read_text(transfer, "kind");
+    data.transfer.coefficients = read_matrix(transfer, "coefficients");
+
+    H5::Group compressed = h5.openGroup("compressed");
+    CompressedTransfer& c = data.compressed;
+    c.compressor = read_text(compressed, "compressor");
+    c.components = static_cast<int>(read_number(compressed, "components"));
+    c.dimension = static_cast<Eigen::Index>(read_number(compressed, "dimension"));
+    hsize_t rows, cols;
+    c.cluster_of_vertex = read_array<std::int32_t>(compressed, "cluster_of_vertex", rows, cols);
+    c.weights = read_matrix(compressed, "weights");
+    c.means = read_matrix(compressed, "means");
+    const MatrixXfRow stacked = read_matrix(compressed, "representatives");
+    if (c.means.cols() != c.dimension || stacked.rows() != c.clusters() * c.components ||
+        c.weights.rows() != c.vertices() || c.weights.cols() != c.components ||
+        c.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()) ||
+        data.transfer.coefficients.rows() != c.vertices())
+      throw Error("compressed transfer has inconsistent sizes");
+    for (auto k : c.cluster_of_vertex)
+      if (k < 0 || k >= c.clusters()) throw Error("cluster index out of range");
+    for (Eigen::Index k = 0; k < c.clusters(); ++k)
+      c.representatives.push_back(stacked.middleRows(k * c.components, c.components));
+
+    H5::Group state = h5.openGroup("basis_state");
+    for (hsize_t i = 0; i < state.getNumObjs(); ++i) {
+      const std::string name = state.getObjnameByIdx(i);
+      auto values = read_array<double>(state, name, rows, cols);
+      data.basis_state.matrices[name] =
+          Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+              values.data(), rows, cols);
+    }
+    H5::Group metrics = h5.openGroup("metrics");
+    for (int i = 0; i < metrics.getNumAttrs(); ++i) {
+      H5::Attribute a = metrics.openAttribute(static_cast<unsigned>(i));
+      double value = 0;
+      a.read(H5::PredType::NATIVE_DOUBLE, &value);
+      data.metrics[a.getName()] = value;
+    }
+  } catch (const H5::Exception& e) {
+    throw Error(file.string() + ": damaged bake file (" + e.getDetailMsg() + ")");
+  } catch (const Error& e) {
+    throw Error(file.string() + ": bad bake file: " + e.what());
+  }
+  return data;
+}
+
+}  // namespace prt

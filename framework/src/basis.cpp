@@ -1,0 +1,22 @@
+#include "prt/basis.hpp"
+
+#include "prt/error.hpp"
+
+namespace prt {
+
+Eigen::MatrixXd Basis::projection_matrix(const DirectionSet& set) const {
+  return set.weights.asDiagonal() * evaluate(set.directions);
+}
+
+Eigen::MatrixXd Basis::project(const Eigen::MatrixXd& samples, const DirectionSet& set) const {
+  if (samples.cols() != set.size())
+    throw Error("project: " + std::to_string(samples.cols()) + " samples per function for " +
+                std::to_string(set.size()) + " directions");
+  return samples * projection_matrix(set);
+}
+
+Eigen::MatrixXd Basis::rotation_matrix(const Eigen::Matrix3d&) const {
+  throw Error("this basis cannot rotate coefficient vectors; re-project the rotated light instead");
+}
+
+}  // namespace prt

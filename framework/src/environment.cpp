@@ -1,0 +1,112 @@
+#include "prt/environment.hpp"
+
+#include <ImfArray.h>
+#include <ImfRgbaFile.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+#include "prt/error.hpp"
+
+namespace prt {
+
+Eigen::Matrix3d rotation_about_up(double degrees) {
+  return Eigen::AngleAxisd(degrees * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+}
+
+Environment Environment::load_exr(const std::filesystem::path& file) {
+  if (!std::filesystem::is_regular_file(file))
+    throw Error(file.string() + ": environment map not found");
+  Imf::Array2D<Imf::Rgba> pixels;
+  int width = 0, height = 0;
+  try {
+    Imf::RgbaInputFile in(file.string().c_str());
+    const Imath::Box2i window = in.dataWindow();
+    width = window.max.x - window.min.x + 1;
+    height = window.max.y - window.min.y + 1;
+    pixels.resizeErase(height, width);
+    in.setFrameBuffer(&pixels[0][0] - window.min.x - window.min.y * width, 1, width);
+    in.readPixels(window.min.y, window.max.y);
+  } catch (const std::exception& e) {
+    throw Error(file.string() + ": cannot read OpenEXR image: " + e.what());
+  }
+  if (width < 2 || height < 1)
+    throw Error(file.string() + ": environment map is too small");
+  std::vector<float> rgb(static_cast<std::size_t>(width) * height * 3);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const Imf::Rgba& p = pixels[y][x];
+      const float values[3] = {p.r, p.g, p.b};
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(values[c]))
+          throw Error(file.string() + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                      ") is NaN or infinite");
+        rgb[(static_cast<std::size_t>(y) * width + x) * 3 + c] = std::max(values[c], 0.f);
+      }
+    }
+  return from_pixels(width, height, std::move(rgb));
+}
+
+Environment Environment::constant(const Eigen::Vector3f& radiance) {
+  return from_pixels(1, 1, {radiance.x(), radiance.y(), radiance.z()});
+}
+
+Environment Environment::from_pixels(int width, int height, std::vector<float> rgb) {
+  if (rgb.size() != static_cast<std::size_t>(width) * height * 3)
+    throw Error("environment: pixel count does not match its size");
+  Environment e;
+  e.width_ = width, e.height_ = height, e.rgb_ = std::move(rgb);
+  return e;
+}
+
+Eigen::Vector3f Environment::texel(int x, int y) const {
+  x = ((x % width_) + width_) % width_;  // wraps in longitude
+  y = std::clamp(y, 0, height_ - 1);
+  const float* p = &rgb_[(static_cast<std::size_t>(y) * width_ + x) * 3];
+  return {p[0], p[1], p[2]};
+}
+
+Eigen::Vector3f Environment::radiance(const Eigen::Vector3d& direction) const {
+  const Eigen::Vector2d uv = equirect_uv(rotation_.transpose() * direction);
+  const double fx = uv.x() * width_ - 0.5, fy = uv.y() * height_ - 0.5;
+  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+  const float ax = static_cast<float>(fx - x0), ay = static_cast<float>(fy - y0);
+  const Eigen::Vector3f top = (1 - ax) * texel(x0, y0) + ax * texel(x0 + 1, y0);
+  const Eigen::Vector3f bottom = (1 - ax) * texel(x0, y0 + 1) + ax * texel(x0 + 1, y0 + 1);
+  return intensity_ * ((1 - ay) * top + ay * bottom);
+}
+
+Eigen::MatrixX3d Environment::project(const Basis& basis) const {
+  const bool rotated = !rotation_.isIdentity(1e-12);
+  const bool rotate_coefficients = rotated && basis.can_rotate();
+  // A constant map is integrated on a fine lattice instead of its one texel.
+  const int w = (width_ == 1 && height_ == 1) ? 256 : width_;
+  const int h = (width_ == 1 && height_ == 1) ? 128 : height_;
+  constexpr int kRows = 8;
+  const int blocks = (h + kRows - 1) / kRows;
+  std::vector<Eigen::MatrixX3d> partial(blocks);
+  tbb::parallel_for(0, blocks, [&](int b) {
+    const int begin = b * kRows, end = std::min(h, begin + kRows);
+    const DirectionSet set = DirectionSet::equirect(w, h, begin, end);
+    Eigen::MatrixXd samples(3, set.size());
+    for (Eigen::Index k = 0; k < set.size(); ++k) {
+      Eigen::Vector3f value;
+      if (rotated && !rotate_coefficients) {
+        value = radiance(set.directions.row(k).transpose());
+      } else if (w == width_) {
+        const int x = static_cast<int>(k % w), y = begin + static_cast<int>(k / w);
+        value = intensity_ * texel(x, y);
+      } else {
+        value = intensity_ * texel(0, 0);
+      }
+      samples.col(k) = value.cast<double>();
+    }
+    partial[b] = basis.project(samples, set).transpose();
+  });
+  Eigen::MatrixX3d light = Eigen::MatrixX3d::Zero(basis.size(), 3);
+  for (const auto& p : partial) light += p;  // fixed order: deterministic
+  if (rotate_coefficients) light = basis.rotation_matrix(rotation_) * light;
+  return light;
+}
+
+}  // namespace prt

@@ -1,0 +1,236 @@
+#include "prt/mesh.hpp"
+
+#include <Eigen/Geometry>
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "prt/error.hpp"
+
+namespace prt {
+
+namespace {
+
+using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+// Captures what OpenMesh prints to its error log while a file is read, so
+// problems can be reported in one message instead of a stream of warnings.
+class OpenMeshLogCapture {
+ public:
+  OpenMeshLogCapture() {
+    omerr().disconnect(std::cerr);
+    omerr().connect(log_);
+    omlog().disable();
+  }
+  ~OpenMeshLogCapture() {
+    omerr().flush();
+    omerr().disconnect(log_);
+    omerr().connect(std::cerr);
+  }
+  std::string text() {
+    omerr().flush();
+    return log_.str();
+  }
+
+ private:
+  std::ostringstream log_;
+};
+
+std::size_t count_lines_containing(const std::string& text, const std::string& needle) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1))
+    ++count;
+  return count;
+}
+
+}  // namespace
+
+Eigen::Vector3f Mesh::bounds_min() const {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY);
+  for (const auto& p : positions) lo = lo.cwiseMin(p);
+  return lo;
+}
+
+Eigen::Vector3f Mesh::bounds_max() const {
+  Eigen::Vector3f hi = Eigen::Vector3f::Constant(-INFINITY);
+  for (const auto& p : positions) hi = hi.cwiseMax(p);
+  return hi;
+}
+
+void Mesh::compute_normals() {
+  std::vector<Eigen::Vector3d> sum(positions.size(), Eigen::Vector3d::Zero());
+  for (const auto& t : triangles) {
+    const Eigen::Vector3d a = positions[t[0]].cast<double>(), b = positions[t[1]].cast<double>(),
+                          c = positions[t[2]].cast<double>();
+    const Eigen::Vector3d area_normal = (b - a).cross(c - a);  // |.| = 2 x area
+    for (auto v : t) sum[v] += area_normal;
+  }
+  normals.resize(positions.size());
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    const double length = sum[v].norm();
+    normals[v] = length > 0 ? (sum[v] / length).cast<float>() : Eigen::Vector3f(0, 1, 0);
+  }
+}
+
+void Mesh::validate(const std::string& source) const {
+  if (positions.empty() || triangles.empty())
+    throw Error(source + ": empty mesh (" + std::to_string(positions.size()) + " vertices, " +
+                std::to_string(triangles.size()) + " usable triangles)");
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (!positions[v].allFinite())
+      throw Error(source + ": vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
+  for (std::size_t f = 0; f < triangles.size(); ++f)
+    for (auto index : triangles[f])
+      if (index >= positions.size())
+        throw Error(source + ": face " + std::to_string(f) + " uses vertex index " +
+                    std::to_string(index) + ", but the mesh has " +
+                    std::to_string(positions.size()) + " vertices");
+  if (normals.size() != positions.size())
+    throw Error(source + ": " + std::to_string(normals.size()) + " normals for " +
+                std::to_string(positions.size()) + " vertices");
+}
+
+Mesh load_mesh(const std::filesystem::path& file) {
+  const std::string source = file.string();
+  if (!std::filesystem::is_regular_file(file)) throw Error(source + ": mesh file not found");
+  OMesh om;
+  om.request_vertex_normals();
+  OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexNormal;
+  std::string log;
+  {
+    OpenMeshLogCapture capture;
+    const bool ok = OpenMesh::IO::read_mesh(om, source, options);
+    log = capture.text();
+    if (!ok) {
+      const std::string detail = log.substr(0, log.find('\n'));
+      throw Error(source + ": cannot read mesh" + (detail.empty() ? "" : " (" + detail + ")"));
+    }
+  }
+  Mesh mesh;
+  mesh.positions.reserve(om.n_vertices());
+  for (auto vh : om.vertices()) {
+    const auto& p = om.point(vh);
+    mesh.positions.emplace_back(p[0], p[1], p[2]);
+  }
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+    if (!mesh.positions[v].allFinite())
+      throw Error(source + ": vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
+  // Faces OpenMesh refused (repeated or invalid vertices) count as degenerate.
+  mesh.skipped_degenerate_faces = count_lines_containing(log, "complex") +
+                                  count_lines_containing(log, "invalid");
+  for (auto fh : om.faces()) {
+    std::array<std::uint32_t, 3> t{};
+    int k = 0;
+    for (auto vh : om.fv_range(fh)) t[k++] = static_cast<std::uint32_t>(vh.idx());
+    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
+                          c = mesh.positions[t[2]];
+    if (!((b - a).cross(c - a).squaredNorm() > 0.f)) {
+      ++mesh.skipped_degenerate_faces;
+      continue;
+    }
+    mesh.triangles.push_back(t);
+  }
+  if (options.check(OpenMesh::IO::Options::VertexNormal)) {
+    for (auto vh : om.vertices()) {
+      const auto& n = om.normal(vh);
+      mesh.normals.emplace_back(n[0], n[1], n[2]);
+    }
+    bool usable = true;
+    for (auto& n : mesh.normals) {
+      const float length = n.norm();
+      if (!std::isfinite(length) || length < 1e-12f) usable = false;
+      else n /= length;
+    }
+    if (!usable) mesh.normals.clear();
+  }
+  if (mesh.normals.empty()) mesh.compute_normals();
+  mesh.validate(source);
+  if (mesh.skipped_degenerate_faces > 0)
+    std::cerr << "warning: " << source << ": skipped " << mesh.skipped_degenerate_faces
+              << " degenerate face(s)\n";
+  return mesh;
+}
+
+Mesh make_sphere(int subdivisions, float radius) {
+  Mesh m;
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (auto& p : m.positions) p.normalize();
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> midpoints;
+    auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::minmax(a, b);
+      auto it = midpoints.find(key);
+      if (it != midpoints.end()) return it->second;
+      m.positions.push_back((m.positions[a] + m.positions[b]).normalized());
+      const auto index = static_cast<std::uint32_t>(m.positions.size() - 1);
+      midpoints.emplace(key, index);
+      return index;
+    };
+    std::vector<std::array<std::uint32_t, 3>> next;
+    for (const auto& f : m.triangles) {
+      const auto ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
+      next.push_back({f[0], ab, ca});
+      next.push_back({f[1], bc, ab});
+      next.push_back({f[2], ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    m.triangles = std::move(next);
+  }
+  m.normals = m.positions;  // exact normals of the unit sphere
+  for (auto& p : m.positions) p *= radius;
+  return m;
+}
+
+Mesh make_plane(int cells, float size) {
+  Mesh m;
+  const int n = std::max(cells, 1);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      m.positions.emplace_back(size * (float(i) / n - 0.5f), 0.f, size * (float(j) / n - 0.5f));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t a = j * (n + 1) + i, b = a + 1, c = a + (n + 1), d = c + 1;
+      m.triangles.push_back({a, c, b});
+      m.triangles.push_back({b, c, d});
+    }
+  m.normals.assign(m.positions.size(), Eigen::Vector3f(0, 1, 0));
+  return m;
+}
+
+Mesh make_box(float size) {
+  // Each face has its own 4 vertices so normals are the face normals.
+  Mesh m;
+  const float h = size / 2;
+  const Eigen::Vector3f axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {1.f, -1.f}) {
+      const Eigen::Vector3f n = sign * axes[axis];
+      const Eigen::Vector3f u = axes[(axis + 1) % 3], v = sign * axes[(axis + 2) % 3];
+      const auto base = static_cast<std::uint32_t>(m.positions.size());
+      for (auto [a, b] : {std::pair{-1.f, -1.f}, {1.f, -1.f}, {1.f, 1.f}, {-1.f, 1.f}}) {
+        m.positions.push_back(h * (n + a * u + b * v));
+        m.normals.push_back(n);
+      }
+      m.triangles.push_back({base, base + 1, base + 2});
+      m.triangles.push_back({base, base + 2, base + 3});
+    }
+  return m;
+}
+
+Mesh make_generated(const std::string& name, int detail) {
+  if (name == "sphere") return make_sphere(detail);
+  if (name == "plane") return make_plane(std::max(detail, 1));
+  if (name == "box") return make_box();
+  throw Error("unknown generated mesh \"" + name + "\"; valid: sphere, plane, box");
+}
+
+}  // namespace prt

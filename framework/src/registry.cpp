@@ -1,0 +1,169 @@
+#include "prt/registry.hpp"
+
+#include <algorithm>
+#include <boost/dll/shared_library.hpp>
+#include <cstdlib>
+#include <cstring>
+
+#include "elf_symbols.hpp"
+
+#ifndef PRT_PLUGIN_DIR
+#define PRT_PLUGIN_DIR ""
+#endif
+
+namespace prt {
+namespace fs = std::filesystem;
+
+const char* host_build_key() { return PRT_BUILD_KEY; }
+
+ParamSchema PluginDescriptor::schema() const {
+  ParamSchema schema;
+  schema.owner = std::string(to_string(kind())) + " \"" + name() + "\"";
+  schema.specs.assign(info.params, info.params + std::min(info.param_count, kMaxParams));
+  return schema;
+}
+
+namespace {
+
+bool is_candidate(const fs::path& file) {
+  const std::string name = file.filename().string();
+  return name.rfind("libprt-", 0) == 0 && file.extension() == ".so";
+}
+
+// Forces every text field to end inside its array, whatever the file held.
+void terminate_texts(PluginInfoRecord& info) {
+  info.name[sizeof info.name - 1] = info.version[sizeof info.version - 1] = '\0';
+  info.build_key[sizeof info.build_key - 1] = info.description[sizeof info.description - 1] = '\0';
+  for (auto& p : info.params) {
+    p.name[sizeof p.name - 1] = p.default_value[sizeof p.default_value - 1] = '\0';
+    p.choices[sizeof p.choices - 1] = p.help[sizeof p.help - 1] = '\0';
+  }
+}
+
+PluginDescriptor read_descriptor(const fs::path& file) {
+  const std::string where = file.string();
+  const elf::SymbolTable symbols = elf::dynamic_symbols(file);
+  const auto bytes = elf::symbol_bytes(file, PRT_INFO_SYMBOL);
+  if (!symbols.has(PRT_INFO_SYMBOL) || !bytes)
+    throw Error(where + ": not a PRT plug-in (it exports no " PRT_INFO_SYMBOL
+                        " record; build it with PRT_EXPORT_PLUGIN)");
+  std::uint32_t abi = 0;
+  if (bytes->size() >= sizeof abi) std::memcpy(&abi, bytes->data(), sizeof abi);
+  if (abi != PRT_ABI_VERSION || bytes->size() != sizeof(PluginInfoRecord))
+    throw Error(where + ": plug-in ABI version " + std::to_string(abi) + " (record of " +
+                std::to_string(bytes->size()) + " bytes), but this host reads ABI version " +
+                std::to_string(PRT_ABI_VERSION) + " (" + std::to_string(sizeof(PluginInfoRecord)) +
+                " bytes); rebuild the plug-in against this framework");
+  PluginDescriptor d{file, {}};
+  std::memcpy(&d.info, bytes->data(), sizeof d.info);
+  terminate_texts(d.info);
+  if (d.info.kind != PluginKind::basis && d.info.kind != PluginKind::compressor &&
+      d.info.kind != PluginKind::renderer)
+    throw Error(where + ": plug-in \"" + d.name() + "\" declares an unknown kind " +
+                std::to_string(static_cast<unsigned>(d.info.kind)));
+  if (std::strcmp(d.info.build_key, host_build_key()) != 0)
+    throw Error(where + ": plug-in \"" + d.name() + "\" was built for \"" + d.info.build_key +
+                "\", but this host is \"" + host_build_key() +
+                "\"; rebuild the plug-in with the same compiler, Eigen and build type");
+  for (const char* symbol : {PRT_CREATE_SYMBOL, PRT_DESTROY_SYMBOL})
+    if (!symbols.has(symbol))
+      throw Error(where + ": plug-in \"" + d.name() + "\" lacks the symbol " + symbol +
+                  " (was it exported with PRT_EXPORT_PLUGIN?)");
+  return d;
+}
+
+}  // namespace
+
+PluginRegistry::PluginRegistry(const std::vector<fs::path>& directories) {
+  for (const auto& directory : directories) scan(directory);
+}
+
+PluginRegistry::~PluginRegistry() = default;
+
+std::vector<fs::path> PluginRegistry::default_directories() {
+  std::vector<fs::path> directories;
+  if (const char* extra = std::getenv("PRT_PLUGIN_PATH")) {
+    std::string list = extra;
+    for (std::size_t start = 0; start <= list.size();) {
+      const std::size_t end = std::min(list.find(':', start), list.size());
+      if (end > start) directories.emplace_back(list.substr(start, end - start));
+      start = end + 1;
+    }
+  }
+  directories.insert(directories.begin(), fs::path(PRT_PLUGIN_DIR));
+  return directories;
+}
+
+void PluginRegistry::scan(const fs::path& directory) {
+  std::error_code error;
+  if (!fs::is_directory(directory, error)) {
+    if (directory.empty()) return;
+    throw Error(directory.string() + ": plug-in directory does not exist");
+  }
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(directory))
+    if (entry.is_regular_file() && is_candidate(entry.path())) files.push_back(entry.path());
+  std::sort(files.begin(), files.end());
+  for (const auto& file : files) {
+    PluginDescriptor d = read_descriptor(file);
+    for (const auto& other : plugins_)
+      if (other.kind() == d.kind() && other.name() == d.name())
+        throw Error(file.string() + ": duplicate " + to_string(d.kind()) + " plug-in name \"" +
+                    d.name() + "\", also provided by " + other.file.string());
+    plugins_.push_back(std::move(d));
+  }
+}
+
+std::vector<std::string> PluginRegistry::names(PluginKind kind) const {
+  std::vector<std::string> out;
+  for (const auto& p : plugins_)
+    if (p.kind() == kind) out.push_back(p.name());
+  return out;
+}
+
+const PluginDescriptor& PluginRegistry::find(PluginKind kind, const std::string& name,
+                                             const SourceLocation& where) const {
+  for (const auto& p : plugins_)
+    if (p.kind() == kind && p.name() == name) return p;
+  const auto available = names(kind);
+  std::string list;
+  for (const auto& n : available) list += (list.empty() ? "" : ", ") + n;
+  std::string message = std::string("no ") + to_string(kind) + " plug-in named \"" + name +
+                        "\"; available: " + (list.empty() ? "(none found)" : list);
+  const std::string suggestion = closest_match(name, available);
+  if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
+  throw Error(where, message);
+}
+
+std::shared_ptr<PluginObject> PluginRegistry::create_object(PluginKind kind,
+                                                            const std::string& name,
+                                                            Params& params,
+                                                            const SourceLocation& where) {
+  const PluginDescriptor& d = find(kind, name, where);
+  params.validate(d.schema());
+
+  auto& module = modules_[d.file];
+  if (!module) {
+    try {
+      module = std::make_shared<boost::dll::shared_library>(
+          boost::dll::fs::path(d.file.string()),
+          boost::dll::load_mode::rtld_now | boost::dll::load_mode::rtld_local);
+    } catch (const std::exception& e) {
+      modules_.erase(d.file);
+      throw Error(where, d.file.string() + ": cannot load plug-in \"" + name + "\": " + e.what());
+    }
+  }
+  auto& create = module->get<PrtCreateFunction>(PRT_CREATE_SYMBOL);
+  PrtDestroyFunction* destroy = &module->get<PrtDestroyFunction>(PRT_DESTROY_SYMBOL);
+
+  char message[1024] = "";
+  PluginObject* raw = create(&params, message, sizeof message);
+  if (!raw)
+    throw Error(where, std::string(to_string(kind)) + " \"" + name + "\" (" + d.file.string() +
+                           ") failed to construct: " + message);
+  // The deleter holds the module, so the library stays mapped while the object lives.
+  std::shared_ptr<boost::dll::shared_library> keep = module;
+  return std::shared_ptr<PluginObject>(raw, [keep, destroy](PluginObject* p) { destroy(p); });
+}
+
+}  // namespace prt

@@ -1,0 +1,277 @@
+#include "prt/scene.hpp"
+
+#include <array>
+#include <fstream>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "prt/environment.hpp"
+#include "prt/mesh.hpp"
+#include "prt/plugin.hpp"
+#include "prt/registry.hpp"
+
+namespace prt {
+namespace fs = std::filesystem;
+using namespace prt::schema;
+
+namespace {
+
+constexpr double kBig = kHuge;
+
+const ParamSchema& mesh_schema() {
+  static const ParamSchema s{
+      "section [mesh]",
+      {path("file", false, "mesh file (OFF, OBJ, PLY, STL), relative to the scene"),
+       choice("generate", "", "sphere|plane|box", "a generated mesh instead of a file"),
+       integer("detail", "3", 0, 8, "subdivision level of a generated mesh")}};
+  return s;
+}
+const ParamSchema& material_schema() {
+  static const ParamSchema s{"section [material]",
+                             {reals("albedo", "0.8", 3, 0, 1, "diffuse albedo (RGB or grey)")}};
+  return s;
+}
+const ParamSchema& transport_schema() {
+  static const ParamSchema s{
+      "section [transport]",
+      {choice("directions", "fibonacci", "fibonacci|stratified|cubemap", "direction set"),
+       integer("rays", "1024", 1, 4194304, "directions per vertex over the sphere"),
+       boolean("shadowed", "true", "trace visibility (false: unshadowed transfer)"),
+       integer("seed", "1", 0, 9.2e18, "seed of stratified directions")}};
+  return s;
+}
+const ParamSchema& lighting_schema() {
+  static const ParamSchema s{
+      "section [lighting]",
+      {path("environment", false, "equirectangular EXR environment map"),
+       reals("constant", "", 3, 0, kBig, "constant radiance instead of a map"),
+       real("intensity", "1", 0, kBig, "radiance scale"),
+       real("rotation", "0", -3600, 3600, "rotation of the environment about +y, degrees")}};
+  return s;
+}
+const ParamSchema& camera_schema() {
+  static const ParamSchema s{
+      "section [camera]",
+      {reals("position", "", 3, -kBig, kBig, "eye position (default: frames the mesh)"),
+       reals("target", "", 3, -kBig, kBig, "point looked at (default: mesh centre)"),
+       reals("up", "0,1,0", 3, -kBig, kBig, "up vector"),
+       real("fov", "40", 1, 170, "vertical field of view, degrees"),
+       integer("width", "640", 1, 16384, "image width"),
+       integer("height", "480", 1, 16384, "image height")}};
+  return s;
+}
+const ParamSchema& output_schema() {
+  static const ParamSchema s{"section [output]",
+                             {text("bake", "", "bake file (.h5), relative to the scene"),
+                              text("image", "", "rendered image (.png), relative to the scene")}};
+  return s;
+}
+const ParamSchema& ground_truth_schema() {
+  static const ParamSchema s{
+      "section [ground_truth]",
+      {integer("samples", "1024", 1, 1048576, "Monte Carlo samples per vertex"),
+       integer("seed", "7", 0, 9.2e18, "sampling seed")}};
+  return s;
+}
+
+const std::array<std::string, 10> kSections = {"mesh",     "material", "transport", "basis",
+                                               "compressor", "lighting", "renderer", "camera",
+                                               "output",   "ground_truth"};
+
+SourceLocation location_of(const toml::source_region& region, const fs::path& file) {
+  return {file.string(), static_cast<int>(region.begin.line),
+          static_cast<int>(region.begin.column)};
+}
+
+ParamValue to_value(const toml::node& node, const SourceLocation& where, const std::string& key) {
+  if (auto v = node.as_boolean()) return v->get();
+  if (auto v = node.as_integer()) return v->get();
+  if (auto v = node.as_floating_point()) return v->get();
+  if (auto v = node.as_string()) return v->get();
+  if (auto array = node.as_array()) {
+    std::vector<double> values;
+    for (const auto& item : *array) {
+      if (auto i = item.as_integer()) values.push_back(double(i->get()));
+      else if (auto f = item.as_floating_point()) values.push_back(f->get());
+      else throw Error(where, "parameter \"" + key + "\": lists may hold only numbers");
+    }
+    return values;
+  }
+  throw Error(where, "parameter \"" + key + "\": tables and dates are not parameter values");
+}
+
+Params read_table(const toml::table* table, const SourceLocation& section_where,
+                  const fs::path& file, const std::string& skip_key = "") {
+  Params params(section_where);
+  if (!table) return params;
+  for (const auto& [key, node] : *table) {
+    const std::string name(key.str());
+    if (name == skip_key) continue;
+    const SourceLocation where = location_of(key.source(), file);
+    params.set(name, to_value(node, where, name), where);
+  }
+  return params;
+}
+
+// Resolves every path-typed parameter against the scene's folder and checks
+// that the file exists, so missing files are reported before any work.
+void resolve_paths(Params& params, const ParamSchema& schema, const SceneSpec& scene) {
+  for (const auto& spec : schema.specs) {
+    if (spec.type != ParamType::path || !params.has(spec.name)) continue;
+    const std::string value = params.get_string(spec.name);
+    if (value.empty()) continue;
+    const fs::path resolved = scene.resolve(value);
+    if (!fs::exists(resolved))
+      params.fail(spec.name, schema.owner + ": " + spec.name + " \"" + value +
+                                 "\" not found (looked for " + resolved.string() + ")");
+    params.set(spec.name, resolved.string(), params.location(spec.name));
+  }
+}
+
+PluginChoice read_plugin(const toml::table& root, const std::string& section,
+                         const std::string& default_name, PluginKind kind,
+                         const PluginRegistry& registry, const SceneSpec& scene) {
+  PluginChoice choice;
+  const toml::table* table = root[section].as_table();
+  const SourceLocation section_where =
+      table ? location_of(table->source(), scene.file) : SourceLocation{scene.file.string()};
+  choice.where = section_where;
+  choice.name = default_name;
+  if (table) {
+    if (const toml::node* plugin = table->get("plugin")) {
+      choice.where = location_of(plugin->source(), scene.file);
+      const auto name = plugin->value<std::string>();
+      if (!name) throw Error(choice.where, "[" + section + "] plugin must be a string");
+      choice.name = *name;
+    }
+  }
+  choice.params = read_table(table, section_where, scene.file, "plugin");
+  const PluginDescriptor& d = registry.find(kind, choice.name, choice.where);
+  const ParamSchema schema = d.schema();
+  choice.params.validate(schema);
+  resolve_paths(choice.params, schema, scene);
+  return choice;
+}
+
+}  // namespace
+
+SceneSpec SceneSpec::load(const fs::path& file, const PluginRegistry& registry) {
+  std::ifstream in(file);
+  if (!in) throw Error(file.string() + ": scene file not found or unreadable");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse(text.str(), file, registry);
+}
+
+SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
+                           const PluginRegistry& registry) {
+  SceneSpec scene;
+  scene.file = file;
+  scene.text = text;
+  toml::table root;
+  try {
+    root = toml::parse(text, file.string());
+  } catch (const toml::parse_error& e) {
+    throw Error(location_of(e.source(), file), std::string(e.description()));
+  }
+  std::vector<std::string> valid(kSections.begin(), kSections.end());
+  for (const auto& [key, node] : root) {
+    const std::string name(key.str());
+    const SourceLocation where = location_of(key.source(), file);
+    if (std::find(valid.begin(), valid.end(), name) == valid.end()) {
+      std::string message = "unknown section [" + name + "]; valid: mesh, material, transport, "
+                            "basis, compressor, lighting, renderer, camera, output, ground_truth";
+      const std::string suggestion = closest_match(name, valid);
+      if (!suggestion.empty()) message += " (did you mean [" + suggestion + "]?)";
+      throw Error(where, message);
+    }
+    if (!node.is_table()) throw Error(where, "[" + name + "] must be a table");
+  }
+
+  auto section = [&](const std::string& name, const ParamSchema& schema) {
+    const toml::table* table = root[name].as_table();
+    const SourceLocation where =
+        table ? location_of(table->source(), file) : SourceLocation{file.string()};
+    Params params = read_table(table, where, file);
+    params.validate(schema);
+    resolve_paths(params, schema, scene);
+    return params;
+  };
+  scene.mesh = section("mesh", mesh_schema());
+  scene.material = section("material", material_schema());
+  scene.transport = section("transport", transport_schema());
+  scene.lighting = section("lighting", lighting_schema());
+  scene.camera = section("camera", camera_schema());
+  scene.output = section("output", output_schema());
+  scene.ground_truth = section("ground_truth", ground_truth_schema());
+
+  const bool has_file = !scene.mesh.get_string("file").empty();
+  const bool has_generated = !scene.mesh.get_string("generate").empty();
+  if (has_file == has_generated)
+    throw Error(scene.mesh.location(),
+                "section [mesh]: give exactly one of \"file\" or \"generate\"");
+  const bool has_map = !scene.lighting.get_string("environment").empty();
+  if (has_map == scene.lighting.has("constant"))
+    throw Error(scene.lighting.location(),
+                "section [lighting]: give exactly one of \"environment\" or \"constant\"");
+
+  scene.basis = read_plugin(root, "basis", "sh", PluginKind::basis, registry, scene);
+  scene.compressor =
+      read_plugin(root, "compressor", "none", PluginKind::compressor, registry, scene);
+  scene.renderer = read_plugin(root, "renderer", "cpu", PluginKind::renderer, registry, scene);
+  return scene;
+}
+
+fs::path SceneSpec::resolve(const std::string& relative) const {
+  const fs::path p(relative);
+  return p.is_absolute() ? p : (file.parent_path() / p).lexically_normal();
+}
+
+fs::path SceneSpec::bake_path() const {
+  const std::string name = output.get_string("bake");
+  return name.empty() ? fs::path(file.stem().string() + ".h5") : resolve(name);
+}
+
+fs::path SceneSpec::image_path() const {
+  const std::string name = output.get_string("image");
+  return name.empty() ? fs::path(file.stem().string() + ".png") : resolve(name);
+}
+
+Mesh SceneSpec::load_mesh() const {
+  const std::string file_name = mesh.get_string("file");
+  if (!file_name.empty()) return prt::load_mesh(file_name);
+  return make_generated(mesh.get_string("generate"), static_cast<int>(mesh.get_int("detail")));
+}
+
+Environment SceneSpec::load_environment() const {
+  const std::string map = lighting.get_string("environment");
+  Environment environment = map.empty()
+                                ? Environment::constant(Eigen::Vector3d(lighting.get_reals(
+                                                            "constant").data())
+                                                            .cast<float>())
+                                : Environment::load_exr(map);
+  environment.set_intensity(static_cast<float>(lighting.get_real("intensity")));
+  environment.set_rotation(rotation_about_up(lighting.get_real("rotation")));
+  return environment;
+}
+
+Camera SceneSpec::make_camera(const Mesh& m) const {
+  Camera c = Camera::framing(m, static_cast<int>(camera.get_int("width")),
+                             static_cast<int>(camera.get_int("height")),
+                             static_cast<float>(camera.get_real("fov")));
+  auto vec = [&](const char* key) {
+    const auto v = camera.get_reals(key);
+    return Eigen::Vector3f(float(v[0]), float(v[1]), float(v[2]));
+  };
+  if (camera.has("target")) c.target = vec("target");
+  if (camera.has("position")) c.position = vec("position");
+  c.up = vec("up");
+  return c;
+}
+
+Eigen::Vector3f SceneSpec::albedo() const {
+  const auto a = material.get_reals("albedo");
+  return {float(a[0]), float(a[1]), float(a[2])};
+}
+
+}  // namespace prt

@@ -1,0 +1,54 @@
+#include "prt/transfer.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "prt/error.hpp"
+
+namespace prt {
+
+MatrixXfRow CompressedTransfer::decode() const {
+  MatrixXfRow out(vertices(), dimension);
+  for (Eigen::Index p = 0; p < vertices(); ++p) {
+    const int k = cluster_of_vertex[p];
+    out.row(p) = means.row(k);
+    if (components > 0) out.row(p) += weights.row(p) * representatives[k];
+  }
+  return out;
+}
+
+double CompressedTransfer::stored_floats() const {
+  return double(vertices()) * components + double(clusters()) * (components + 1) * dimension;
+}
+
+Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& light) {
+  if (light.rows() != t.dimension)
+    throw Error("light vector has " + std::to_string(light.rows()) + " coefficients, transfer " +
+                std::to_string(t.dimension));
+  // Per-cluster constants: row 0 = mean . l, rows 1..n' = representatives . l.
+  const Eigen::MatrixX3f l = light.cast<float>();
+  std::vector<Eigen::MatrixX3f> constants(t.clusters());
+  for (Eigen::Index k = 0; k < t.clusters(); ++k) {
+    constants[k].resize(t.components + 1, 3);
+    constants[k].row(0) = t.means.row(k) * l;
+    if (t.components > 0) constants[k].bottomRows(t.components) = t.representatives[k] * l;
+  }
+  Eigen::MatrixX3f out(t.vertices(), 3);
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, t.vertices(), 4096), [&](const auto& r) {
+    for (Eigen::Index p = r.begin(); p < r.end(); ++p) {
+      const auto& c = constants[t.cluster_of_vertex[p]];
+      Eigen::RowVector3f e = c.row(0);
+      if (t.components > 0) e += t.weights.row(p) * c.bottomRows(t.components);
+      out.row(p) = e;
+    }
+  });
+  return out;
+}
+
+double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation) {
+  if (exact.rows() != approximation.rows() || exact.cols() != approximation.cols())
+    throw Error("squared_error: shapes differ");
+  return (exact.cast<double>() - approximation.cast<double>()).squaredNorm();
+}
+
+}  // namespace prt

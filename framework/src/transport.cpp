@@ -1,0 +1,231 @@
+#include "prt/transport.hpp"
+
+#include <Eigen/Geometry>
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <bit>
+#include <cmath>
+#include <optional>
+#include <random>
+
+#include "prt/environment.hpp"
+#include "prt/error.hpp"
+#include "prt/progress.hpp"
+
+namespace prt {
+
+std::size_t VisibilityBits::count_visible(std::size_t vertex) const {
+  std::size_t count = 0;
+  for (std::size_t w = 0; w < words_per_vertex_; ++w)
+    count += std::popcount(bits_[vertex * words_per_vertex_ + w]);
+  return count;
+}
+
+struct RayCaster::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+RayCaster::RayCaster(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
+  impl_->device = rtcNewDevice(nullptr);
+  if (!impl_->device) throw Error("Embree: cannot create a device");
+  impl_->scene = rtcNewScene(impl_->device);
+  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+  RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+      mesh.positions.size()));
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+    for (int c = 0; c < 3; ++c) vertices[3 * v + c] = mesh.positions[v][c];
+  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+      mesh.triangles.size()));
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c) indices[3 * t + c] = mesh.triangles[t][c];
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(impl_->scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(impl_->scene);
+  // Offset relative to the object's size keeps rays off their own surface.
+  const float extent = (mesh.bounds_max() - mesh.bounds_min()).norm();
+  offset_ = std::max(1e-6f, 1e-4f * extent);
+}
+
+RayCaster::~RayCaster() = default;
+
+void RayCaster::occluded(const float* origins, const float* directions, std::size_t count,
+                         std::uint8_t* escaped) const {
+  constexpr std::size_t kChunk = 256;
+  RTCRay rays[kChunk];
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  for (std::size_t begin = 0; begin < count; begin += kChunk) {
+    const std::size_t n = std::min(kChunk, count - begin);
+    for (std::size_t i = 0; i < n; ++i) {
+      RTCRay& r = rays[i];
+      const float* o = origins + 3 * (begin + i);
+      const float* d = directions + 3 * (begin + i);
+      r.org_x = o[0], r.org_y = o[1], r.org_z = o[2];
+      r.dir_x = d[0], r.dir_y = d[1], r.dir_z = d[2];
+      r.tnear = 0.f, r.tfar = INFINITY, r.time = 0.f;
+      r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
+    }
+    rtcOccluded1M(impl_->scene, &context, rays, static_cast<unsigned>(n), sizeof(RTCRay));
+    for (std::size_t i = 0; i < n; ++i) escaped[begin + i] = rays[i].tfar >= 0.f;
+  }
+}
+
+namespace {
+
+constexpr int kBlock = 64;  // vertices per task: one GEMM of kBlock x s by s x n
+
+// Rays of one vertex block toward directions above each vertex's tangent plane.
+struct BlockRays {
+  std::vector<float> origins, directions;
+  std::vector<std::uint32_t> vertex, direction;  // which (vertex, direction) each ray is
+  std::vector<std::uint8_t> escaped;
+
+  void build(const Mesh& mesh, const DirectionSet& set, const std::vector<float>& dirs_f,
+             float offset, std::size_t begin, std::size_t end) {
+    origins.clear(), directions.clear(), vertex.clear(), direction.clear();
+    const auto s = static_cast<std::size_t>(set.size());
+    for (std::size_t v = begin; v < end; ++v) {
+      const Eigen::Vector3f n = mesh.normals[v];
+      const Eigen::Vector3f o = mesh.positions[v] + offset * n;
+      for (std::size_t k = 0; k < s; ++k) {
+        const float* d = &dirs_f[3 * k];
+        if (n.x() * d[0] + n.y() * d[1] + n.z() * d[2] <= 0.f) continue;
+        origins.insert(origins.end(), {o.x(), o.y(), o.z()});
+        directions.insert(directions.end(), {d[0], d[1], d[2]});
+        vertex.push_back(static_cast<std::uint32_t>(v));
+        direction.push_back(static_cast<std::uint32_t>(k));
+      }
+    }
+    escaped.resize(vertex.size());
+  }
+  void trace(const RayCaster& caster) {
+    caster.occluded(origins.data(), directions.data(), vertex.size(), escaped.data());
+  }
+};
+
+std::vector<float> to_float(const DirectionSet& set) {
+  std::vector<float> out(3 * set.size());
+  for (Eigen::Index k = 0; k < set.size(); ++k)
+    for (int c = 0; c < 3; ++c) out[3 * k + c] = static_cast<float>(set.directions(k, c));
+  return out;
+}
+
+}  // namespace
+
+TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
+                                 const Eigen::MatrixXd& projection,
+                                 const TransportOptions& options, Progress* progress) {
+  if (projection.rows() != set.size())
+    throw Error("projection matrix has " + std::to_string(projection.rows()) + " rows for " +
+                std::to_string(set.size()) + " directions");
+  const std::size_t v_count = mesh.vertex_count();
+  const auto s = static_cast<std::size_t>(set.size());
+  TransportResult result;
+  result.transfer.coefficients.resize(static_cast<Eigen::Index>(v_count), projection.cols());
+  if (options.keep_visibility) result.visibility = VisibilityBits(v_count, s);
+  std::optional<RayCaster> caster;
+  if (options.shadowed) caster.emplace(mesh);
+  const std::vector<float> dirs_f = to_float(set);
+  std::atomic<std::uint64_t> rays{0};
+
+  Stopwatch clock;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, kBlock), [&](const auto& range) {
+    BlockRays block;
+    block.build(mesh, set, dirs_f, caster ? caster->offset() : 0.f, range.begin(), range.end());
+    if (caster) block.trace(*caster);
+    else std::fill(block.escaped.begin(), block.escaped.end(), 1);
+    // Cosine-weighted visibility times quadrature weight / pi, then one GEMM.
+    Eigen::MatrixXd weighted = Eigen::MatrixXd::Zero(range.size(), s);
+    for (std::size_t r = 0; r < block.vertex.size(); ++r) {
+      if (!block.escaped[r]) continue;
+      const std::size_t v = block.vertex[r], k = block.direction[r];
+      const double cosine = mesh.normals[v].cast<double>().dot(set.directions.row(k));
+      weighted(v - range.begin(), k) = set.weights[k] * cosine / M_PI;
+      if (options.keep_visibility) result.visibility.set(v, k);
+    }
+    result.transfer.coefficients.middleRows(range.begin(), range.size()) =
+        (weighted * projection).cast<float>();
+    if (caster) rays += block.vertex.size();
+    if (progress) progress->add(static_cast<double>(range.size()), double(block.vertex.size()));
+  });
+  result.trace_seconds = clock.seconds();
+  result.rays_cast = rays;
+  return result;
+}
+
+std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& set, Progress* progress) {
+  RayCaster caster(mesh);
+  const std::vector<float> dirs_f = to_float(set);
+  std::atomic<std::uint64_t> rays{0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kBlock),
+                    [&](const auto& range) {
+                      BlockRays block;
+                      block.build(mesh, set, dirs_f, caster.offset(), range.begin(), range.end());
+                      block.trace(caster);
+                      rays += block.vertex.size();
+                      if (progress)
+                        progress->add(static_cast<double>(range.size()), double(block.vertex.size()));
+                    });
+  return rays;
+}
+
+Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
+                                       int samples, std::uint64_t seed, Progress* progress) {
+  RayCaster caster(mesh);
+  const std::size_t v_count = mesh.vertex_count();
+  const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(samples))));
+  const int n = side * side;
+  Eigen::MatrixX3f radiance(static_cast<Eigen::Index>(v_count), 3);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, 16), [&](const auto& range) {
+    std::vector<float> origins(3 * n), directions(3 * n);
+    std::vector<std::uint8_t> escaped(n);
+    for (std::size_t v = range.begin(); v < range.end(); ++v) {
+      // Seeded per vertex, so results do not depend on scheduling.
+      std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + v);
+      std::uniform_real_distribution<double> jitter(0.0, 1.0);
+      const Eigen::Vector3d nrm = mesh.normals[v].cast<double>();
+      const Eigen::Vector3d t =
+          (std::abs(nrm.x()) > 0.9 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(1, 0, 0))
+              .cross(nrm)
+              .normalized();
+      const Eigen::Vector3d b = nrm.cross(t);
+      const Eigen::Vector3f o = mesh.positions[v] + caster.offset() * mesh.normals[v];
+      for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j) {
+          // Stratified cosine-weighted hemisphere sample.
+          const double u1 = (i + jitter(rng)) / side, u2 = (j + jitter(rng)) / side;
+          const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
+          const Eigen::Vector3d d =
+              r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(1.0 - u1) * nrm;
+          const int k = i * side + j;
+          for (int c = 0; c < 3; ++c) origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
+        }
+      caster.occluded(origins.data(), directions.data(), n, escaped.data());
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int k = 0; k < n; ++k)
+        if (escaped[k])
+          sum += environment
+                     .radiance(Eigen::Vector3d(directions[3 * k], directions[3 * k + 1],
+                                               directions[3 * k + 2]))
+                     .cast<double>();
+      // (1/pi) int L V cos = E[L V] under the cosine-weighted pdf.
+      radiance.row(static_cast<Eigen::Index>(v)) = (sum / n).cast<float>().transpose();
+    }
+    if (progress) progress->add(static_cast<double>(range.size()), double(range.size()) * n);
+  });
+  return radiance;
+}
+
+}  // namespace prt

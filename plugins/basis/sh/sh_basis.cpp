@@ -1,0 +1,39 @@
+// Real spherical harmonics (prt/sh.hpp conventions) as a basis plug-in.
+#include <array>
+
+#include "prt/basis.hpp"
+#include "prt/plugin.hpp"
+#include "prt/sh.hpp"
+
+namespace prt {
+
+class SphericalHarmonics final : public Basis {
+ public:
+  static constexpr const char* plugin_version = "1.0.0";
+  static constexpr const char* plugin_description =
+      "real orthonormal spherical harmonics, order^2 coefficients, with rotation";
+  static constexpr auto parameters() {
+    return std::array{
+        schema::integer("order", "6", 1, 200, "number of bands l = 0..order-1 (order^2 terms)")};
+  }
+
+  explicit SphericalHarmonics(const Params& params)
+      : order_(static_cast<int>(params.get_int("order"))) {}
+
+  int size() const override { return sh::coefficient_count(order_); }
+  bool orthonormal() const override { return true; }
+  Eigen::MatrixXd evaluate(const Directions& directions) const override {
+    return sh::evaluate(order_, directions);
+  }
+  bool can_rotate() const override { return true; }
+  Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& rotation) const override {
+    return sh::rotation(order_, rotation);
+  }
+
+ private:
+  int order_;
+};
+
+}  // namespace prt
+
+PRT_EXPORT_PLUGIN(prt::SphericalHarmonics, "sh")

@@ -1,0 +1,95 @@
+#include "rasterizer.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <limits>
+
+namespace prt {
+
+Eigen::Matrix4f view_projection(const Camera& camera, const Mesh& mesh) {
+  const Eigen::Vector3f f = (camera.target - camera.position).normalized();
+  const Eigen::Vector3f s = f.cross(camera.up).normalized();
+  const Eigen::Vector3f u = s.cross(f);
+  Eigen::Matrix4f view = Eigen::Matrix4f::Identity();
+  view.block<1, 3>(0, 0) = s.transpose();
+  view.block<1, 3>(1, 0) = u.transpose();
+  view.block<1, 3>(2, 0) = -f.transpose();
+  view(0, 3) = -s.dot(camera.position);
+  view(1, 3) = -u.dot(camera.position);
+  view(2, 3) = f.dot(camera.position);
+  // Near and far planes enclose the mesh's bounding sphere.
+  const Eigen::Vector3f centre = 0.5f * (mesh.bounds_min() + mesh.bounds_max());
+  const float radius = 0.5f * (mesh.bounds_max() - mesh.bounds_min()).norm();
+  const float distance = (centre - camera.position).dot(f);
+  const float far_plane = std::max(distance + 1.5f * radius, 1e-3f);
+  const float near_plane = std::max(distance - 1.5f * radius, far_plane * 1e-4f);
+  const float aspect = float(camera.width) / float(camera.height);
+  const float t = 1.0f / std::tan(0.5f * camera.fov_degrees * float(M_PI) / 180.f);
+  Eigen::Matrix4f projection = Eigen::Matrix4f::Zero();
+  projection(0, 0) = t / aspect;
+  projection(1, 1) = t;
+  projection(2, 2) = -(far_plane + near_plane) / (far_plane - near_plane);
+  projection(2, 3) = -2.f * far_plane * near_plane / (far_plane - near_plane);
+  projection(3, 2) = -1.f;
+  return projection * view;
+}
+
+std::vector<std::uint8_t> rasterize(const Mesh& mesh, const Eigen::MatrixX3f& colours,
+                                    const Camera& camera, Image& image) {
+  const int W = image.width, H = image.height;
+  const Eigen::Matrix4f vp = view_projection(camera, mesh);
+  // Screen position (x, y in pixels, z in [0,1]) and 1/w per vertex.
+  std::vector<Eigen::Vector4f> screen(mesh.vertex_count());
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const Eigen::Vector4f clip = vp * mesh.positions[v].homogeneous();
+    const float inv_w = clip.w() > 1e-8f ? 1.f / clip.w() : -1.f;
+    screen[v] = {(clip.x() * inv_w * 0.5f + 0.5f) * W, (0.5f - clip.y() * inv_w * 0.5f) * H,
+                 clip.z() * inv_w * 0.5f + 0.5f, inv_w};
+  }
+  std::vector<float> depth(static_cast<std::size_t>(W) * H, std::numeric_limits<float>::max());
+  std::vector<std::uint8_t> covered(static_cast<std::size_t>(W) * H, 0);
+  constexpr int kBand = 16;  // rows per task; each task owns its rows, so no locking
+  tbb::parallel_for(0, (H + kBand - 1) / kBand, [&](int band) {
+    const int row_begin = band * kBand, row_end = std::min(H, row_begin + kBand);
+    for (const auto& t : mesh.triangles) {
+      const Eigen::Vector4f& a = screen[t[0]];
+      const Eigen::Vector4f& b = screen[t[1]];
+      const Eigen::Vector4f& c = screen[t[2]];
+      if (a.w() <= 0 || b.w() <= 0 || c.w() <= 0) continue;  // behind the eye
+      const float area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+      if (std::abs(area) < 1e-12f) continue;
+      const int x0 = std::max(0, int(std::floor(std::min({a.x(), b.x(), c.x()}))));
+      const int x1 = std::min(W - 1, int(std::ceil(std::max({a.x(), b.x(), c.x()}))));
+      const int y0 = std::max(row_begin, int(std::floor(std::min({a.y(), b.y(), c.y()}))));
+      const int y1 = std::min(row_end - 1, int(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+      for (int y = y0; y <= y1; ++y) {
+        const float py = y + 0.5f;
+        for (int x = x0; x <= x1; ++x) {
+          const float px = x + 0.5f;
+          float l0 = ((b.x() - px) * (c.y() - py) - (b.y() - py) * (c.x() - px)) / area;
+          float l1 = ((c.x() - px) * (a.y() - py) - (c.y() - py) * (a.x() - px)) / area;
+          float l2 = 1.f - l0 - l1;
+          if (l0 < 0 || l1 < 0 || l2 < 0) continue;
+          const float z = l0 * a.z() + l1 * b.z() + l2 * c.z();
+          const std::size_t i = static_cast<std::size_t>(y) * W + x;
+          if (z < 0.f || z > 1.f || z >= depth[i]) continue;
+          depth[i] = z;
+          covered[i] = 1;
+          // Perspective-correct weights.
+          const float p0 = l0 * a.w(), p1 = l1 * b.w(), p2 = l2 * c.w();
+          const float sum = p0 + p1 + p2;
+          const Eigen::RowVector3f colour =
+              (p0 * colours.row(t[0]) + p1 * colours.row(t[1]) + p2 * colours.row(t[2])) / sum;
+          float* out = image.at(x, y);
+          for (int ch = 0; ch < 3; ++ch) out[ch] = colour[ch];
+        }
+      }
+    }
+  });
+  return covered;
+}
+
+}  // namespace prt

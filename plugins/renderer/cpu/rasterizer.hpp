@@ -1,0 +1,21 @@
+// A software rasteriser: z-buffer, perspective-correct Gouraud interpolation
+// of per-vertex colours, pixel centres at (x + 0.5, y + 0.5) as in OpenGL.
+#pragma once
+#include <Eigen/Core>
+
+#include "prt/camera.hpp"
+#include "prt/image.hpp"
+#include "prt/mesh.hpp"
+
+namespace prt {
+
+// 4x4 view-projection matrix of the camera (OpenGL conventions, near/far
+// chosen from the mesh bounds).
+Eigen::Matrix4f view_projection(const Camera& camera, const Mesh& mesh);
+
+// Draws the mesh with per-vertex colours into `image`; returns the coverage
+// mask (1 where a triangle was drawn).
+std::vector<std::uint8_t> rasterize(const Mesh& mesh, const Eigen::MatrixX3f& vertex_colours,
+                                    const Camera& camera, Image& image);
+
+}  // namespace prt
