@@ -146,13 +146,14 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
     block.build(mesh, set, dirs_f, caster ? caster->offset() : 0.f, range.begin(), range.end());
     if (caster) block.trace(*caster);
     else std::fill(block.escaped.begin(), block.escaped.end(), 1);
-    // Cosine-weighted visibility times quadrature weight / pi, then one GEMM.
+    // Cosine-weighted visibility / pi, then one GEMM with P (which holds the
+    // quadrature weights).
     Eigen::MatrixXd weighted = Eigen::MatrixXd::Zero(range.size(), s);
     for (std::size_t r = 0; r < block.vertex.size(); ++r) {
       if (!block.escaped[r]) continue;
       const std::size_t v = block.vertex[r], k = block.direction[r];
       const double cosine = mesh.normals[v].cast<double>().dot(set.directions.row(k));
-      weighted(v - range.begin(), k) = set.weights[k] * cosine / M_PI;
+      weighted(v - range.begin(), k) = cosine / M_PI;
       if (options.keep_visibility) result.visibility.set(v, k);
     }
     result.transfer.coefficients.middleRows(range.begin(), range.size()) =
