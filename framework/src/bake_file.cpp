@@ -71,7 +71,6 @@ void write_array(H5::Group& group, const std::string& name, const T* data, hsize
   if (rows > 0 && cols > 0) {
     const hsize_t chunk[2] = {std::min<hsize_t>(rows, 4096), cols};
     properties.setChunk(2, chunk);
-    properties.setDeflate(1);
   }
   H5::DataSet set = group.createDataSet(name, h5_type<T>(), H5::DataSpace(2, dims), properties);
   if (rows > 0 && cols > 0) set.write(data, h5_type<T>());
@@ -137,6 +136,10 @@ PluginRecord read_plugin(const H5::H5Object& object, const std::string& prefix) 
 
 void write_bake(const fs::path& file, const BakeData& data) {
   H5::Exception::dontPrint();
+  data.mesh.validate("bake data");
+  data.compressed.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
+  if (data.transfer.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
+    throw Error(file.string() + ": transfer rows do not match the mesh's vertices");
   write_atomically(file, [&](const fs::path& temporary) {
     try {
       H5::H5File h5(temporary.string(), H5F_ACC_TRUNC);
@@ -231,15 +234,12 @@ BakeData read_bake(const fs::path& file) {
     c.weights = read_matrix(compressed, "weights");
     c.means = read_matrix(compressed, "means");
     const MatrixXfRow stacked = read_matrix(compressed, "representatives");
-    if (c.means.cols() != c.dimension || stacked.rows() != c.clusters() * c.components ||
-        c.weights.rows() != c.vertices() || c.weights.cols() != c.components ||
-        c.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()) ||
+    if (stacked.rows() != c.clusters() * c.components || stacked.cols() != c.dimension ||
         data.transfer.coefficients.rows() != c.vertices())
       throw Error("compressed transfer has inconsistent sizes");
-    for (auto k : c.cluster_of_vertex)
-      if (k < 0 || k >= c.clusters()) throw Error("cluster index out of range");
     for (Eigen::Index k = 0; k < c.clusters(); ++k)
       c.representatives.push_back(stacked.middleRows(k * c.components, c.components));
+    c.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
 
     H5::Group state = h5.openGroup("basis_state");
     for (hsize_t i = 0; i < state.getNumObjs(); ++i) {

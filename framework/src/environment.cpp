@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "prt/error.hpp"
+#include "prt/quadrature.hpp"
 
 namespace prt {
 
@@ -79,9 +80,14 @@ Eigen::Vector3f Environment::radiance(const Eigen::Vector3d& direction) const {
 Eigen::MatrixX3d Environment::project(const Basis& basis) const {
   const bool rotated = !rotation_.isIdentity(1e-12);
   const bool rotate_coefficients = rotated && basis.can_rotate();
-  // A constant map is integrated on a fine lattice instead of its one texel.
-  const int w = (width_ == 1 && height_ == 1) ? 256 : width_;
-  const int h = (width_ == 1 && height_ == 1) ? 128 : height_;
+  if (width_ == 1 && height_ == 1) {
+    // A constant: exact quadrature (for polynomial bases up to order 64).
+    const DirectionSet set = gauss_product_sphere(64);
+    const Eigen::MatrixXd samples =
+        (intensity_ * texel(0, 0)).cast<double>() * Eigen::RowVectorXd::Ones(set.size());
+    return basis.project(samples, set).transpose();
+  }
+  const int w = width_, h = height_;
   constexpr int kRows = 8;
   const int blocks = (h + kRows - 1) / kRows;
   std::vector<Eigen::MatrixX3d> partial(blocks);
@@ -93,11 +99,9 @@ Eigen::MatrixX3d Environment::project(const Basis& basis) const {
       Eigen::Vector3f value;
       if (rotated && !rotate_coefficients) {
         value = radiance(set.directions.row(k).transpose());
-      } else if (w == width_) {
+      } else {
         const int x = static_cast<int>(k % w), y = begin + static_cast<int>(k / w);
         value = intensity_ * texel(x, y);
-      } else {
-        value = intensity_ * texel(0, 0);
       }
       samples.col(k) = value.cast<double>();
     }

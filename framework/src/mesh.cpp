@@ -3,7 +3,10 @@
 #include <Eigen/Geometry>
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -44,6 +47,29 @@ std::size_t count_lines_containing(const std::string& text, const std::string& n
   for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1))
     ++count;
   return count;
+}
+
+// OpenMesh reads "nan" or "inf" in a text file as garbage without a word, so
+// text files are scanned for non-finite numbers first.
+void reject_non_finite_text(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char head[512] = {};
+  in.read(head, sizeof head);
+  if (std::find(head, head + in.gcount(), '\0') != head + in.gcount()) return;  // binary
+  in.clear();
+  in.seekg(0);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream tokens(line);
+    for (std::string token; tokens >> token;) {
+      char* end = nullptr;
+      const double value = std::strtod(token.c_str(), &end);
+      if (end && *end == '\0' && end != token.c_str() && !std::isfinite(value))
+        throw Error(file.string() + ":" + std::to_string(number) +
+                    ": NaN or infinite coordinate \"" + token + "\"");
+    }
+  }
 }
 
 }  // namespace
@@ -96,6 +122,7 @@ void Mesh::validate(const std::string& source) const {
 Mesh load_mesh(const std::filesystem::path& file) {
   const std::string source = file.string();
   if (!std::filesystem::is_regular_file(file)) throw Error(source + ": mesh file not found");
+  reject_non_finite_text(file);
   OMesh om;
   om.request_vertex_normals();
   OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexNormal;
@@ -118,9 +145,15 @@ Mesh load_mesh(const std::filesystem::path& file) {
   for (std::size_t v = 0; v < mesh.positions.size(); ++v)
     if (!mesh.positions[v].allFinite())
       throw Error(source + ": vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
-  // Faces OpenMesh refused (repeated or invalid vertices) count as degenerate.
-  mesh.skipped_degenerate_faces = count_lines_containing(log, "complex") +
-                                  count_lines_containing(log, "invalid");
+  if (log.find("invalid vertex index") != std::string::npos)
+    throw Error(source + ": " + std::to_string(count_lines_containing(log, "invalid vertex index")) +
+                " face(s) use a vertex index out of range (the file has " +
+                std::to_string(om.n_vertices()) + " vertices)");
+  // Faces OpenMesh refused (a vertex repeated) count as degenerate.
+  mesh.skipped_degenerate_faces = count_lines_containing(log, "ImporterT: Face");
+  if (const auto complex = count_lines_containing(log, "complex"))
+    std::cerr << "warning: " << source << ": " << complex
+              << " non-manifold face(s); OpenMesh duplicated their vertices\n";
   for (auto fh : om.faces()) {
     std::array<std::uint32_t, 3> t{};
     int k = 0;

@@ -109,6 +109,7 @@ ParamValue parse_default(const ParamSpecRecord& spec) {
     case ParamType::reals: {
       std::vector<double> values;
       for (const auto& part : split(text, ',')) values.push_back(std::stod(part));
+      if (values.size() == 1 && spec.list_length > 1) values.resize(spec.list_length, values[0]);
       return values;
     }
     case ParamType::string:

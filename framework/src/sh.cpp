@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "prt/error.hpp"
+#include "prt/quadrature.hpp"
 
 namespace prt::sh {
 
@@ -136,46 +137,18 @@ Eigen::MatrixXd rotation(int order, const Eigen::Matrix3d& r) {
 }
 
 Eigen::VectorXd clamped_cosine_zonal(int order) {
-  // z_l = 2 pi sqrt((2l+1)/(4 pi)) int_0^1 P_l(t) t dt, with the integral
-  // computed exactly by Gauss-Legendre quadrature (the integrand is a polynomial).
+  // z_l = 2 pi sqrt((2l+1)/(4 pi)) int_0^1 P_l(t) t dt; the integrand is a
+  // polynomial, so Gauss-Legendre quadrature on [0, 1] is exact.
   Eigen::VectorXd z = Eigen::VectorXd::Zero(std::max(order, 0));
-  const int nodes = order / 2 + 2;
-  // Gauss-Legendre nodes on [-1, 1] by Newton iteration.
-  std::vector<double> t(nodes), w(nodes);
-  for (int i = 0; i < nodes; ++i) {
-    double x = std::cos(M_PI * (i + 0.75) / (nodes + 0.5));
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = x;
-      for (int k = 2; k <= nodes; ++k) {
-        const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      const double derivative = nodes * (x * p1 - p0) / (x * x - 1.0);
-      const double dx = p1 / derivative;
-      x -= dx;
-      if (std::abs(dx) < 1e-16) {
-        w[i] = 2.0 / ((1.0 - x * x) * derivative * derivative);
-        break;
-      }
-      w[i] = 2.0 / ((1.0 - x * x) * derivative * derivative);
-    }
-    t[i] = x;
-  }
-  for (int i = 0; i < nodes; ++i) {
-    const double u = 0.5 * (t[i] + 1.0);  // map to [0, 1]
-    const double weight = 0.5 * w[i];
-    double p0 = 1.0, p1 = u;
+  const GaussLegendre rule = gauss_legendre(order / 2 + 2);
+  for (std::size_t i = 0; i < rule.nodes.size(); ++i) {
+    const double t = 0.5 * (rule.nodes[i] + 1.0), weight = 0.5 * rule.weights[i];
+    double p_prev = 0.0, p = 1.0;  // P_{l-1}(t), P_l(t)
     for (int l = 0; l < order; ++l) {
-      double pl;
-      if (l == 0) pl = 1.0;
-      else if (l == 1) pl = u;
-      else {
-        pl = ((2.0 * l - 1.0) * u * p1 - (l - 1.0) * p0) / l;
-        p0 = p1;
-        p1 = pl;
-      }
-      z[l] += weight * pl * u;
+      z[l] += weight * p * t;
+      const double p_next = ((2.0 * l + 1.0) * t * p - l * p_prev) / (l + 1.0);
+      p_prev = p;
+      p = p_next;
     }
   }
   for (int l = 0; l < order; ++l) z[l] *= 2.0 * M_PI * std::sqrt((2.0 * l + 1.0) / (4.0 * M_PI));

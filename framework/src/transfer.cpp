@@ -17,6 +17,17 @@ MatrixXfRow CompressedTransfer::decode() const {
   return out;
 }
 
+void CompressedTransfer::validate(Eigen::Index vertex_count) const {
+  if (vertices() != vertex_count || weights.rows() != vertices() || weights.cols() != components ||
+      means.cols() != dimension || static_cast<Eigen::Index>(representatives.size()) != clusters())
+    throw Error("compressed transfer has inconsistent sizes");
+  for (const auto& r : representatives)
+    if (r.rows() != components || r.cols() != dimension)
+      throw Error("compressed transfer has a representative block of the wrong size");
+  for (auto k : cluster_of_vertex)
+    if (k < 0 || k >= clusters()) throw Error("compressed transfer: cluster index out of range");
+}
+
 double CompressedTransfer::stored_floats() const {
   return double(vertices()) * components + double(clusters()) * (components + 1) * dimension;
 }

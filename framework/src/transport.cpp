@@ -11,6 +11,7 @@
 #include <random>
 
 #include "prt/environment.hpp"
+#include "prt/environment_sampler.hpp"
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
 
@@ -186,11 +187,18 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
                                        int samples, std::uint64_t seed, Progress* progress) {
   RayCaster caster(mesh);
   const std::size_t v_count = mesh.vertex_count();
-  const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(samples))));
-  const int n = side * side;
+  // A constant map is sampled best by the cosine alone (zero variance); a real
+  // map adds luminance-proportional samples, combined by the balance heuristic.
+  const bool use_map = environment.width() * environment.height() > 1;
+  std::optional<EnvironmentSampler> sampler;
+  if (use_map) sampler.emplace(environment);
+  const int strategies = use_map ? 2 : 1;
+  const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(samples / strategies))));
+  const int per_strategy = side * side, n = strategies * per_strategy;
   Eigen::MatrixX3f radiance(static_cast<Eigen::Index>(v_count), 3);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, 16), [&](const auto& range) {
     std::vector<float> origins(3 * n), directions(3 * n);
+    std::vector<double> cosine_pdf(n), map_pdf(n, 0.0);
     std::vector<std::uint8_t> escaped(n);
     for (std::size_t v = range.begin(); v < range.end(); ++v) {
       // Seeded per vertex, so results do not depend on scheduling.
@@ -203,26 +211,33 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
               .normalized();
       const Eigen::Vector3d b = nrm.cross(t);
       const Eigen::Vector3f o = mesh.positions[v] + caster.offset() * mesh.normals[v];
-      for (int i = 0; i < side; ++i)
-        for (int j = 0; j < side; ++j) {
-          // Stratified cosine-weighted hemisphere sample.
-          const double u1 = (i + jitter(rng)) / side, u2 = (j + jitter(rng)) / side;
+      for (int k = 0; k < n; ++k) {
+        // Stratified in [0,1)^2 within each strategy.
+        const int stratum = k % per_strategy;
+        const double u1 = (stratum / side + jitter(rng)) / side;
+        const double u2 = (stratum % side + jitter(rng)) / side;
+        Eigen::Vector3d d;
+        if (k < per_strategy) {  // cosine-weighted hemisphere
           const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
-          const Eigen::Vector3d d =
-              r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(1.0 - u1) * nrm;
-          const int k = i * side + j;
-          for (int c = 0; c < 3; ++c) origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
+          d = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(1.0 - u1) * nrm;
+        } else {
+          d = sampler->sample(u1, u2).direction;
         }
+        cosine_pdf[k] = std::max(0.0, d.dot(nrm)) / M_PI;
+        if (use_map) map_pdf[k] = sampler->pdf(d);
+        for (int c = 0; c < 3; ++c) origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
+      }
       caster.occluded(origins.data(), directions.data(), n, escaped.data());
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (int k = 0; k < n; ++k)
-        if (escaped[k])
-          sum += environment
-                     .radiance(Eigen::Vector3d(directions[3 * k], directions[3 * k + 1],
-                                               directions[3 * k + 2]))
-                     .cast<double>();
-      // (1/pi) int L V cos = E[L V] under the cosine-weighted pdf.
-      radiance.row(static_cast<Eigen::Index>(v)) = (sum / n).cast<float>().transpose();
+      for (int k = 0; k < n; ++k) {
+        if (!escaped[k] || cosine_pdf[k] <= 0) continue;
+        const Eigen::Vector3d d(directions[3 * k], directions[3 * k + 1], directions[3 * k + 2]);
+        // f = L V cos / pi = L cosine_pdf (albedo 1); balance heuristic:
+        // f / (N (p_cosine + p_map)).
+        const double weight = cosine_pdf[k] / (per_strategy * (cosine_pdf[k] + map_pdf[k]));
+        sum += weight * environment.radiance(d).cast<double>();
+      }
+      radiance.row(static_cast<Eigen::Index>(v)) = sum.cast<float>().transpose();
     }
     if (progress) progress->add(static_cast<double>(range.size()), double(range.size()) * n);
   });

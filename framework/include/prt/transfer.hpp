@@ -39,6 +39,9 @@ struct CompressedTransfer {
 
   // Reconstructs the v x n signal (for error measurement).
   MatrixXfRow decode() const;
+  // Throws prt::Error unless the sizes and cluster indices agree with each
+  // other and with `vertex_count`.
+  void validate(Eigen::Index vertex_count) const;
   // Floats stored: m_p n' + m_c (n' + 1) n.
   double stored_floats() const;
 };

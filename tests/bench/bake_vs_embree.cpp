@@ -1,0 +1,63 @@
+// Bake throughput against raw Embree on the same rays, in one run.
+//
+//   bench_bake [mesh.off] [rays] [order] [repeats]
+//
+// "raw" builds the BVH and traces exactly the rays the bake casts (only
+// directions above each vertex's tangent plane) and does nothing else; "bake"
+// is the full transfer stage (BVH, rays, visibility bits, SH projection as
+// GEMMs). The acceptance limit of issue 2 is bake / raw <= 1.25.
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "prt/direction_set.hpp"
+#include "prt/mesh.hpp"
+#include "prt/progress.hpp"
+#include "prt/sh.hpp"
+#include "prt/transport.hpp"
+
+#ifndef PRT_SOURCE_DIR
+#define PRT_SOURCE_DIR "."
+#endif
+
+int main(int argc, char** argv) {
+  using namespace prt;
+  const std::string mesh_file =
+      argc > 1 ? argv[1] : std::string(PRT_SOURCE_DIR) + "/data/meshes/bunny00.off";
+  const int rays = argc > 2 ? std::stoi(argv[2]) : 1024;
+  const int order = argc > 3 ? std::stoi(argv[3]) : 10;
+  const int repeats = argc > 4 ? std::stoi(argv[4]) : 3;
+  const double limit = 1.25;
+
+  const Mesh mesh = load_mesh(mesh_file);
+  const DirectionSet set = DirectionSet::fibonacci(rays);
+  std::printf("mesh %s: %zu vertices; %d directions; SH order %d (%d coefficients)\n",
+              mesh_file.c_str(), mesh.vertex_count(), rays, order, order * order);
+
+  std::vector<double> raw, bake;
+  std::uint64_t rays_raw = 0, rays_bake = 0;
+  for (int r = 0; r < repeats; ++r) {
+    Stopwatch raw_clock;
+    rays_raw = trace_only(mesh, set, nullptr);
+    raw.push_back(raw_clock.seconds());
+
+    Stopwatch bake_clock;
+    const Eigen::MatrixXd projection = set.weights.asDiagonal() * sh::evaluate(order, set.directions);
+    const TransportResult result = diffuse_transfer(mesh, set, projection, {true, false}, nullptr);
+    bake.push_back(bake_clock.seconds());
+    rays_bake = result.rays_cast;
+  }
+  std::sort(raw.begin(), raw.end());
+  std::sort(bake.begin(), bake.end());
+  const double raw_s = raw[raw.size() / 2], bake_s = bake[bake.size() / 2];
+  const double ratio = bake_s / raw_s;
+  std::printf("rays per run: raw %llu, bake %llu%s\n", (unsigned long long)rays_raw,
+              (unsigned long long)rays_bake, rays_raw == rays_bake ? " (same rays)" : " (MISMATCH)");
+  std::printf("raw Embree trace : %8.3f s  %6.2f Mrays/s (median of %d)\n", raw_s,
+              rays_raw / raw_s * 1e-6, repeats);
+  std::printf("bake (trace+SH)  : %8.3f s  %6.2f Mrays/s\n", bake_s, rays_bake / bake_s * 1e-6);
+  std::printf("ratio bake/raw   : %8.3f  (limit %.2f: %s)\n", ratio, limit,
+              ratio <= limit ? "PASS" : "FAIL");
+  return ratio <= limit && rays_raw == rays_bake ? 0 : 1;
+}

@@ -1,0 +1,96 @@
+// Conformance checks run over every basis plug-in (one ctest entry each):
+// orthonormality if claimed, projection/reconstruction round trip, linearity,
+// rotation consistency if it rotates, save/load round trip, extreme inputs.
+#include <Eigen/Geometry>
+#include <catch2/catch.hpp>
+#include <random>
+
+#include "conformance.hpp"
+#include "prt/basis.hpp"
+#include "prt/quadrature.hpp"
+#include "prt/registry.hpp"
+
+using namespace prt;
+
+namespace {
+
+struct Fixture {
+  PluginRegistry registry{PluginRegistry::default_directories()};
+  Params params;
+  std::shared_ptr<Basis> basis = registry.create<Basis>(conformance::plugin_name, params);
+  // Exact for spherical polynomials of degree < 128.
+  DirectionSet set = gauss_product_sphere(64);
+};
+
+Eigen::MatrixXd random_coefficients(int functions, int size, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd c(functions, size);
+  for (auto& x : c.reshaped()) x = g(rng);
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE_METHOD(Fixture, "basis values are finite everywhere, poles included", "[conformance]") {
+  Directions extremes(6, 3);
+  extremes << 0, 0, 1, 0, 0, -1, 1, 0, 0, 0, 1, 0, 1e-12, 0, 1, 0, -1e-12, -1;
+  extremes.row(4).normalize(), extremes.row(5).normalize();
+  const Eigen::MatrixXd v = basis->evaluate(extremes);
+  CHECK(v.rows() == 6);
+  CHECK(v.cols() == basis->size());
+  CHECK(v.allFinite());
+}
+
+TEST_CASE_METHOD(Fixture, "an orthonormal basis has an identity Gram matrix", "[conformance]") {
+  if (!basis->orthonormal()) return;
+  const Eigen::MatrixXd y = basis->evaluate(set.directions);
+  const Eigen::MatrixXd gram = y.transpose() * set.weights.asDiagonal() * y;
+  const int n = basis->size();
+  CHECK((gram - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
+}
+
+TEST_CASE_METHOD(Fixture, "projection reconstructs functions in the span", "[conformance]") {
+  const Eigen::MatrixXd c = random_coefficients(4, basis->size(), 1);
+  const Eigen::MatrixXd samples = c * basis->evaluate(set.directions).transpose();
+  const Eigen::MatrixXd projected = basis->project(samples, set);
+  CHECK((projected - c).norm() / c.norm() < 1e-9);
+}
+
+TEST_CASE_METHOD(Fixture, "projection is linear and scales from 1e-6 to 1e6", "[conformance]") {
+  const Eigen::MatrixXd f = random_coefficients(2, set.size(), 2);
+  const Eigen::MatrixXd pf = basis->project(f, set);
+  const Eigen::MatrixXd combined = basis->project(3.0 * f.row(0) - 0.5 * f.row(1), set);
+  CHECK((combined - (3.0 * pf.row(0) - 0.5 * pf.row(1))).norm() < 1e-9 * pf.norm());
+  for (double scale : {1e-6, 1e6}) {
+    const Eigen::MatrixXd scaled = basis->project(scale * f, set);
+    REQUIRE(scaled.allFinite());
+    CHECK((scaled / scale - pf).norm() < 1e-12 * pf.norm());
+  }
+  CHECK(basis->project(Eigen::MatrixXd::Zero(1, set.size()), set).cwiseAbs().maxCoeff() == 0.0);
+}
+
+TEST_CASE_METHOD(Fixture, "rotation is consistent with re-projection and composes",
+                 "[conformance]") {
+  if (!basis->can_rotate()) return;
+  const Eigen::Matrix3d a =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d b = Eigen::AngleAxisd(-1.9, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::MatrixXd ra = basis->rotation_matrix(a), rb = basis->rotation_matrix(b);
+  CHECK((ra * rb - basis->rotation_matrix(a * b)).cwiseAbs().maxCoeff() < 1e-10);
+  // Rotating coefficients equals projecting f(A^T d).
+  const Eigen::VectorXd c = random_coefficients(1, basis->size(), 3).transpose();
+  const Directions back = set.directions * a;
+  const Eigen::RowVectorXd samples = (basis->evaluate(back) * c).transpose();
+  const Eigen::VectorXd reprojected = basis->project(samples, set).transpose();
+  CHECK((ra * c - reprojected).norm() / c.norm() < 1e-9);
+}
+
+TEST_CASE_METHOD(Fixture, "saved state restores an identical basis", "[conformance]") {
+  const BasisState state = basis->save();
+  Params fresh_params;
+  auto fresh = registry.create<Basis>(conformance::plugin_name, fresh_params);
+  fresh->load(state);
+  CHECK(fresh->size() == basis->size());
+  CHECK(fresh->evaluate(set.directions) == basis->evaluate(set.directions));
+}

@@ -1,0 +1,120 @@
+#include <H5Cpp.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+
+#include "prt/bake_file.hpp"
+#include "prt/error.hpp"
+
+using namespace prt;
+namespace fs = std::filesystem;
+
+namespace {
+fs::path temp_dir() {
+  const fs::path dir = fs::temp_directory_path() / "prt_bake_tests";
+  fs::create_directories(dir);
+  return dir;
+}
+
+BakeData sample_bake() {
+  BakeData d;
+  d.scene_file = "scene.toml";
+  d.scene_text = "[basis]\nplugin = \"sh\"\n";
+  d.basis = {"sh", "1.0.0", "order = 3\n"};
+  d.compressor = {"none", "1.0.0", ""};
+  d.transport = "fibonacci 64 directions";
+  d.mesh = make_box();
+  d.albedo = {0.5f, 0.25f, 1.0f};
+  d.transfer.coefficients = MatrixXfRow::Random(d.mesh.vertex_count(), 9);
+  d.compressed.compressor = "none";
+  d.compressed.dimension = 9;
+  d.compressed.components = 2;
+  d.compressed.cluster_of_vertex.assign(d.mesh.vertex_count(), 1);
+  d.compressed.cluster_of_vertex[0] = 0;
+  d.compressed.weights = MatrixXfRow::Random(d.mesh.vertex_count(), 2);
+  d.compressed.means = MatrixXfRow::Random(2, 9);
+  d.compressed.representatives = {MatrixXfRow::Random(2, 9), MatrixXfRow::Random(2, 9)};
+  d.basis_state.matrices["mean"] = Eigen::MatrixXd::Random(3, 4);
+  d.metrics["trace_seconds"] = 1.5;
+  return d;
+}
+
+bool leftovers(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+  return false;
+}
+}  // namespace
+
+TEST_CASE("bake files round-trip every field", "[bake]") {
+  const BakeData d = sample_bake();
+  const fs::path file = temp_dir() / "roundtrip.h5";
+  write_bake(file, d);
+  const BakeData r = read_bake(file);
+  CHECK(r.scene_text == d.scene_text);
+  CHECK(r.basis.name == "sh");
+  CHECK(r.basis.parameters == d.basis.parameters);
+  CHECK(r.compressor.parameters.empty());
+  CHECK(r.transport == d.transport);
+  CHECK(r.mesh.positions == d.mesh.positions);
+  CHECK(r.mesh.triangles == d.mesh.triangles);
+  CHECK(r.albedo == d.albedo);
+  CHECK(r.transfer.coefficients == d.transfer.coefficients);
+  CHECK(r.compressed.cluster_of_vertex == d.compressed.cluster_of_vertex);
+  CHECK(r.compressed.weights == d.compressed.weights);
+  CHECK(r.compressed.means == d.compressed.means);
+  CHECK(r.compressed.representatives[1] == d.compressed.representatives[1]);
+  CHECK(r.basis_state.matrices.at("mean") == d.basis_state.matrices.at("mean"));
+  CHECK(r.metrics.at("trace_seconds") == 1.5);
+  CHECK_FALSE(leftovers(temp_dir()));
+}
+
+TEST_CASE("a failed write leaves neither the file nor a temporary", "[bake]") {
+  const fs::path file = temp_dir() / "never.h5";
+  fs::remove(file);
+  CHECK_THROWS(write_atomically(file, [](const fs::path& temporary) {
+    std::ofstream(temporary) << "half";
+    throw Error("interrupted");
+  }));
+  CHECK_FALSE(fs::exists(file));
+  CHECK_FALSE(leftovers(temp_dir()));
+}
+
+TEST_CASE("a failed rewrite keeps the previous complete file", "[bake]") {
+  const fs::path file = temp_dir() / "keep.h5";
+  write_bake(file, sample_bake());
+  BakeData broken = sample_bake();
+  broken.compressed.representatives.pop_back();  // inconsistent: cannot be written
+  CHECK_THROWS(write_bake(file, broken));
+  CHECK_NOTHROW(read_bake(file));
+}
+
+TEST_CASE("damaged and foreign files are refused with a clear message", "[bake]") {
+  const fs::path dir = temp_dir();
+  CHECK_THROWS_WITH(read_bake(dir / "missing.h5"), Catch::Contains("not found"));
+
+  std::ofstream(dir / "garbage.h5") << "definitely not hdf5";
+  CHECK_THROWS_WITH(read_bake(dir / "garbage.h5"),
+                    Catch::Contains("garbage.h5") && Catch::Contains("not a PRT bake file"));
+
+  write_bake(dir / "whole.h5", sample_bake());
+  const auto size = fs::file_size(dir / "whole.h5");
+  fs::copy_file(dir / "whole.h5", dir / "truncated.h5", fs::copy_options::overwrite_existing);
+  fs::resize_file(dir / "truncated.h5", size / 2);
+  CHECK_THROWS_WITH(read_bake(dir / "truncated.h5"), Catch::Contains("truncated.h5"));
+
+  {
+    H5::H5File other((dir / "other.h5").string(), H5F_ACC_TRUNC);
+  }
+  CHECK_THROWS_WITH(read_bake(dir / "other.h5"), Catch::Contains("not a PRT bake"));
+
+  fs::copy_file(dir / "whole.h5", dir / "future.h5", fs::copy_options::overwrite_existing);
+  {
+    H5::H5File f((dir / "future.h5").string(), H5F_ACC_RDWR);
+    double version = 99;
+    f.openGroup("/").openAttribute("format_version").write(H5::PredType::NATIVE_DOUBLE, &version);
+  }
+  CHECK_THROWS_WITH(read_bake(dir / "future.h5"),
+                    Catch::Contains("format version 99") && Catch::Contains("reads version 1"));
+}

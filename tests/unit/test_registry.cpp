@@ -1,0 +1,110 @@
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "prt/basis.hpp"
+#include "prt/registry.hpp"
+
+using namespace prt;
+namespace fs = std::filesystem;
+
+namespace {
+fs::path case_dir(const std::string& name) { return fs::path(PRT_TEST_PLUGIN_DIR) / name; }
+
+bool is_mapped(const std::string& fragment) {
+  std::ifstream maps("/proc/self/maps");
+  std::stringstream text;
+  text << maps.rdbuf();
+  return text.str().find(fragment) != std::string::npos;
+}
+}  // namespace
+
+TEST_CASE("the build's plug-ins are discovered from their info records", "[registry]") {
+  PluginRegistry r({PRT_BUILD_PLUGIN_DIR});
+  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"sh"});
+  CHECK(r.names(PluginKind::compressor) == std::vector<std::string>{"none"});
+  CHECK(r.names(PluginKind::renderer) == std::vector<std::string>{"cpu"});
+  const auto& sh = r.find(PluginKind::basis, "sh");
+  CHECK(std::string(sh.info.build_key) == host_build_key());
+  CHECK(sh.schema().find("order") != nullptr);
+  CHECK(r.loaded_count() == 0);  // reading records loads nothing
+}
+
+TEST_CASE("a library is loaded only when an object is created", "[registry]") {
+  PluginRegistry r({case_dir("good")});
+  CHECK(r.loaded_count() == 0);
+  CHECK_FALSE(is_mapped("libprt-basis-good.so"));
+  Params p;
+  auto basis = r.create<Basis>("constant", p);
+  CHECK(r.loaded_count() == 1);
+  CHECK(is_mapped("libprt-basis-good.so"));
+  CHECK(basis->size() == 1);
+}
+
+TEST_CASE("objects keep their library mapped after the registry is gone", "[registry][lifetime]") {
+  std::shared_ptr<Basis> basis;
+  {
+    PluginRegistry r({case_dir("good")});
+    Params p;
+    p.set("scale", 2.0);
+    basis = r.create<Basis>("constant", p);
+  }
+  // The registry's handle is gone; calling into the plug-in must still work.
+  REQUIRE(is_mapped("libprt-basis-good.so"));
+  const Eigen::MatrixXd v = basis->evaluate(Directions::Zero(3, 3));
+  CHECK(v(0, 0) == Approx(2.0 / std::sqrt(4 * M_PI)));
+  basis.reset();  // destroy runs inside the module, then the module is unmapped
+  CHECK_FALSE(is_mapped("libprt-basis-good.so"));
+}
+
+TEST_CASE("plug-in parameters are validated against the schema before creation",
+          "[registry]") {
+  PluginRegistry r({case_dir("good")});
+  Params p({"s.toml", 3, 1});
+  p.set("scael", 1.0, {"s.toml", 4, 1});
+  CHECK_THROWS_WITH(r.create<Basis>("constant", p),
+                    Catch::Contains("s.toml:4:1") && Catch::Contains("did you mean \"scale\""));
+  CHECK(r.loaded_count() == 0);
+}
+
+TEST_CASE("each plug-in failure gives one clear error naming the file", "[registry]") {
+  CHECK_THROWS_WITH(PluginRegistry({case_dir("not_a_plugin")}),
+                    Catch::Contains("libprt-basis-notaplugin.so: not a PRT plug-in"));
+  CHECK_THROWS_WITH(PluginRegistry({case_dir("missing_symbol")}),
+                    Catch::Contains("libprt-basis-missing.so") &&
+                        Catch::Contains("lacks the symbol prt_plugin_destroy"));
+  CHECK_THROWS_WITH(PluginRegistry({case_dir("abi_mismatch")}),
+                    Catch::Contains("libprt-basis-abi.so: plug-in ABI version 999") &&
+                        Catch::Contains("this host reads ABI version 1"));
+  CHECK_THROWS_WITH(PluginRegistry({case_dir("build_key")}),
+                    Catch::Contains("libprt-basis-key.so") &&
+                        Catch::Contains("was built for \"gcc-4-foreign\"") &&
+                        Catch::Contains(host_build_key()));
+  CHECK_THROWS_WITH(PluginRegistry({case_dir("duplicate")}),
+                    Catch::Contains("duplicate basis plug-in name \"constant\"") &&
+                        Catch::Contains("libprt-basis-dup-a.so") &&
+                        Catch::Contains("libprt-basis-dup-b.so"));
+  PluginRegistry throwing({case_dir("throwing")});
+  Params p;
+  CHECK_THROWS_WITH(throwing.create<Basis>("constant", p),
+                    Catch::Contains("failed to construct: this test plug-in always fails"));
+  PluginRegistry good({case_dir("good")});
+  CHECK_THROWS_WITH(good.find(PluginKind::basis, "constnat"),
+                    Catch::Contains("no basis plug-in named \"constnat\"; available: constant") &&
+                        Catch::Contains("did you mean \"constant\""));
+  CHECK_THROWS_WITH(good.find(PluginKind::renderer, "cpu"),
+                    Catch::Contains("available: (none found)"));
+  CHECK_THROWS_WITH(PluginRegistry({"/no/such/dir"}), Catch::Contains("does not exist"));
+}
+
+TEST_CASE("PRT_PLUGIN_PATH adds directories after the build's", "[registry]") {
+  const std::string path = case_dir("good").string() + ":" + case_dir("throwing").string();
+  setenv("PRT_PLUGIN_PATH", path.c_str(), 1);
+  const auto dirs = PluginRegistry::default_directories();
+  unsetenv("PRT_PLUGIN_PATH");
+  REQUIRE(dirs.size() == 3);
+  CHECK(dirs[0] == fs::path(PRT_BUILD_PLUGIN_DIR));
+  CHECK(dirs[1] == case_dir("good"));
+  CHECK(dirs[2] == case_dir("throwing"));
+}
