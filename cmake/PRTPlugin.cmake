@@ -1,7 +1,9 @@
 # prt_add_plugin(<name> KIND <basis|compressor|renderer> SOURCES <files...>
 #                [OUTPUT_DIR <dir>] [LIBRARIES <libs...>])
 # Builds a PRT plug-in: a shared library with hidden visibility that links the
-# framework and lands in the directory the registry scans.
+# framework and lands in the directory the registry scans. Outside the PRT
+# tree (find_package(PRT)) it also registers the plug-in's conformance tests
+# with ctest, run with PRT_PLUGIN_PATH pointing at the output directory.
 function(prt_add_plugin name)
   cmake_parse_arguments(ARG "" "KIND;OUTPUT_DIR" "SOURCES;LIBRARIES" ${ARGN})
   if(NOT ARG_KIND MATCHES "^(basis|compressor|renderer)$")
@@ -20,4 +22,10 @@ function(prt_add_plugin name)
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON)
   set_property(GLOBAL APPEND PROPERTY PRT_PLUGIN_TARGETS ${target})
+  if(TARGET PRT::basis_conformance AND ARG_KIND STREQUAL "basis")
+    add_test(NAME conformance.basis.${name}
+             COMMAND PRT::basis_conformance --plugin ${name})
+    set_tests_properties(conformance.basis.${name} PROPERTIES
+      ENVIRONMENT "PRT_PLUGIN_PATH=${ARG_OUTPUT_DIR}")
+  endif()
 endfunction()

@@ -16,7 +16,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-void print_times(const StageTimes& times) { std::cout << "timings:\n" << times.table(); }
+void print_times(const StageTimes& times) {
+  std::cout << "timings:\n" << times.table();
+}
 
 std::string describe_shape(Eigen::Index rows, Eigen::Index cols) {
   return std::to_string(rows) + " x " + std::to_string(cols);
@@ -34,9 +36,9 @@ int bake(Context& context, const BakeArgs& args) {
   clock = Stopwatch();
   write_bake(output, data);
   times.add("write bake file", clock.seconds());
-  std::cout << "baked " << data.mesh.vertex_count() << " vertices x "
-            << data.transfer.dimension() << " coefficients (" << data.basis.name << ", "
-            << data.transport << ") -> " << output.string() << "\n"
+  std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << data.transfer.dimension()
+            << " coefficients (" << data.basis.name << ", " << data.transport << ") -> "
+            << output.string() << "\n"
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
   print_times(times);
   return 0;
@@ -88,16 +90,18 @@ int info(const std::string& file) {
             << data.mesh.triangle_count() << " triangles\n"
             << "transport:    " << data.transport << "\n"
             << "basis:        " << data.basis.name << " " << data.basis.version << " ("
-            << data.basis.parameters.substr(0, data.basis.parameters.size() ? data.basis.parameters.size() - 1 : 0)
+            << data.basis.parameters.substr(
+                   0, data.basis.parameters.size() ? data.basis.parameters.size() - 1 : 0)
             << ")\n"
             << "transfer:     " << data.transfer.kind << ", "
             << describe_shape(data.transfer.vertices(), data.transfer.dimension()) << "\n"
-            << "compressor:   " << data.compressor.name << " " << data.compressor.version
-            << ": " << c.clusters() << " cluster(s), " << c.components
-            << " component(s), " << c.stored_floats() << " floats stored\n"
+            << "compressor:   " << data.compressor.name << " " << data.compressor.version << ": "
+            << c.clusters() << " cluster(s), " << c.components << " component(s), "
+            << c.stored_floats() << " floats stored\n"
             << "albedo:       " << data.albedo.transpose() << "\n"
             << "metrics:\n";
-  for (const auto& [name, value] : data.metrics) std::cout << "  " << name << " = " << value << "\n";
+  for (const auto& [name, value] : data.metrics)
+    std::cout << "  " << name << " = " << value << "\n";
   return 0;
 }
 

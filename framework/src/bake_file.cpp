@@ -56,10 +56,14 @@ double read_number(const H5::H5Object& object, const std::string& name) {
 
 template <class T>
 const H5::PredType& h5_type() {
-  if constexpr (std::is_same_v<T, float>) return H5::PredType::NATIVE_FLOAT;
-  else if constexpr (std::is_same_v<T, double>) return H5::PredType::NATIVE_DOUBLE;
-  else if constexpr (std::is_same_v<T, std::int32_t>) return H5::PredType::NATIVE_INT32;
-  else return H5::PredType::NATIVE_UINT32;
+  if constexpr (std::is_same_v<T, float>)
+    return H5::PredType::NATIVE_FLOAT;
+  else if constexpr (std::is_same_v<T, double>)
+    return H5::PredType::NATIVE_DOUBLE;
+  else if constexpr (std::is_same_v<T, std::int32_t>)
+    return H5::PredType::NATIVE_INT32;
+  else
+    return H5::PredType::NATIVE_UINT32;
 }
 
 // Writes rows x cols values (row-major) as a 2-D dataset, compressed.
@@ -151,7 +155,8 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_text(root, "transport", data.transport);
       write_plugin(root, "basis", data.basis);
       write_plugin(root, "compressor", data.compressor);
-      for (int c = 0; c < 3; ++c) write_number(root, "albedo_" + std::string(1, "rgb"[c]), data.albedo[c]);
+      for (int c = 0; c < 3; ++c)
+        write_number(root, "albedo_" + std::string(1, "rgb"[c]), data.albedo[c]);
 
       H5::Group mesh = h5.createGroup("mesh");
       write_vectors<Eigen::Vector3f, float>(mesh, "positions", data.mesh.positions);

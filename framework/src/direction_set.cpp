@@ -22,7 +22,8 @@ Eigen::Vector2d equirect_uv(const Eigen::Vector3d& d) {
 
 DirectionSet DirectionSet::fibonacci(int count) {
   if (count < 1) throw Error("fibonacci direction set needs at least 1 direction");
-  DirectionSet set{"fibonacci", Directions(count, 3), Eigen::VectorXd::Constant(count, 4.0 * M_PI / count)};
+  DirectionSet set{"fibonacci", Directions(count, 3),
+                   Eigen::VectorXd::Constant(count, 4.0 * M_PI / count)};
   const double golden = M_PI * (3.0 - std::sqrt(5.0));
   for (int k = 0; k < count; ++k) {
     const double z = 1.0 - (2.0 * k + 1.0) / count;
@@ -41,7 +42,8 @@ DirectionSet DirectionSet::stratified(int count, std::uint64_t seed) {
   const int cols = std::max(1, count / rows);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> jitter(0.0, 1.0);
-  DirectionSet set{"stratified", Directions(count, 3), Eigen::VectorXd::Constant(count, 4.0 * M_PI / count)};
+  DirectionSet set{"stratified", Directions(count, 3),
+                   Eigen::VectorXd::Constant(count, 4.0 * M_PI / count)};
   for (int k = 0; k < count; ++k) {
     const int row = std::min(k / cols, rows - 1);
     const int row_begin = row * cols;
@@ -58,16 +60,24 @@ DirectionSet DirectionSet::stratified(int count, std::uint64_t seed) {
 namespace {
 
 // Solid angle subtended by the cube-face rectangle [0,x] x [0,y] at distance 1.
-double area_element(double x, double y) { return std::atan2(x * y, std::sqrt(x * x + y * y + 1)); }
+double area_element(double x, double y) {
+  return std::atan2(x * y, std::sqrt(x * x + y * y + 1));
+}
 
 Eigen::Vector3d cube_direction(int face, double a, double b) {
   switch (face) {
-    case 0: return {1, -b, -a};
-    case 1: return {-1, -b, a};
-    case 2: return {a, 1, b};
-    case 3: return {a, -1, -b};
-    case 4: return {a, -b, 1};
-    default: return {-a, -b, -1};
+    case 0:
+      return {1, -b, -a};
+    case 1:
+      return {-1, -b, a};
+    case 2:
+      return {a, 1, b};
+    case 3:
+      return {a, -1, -b};
+    case 4:
+      return {a, -b, 1};
+    default:
+      return {-a, -b, -1};
   }
 }
 

@@ -71,9 +71,8 @@ bool SymbolTable::has(const std::string& name) const {
 SymbolTable dynamic_symbols(const std::filesystem::path& file) {
   const ElfImage image = read_image(file);
   SymbolTable table;
-  for_each_dynamic_symbol(image, [&](const Elf64_Sym&, std::string name) {
-    table.names.push_back(std::move(name));
-  });
+  for_each_dynamic_symbol(
+      image, [&](const Elf64_Sym&, std::string name) { table.names.push_back(std::move(name)); });
   return table;
 }
 

@@ -31,8 +31,7 @@ Environment Environment::load_exr(const std::filesystem::path& file) {
   } catch (const std::exception& e) {
     throw Error(file.string() + ": cannot read OpenEXR image: " + e.what());
   }
-  if (width < 2 || height < 1)
-    throw Error(file.string() + ": environment map is too small");
+  if (width < 2 || height < 1) throw Error(file.string() + ": environment map is too small");
   std::vector<float> rgb(static_cast<std::size_t>(width) * height * 3);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
@@ -77,6 +76,11 @@ Eigen::Vector3f Environment::radiance(const Eigen::Vector3d& direction) const {
   return intensity_ * ((1 - ay) * top + ay * bottom);
 }
 
+Eigen::Vector3f Environment::texel_radiance(const Eigen::Vector3d& direction) const {
+  const Eigen::Vector2d uv = equirect_uv(rotation_.transpose() * direction);
+  return intensity_ * texel(static_cast<int>(uv.x() * width_), static_cast<int>(uv.y() * height_));
+}
+
 Eigen::MatrixX3d Environment::project(const Basis& basis) const {
   const bool rotated = !rotation_.isIdentity(1e-12);
   const bool rotate_coefficients = rotated && basis.can_rotate();
@@ -98,7 +102,7 @@ Eigen::MatrixX3d Environment::project(const Basis& basis) const {
     for (Eigen::Index k = 0; k < set.size(); ++k) {
       Eigen::Vector3f value;
       if (rotated && !rotate_coefficients) {
-        value = radiance(set.directions.row(k).transpose());
+        value = texel_radiance(set.directions.row(k).transpose());
       } else {
         const int x = static_cast<int>(k % w), y = begin + static_cast<int>(k / w);
         value = intensity_ * texel(x, y);

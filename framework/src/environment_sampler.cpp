@@ -40,7 +40,8 @@ EnvironmentSampler::EnvironmentSampler(const Environment& env)
   for (int y = 0; y < height_; ++y) {
     double* cdf = &column_cdf_[static_cast<std::size_t>(y) * (width_ + 1)];
     const double row_total = cdf[width_];
-    for (int x = 0; x <= width_; ++x) cdf[x] = row_total > 0 ? cdf[x] / row_total : double(x) / width_;
+    for (int x = 0; x <= width_; ++x)
+      cdf[x] = row_total > 0 ? cdf[x] / row_total : double(x) / width_;
   }
 }
 
@@ -65,8 +66,8 @@ double EnvironmentSampler::pdf(const Eigen::Vector3d& direction) const {
   const Eigen::Vector2d uv = equirect_uv(rotation_.transpose() * direction);
   const int x = std::clamp(static_cast<int>(uv.x() * width_), 0, width_ - 1);
   const int y = std::clamp(static_cast<int>(uv.y() * height_), 0, height_ - 1);
-  const double solid_angle = (2.0 * M_PI / width_) *
-                             (std::cos(M_PI * y / height_) - std::cos(M_PI * (y + 1) / height_));
+  const double solid_angle =
+      (2.0 * M_PI / width_) * (std::cos(M_PI * y / height_) - std::cos(M_PI * (y + 1) / height_));
   return texel_probability_[static_cast<std::size_t>(y) * width_ + x] / solid_angle;
 }
 

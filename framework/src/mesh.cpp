@@ -146,7 +146,8 @@ Mesh load_mesh(const std::filesystem::path& file) {
     if (!mesh.positions[v].allFinite())
       throw Error(source + ": vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
   if (log.find("invalid vertex index") != std::string::npos)
-    throw Error(source + ": " + std::to_string(count_lines_containing(log, "invalid vertex index")) +
+    throw Error(source + ": " +
+                std::to_string(count_lines_containing(log, "invalid vertex index")) +
                 " face(s) use a vertex index out of range (the file has " +
                 std::to_string(om.n_vertices()) + " vertices)");
   // Faces OpenMesh refused (a vertex repeated) count as degenerate.
@@ -174,8 +175,10 @@ Mesh load_mesh(const std::filesystem::path& file) {
     bool usable = true;
     for (auto& n : mesh.normals) {
       const float length = n.norm();
-      if (!std::isfinite(length) || length < 1e-12f) usable = false;
-      else n /= length;
+      if (!std::isfinite(length) || length < 1e-12f)
+        usable = false;
+      else
+        n /= length;
     }
     if (!usable) mesh.normals.clear();
   }
@@ -190,8 +193,8 @@ Mesh load_mesh(const std::filesystem::path& file) {
 Mesh make_sphere(int subdivisions, float radius) {
   Mesh m;
   const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (auto& p : m.positions) p.normalize();
   m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                  {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},

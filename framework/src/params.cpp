@@ -8,21 +8,30 @@ namespace prt {
 
 const char* to_string(PluginKind kind) {
   switch (kind) {
-    case PluginKind::basis: return "basis";
-    case PluginKind::compressor: return "compressor";
-    case PluginKind::renderer: return "renderer";
+    case PluginKind::basis:
+      return "basis";
+    case PluginKind::compressor:
+      return "compressor";
+    case PluginKind::renderer:
+      return "renderer";
   }
   return "unknown";
 }
 
 const char* to_string(ParamType type) {
   switch (type) {
-    case ParamType::boolean: return "bool";
-    case ParamType::integer: return "integer";
-    case ParamType::real: return "real";
-    case ParamType::string: return "string";
-    case ParamType::reals: return "list of reals";
-    case ParamType::path: return "path";
+    case ParamType::boolean:
+      return "bool";
+    case ParamType::integer:
+      return "integer";
+    case ParamType::real:
+      return "real";
+    case ParamType::string:
+      return "string";
+    case ParamType::reals:
+      return "list of reals";
+    case ParamType::path:
+      return "path";
   }
   return "unknown";
 }
@@ -77,14 +86,17 @@ std::string describe_value(const ParamValue& value) {
   return std::visit(
       [](const auto& v) -> std::string {
         using T = std::decay_t<decltype(v)>;
-        if constexpr (std::is_same_v<T, bool>) return v ? "true" : "false";
-        else if constexpr (std::is_same_v<T, std::int64_t>) return std::to_string(v);
+        if constexpr (std::is_same_v<T, bool>)
+          return v ? "true" : "false";
+        else if constexpr (std::is_same_v<T, std::int64_t>)
+          return std::to_string(v);
         else if constexpr (std::is_same_v<T, double>) {
           std::ostringstream s;
           s.precision(17);
           s << v;
           return s.str();
-        } else if constexpr (std::is_same_v<T, std::string>) return "\"" + v + "\"";
+        } else if constexpr (std::is_same_v<T, std::string>)
+          return "\"" + v + "\"";
         else {
           std::vector<std::string> items;
           for (double x : v) items.push_back(describe_value(ParamValue(x)));
@@ -103,9 +115,12 @@ const char* value_type_name(const ParamValue& value) {
 ParamValue parse_default(const ParamSpecRecord& spec) {
   const std::string text = spec.default_value;
   switch (spec.type) {
-    case ParamType::boolean: return text == "true";
-    case ParamType::integer: return static_cast<std::int64_t>(std::stoll(text));
-    case ParamType::real: return std::stod(text);
+    case ParamType::boolean:
+      return text == "true";
+    case ParamType::integer:
+      return static_cast<std::int64_t>(std::stoll(text));
+    case ParamType::real:
+      return std::stod(text);
     case ParamType::reals: {
       std::vector<double> values;
       for (const auto& part : split(text, ',')) values.push_back(std::stod(part));
@@ -113,7 +128,8 @@ ParamValue parse_default(const ParamSpecRecord& spec) {
       return values;
     }
     case ParamType::string:
-    case ParamType::path: return text;
+    case ParamType::path:
+      return text;
   }
   return text;
 }
@@ -155,20 +171,18 @@ void Params::validate(const ParamSchema& schema) {
     }
     const std::string what = schema.owner + ": parameter \"" + key + "\"";
     auto wrong_type = [&] {
-      throw Error(entry.where, what + " must be " + (spec->type == ParamType::reals
-                                                         ? std::string("a number or a list of ") +
-                                                               std::to_string(spec->list_length) +
-                                                               " numbers"
-                                                         : std::string("a ") +
-                                                               to_string(spec->type)) +
-                                   ", got " + value_type_name(entry.value) + " " +
-                                   describe_value(entry.value));
+      throw Error(
+          entry.where,
+          what + " must be " +
+              (spec->type == ParamType::reals ? std::string("a number or a list of ") +
+                                                    std::to_string(spec->list_length) + " numbers"
+                                              : std::string("a ") + to_string(spec->type)) +
+              ", got " + value_type_name(entry.value) + " " + describe_value(entry.value));
     };
     auto check_range = [&](double x) {
       if (!std::isfinite(x) || x < spec->min || x > spec->max)
-        throw Error(entry.where,
-                    what + " = " + describe_value(entry.value) + " is out of range " +
-                        range_text(*spec));
+        throw Error(entry.where, what + " = " + describe_value(entry.value) + " is out of range " +
+                                     range_text(*spec));
     };
     switch (spec->type) {
       case ParamType::boolean:
@@ -185,7 +199,8 @@ void Params::validate(const ParamSchema& schema) {
         check_range(std::get<double>(entry.value));
         break;
       case ParamType::reals: {
-        if (auto* i = std::get_if<std::int64_t>(&entry.value)) entry.value = static_cast<double>(*i);
+        if (auto* i = std::get_if<std::int64_t>(&entry.value))
+          entry.value = static_cast<double>(*i);
         if (auto* d = std::get_if<double>(&entry.value))
           entry.value = std::vector<double>(std::max<std::uint32_t>(spec->list_length, 1), *d);
         auto* list = std::get_if<std::vector<double>>(&entry.value);
@@ -201,7 +216,8 @@ void Params::validate(const ParamSchema& schema) {
         if (spec->choices[0] != '\0') {
           const auto choices = split(spec->choices, '|');
           if (std::find(choices.begin(), choices.end(), text) == choices.end()) {
-            std::string message = what + " = \"" + text + "\" is not one of: " + join(choices, ", ");
+            std::string message =
+                what + " = \"" + text + "\" is not one of: " + join(choices, ", ");
             const std::string suggestion = closest_match(text, choices);
             if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
             throw Error(entry.where, message);
@@ -230,7 +246,9 @@ const ParamEntry& Params::entry(const std::string& key) const {
   return it->second;
 }
 
-bool Params::get_bool(const std::string& key) const { return std::get<bool>(entry(key).value); }
+bool Params::get_bool(const std::string& key) const {
+  return std::get<bool>(entry(key).value);
+}
 
 std::int64_t Params::get_int(const std::string& key) const {
   return std::get<std::int64_t>(entry(key).value);

@@ -51,10 +51,9 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   times.add("load mesh", clock.seconds());
 
   clock = Stopwatch();
-  const DirectionSet set =
-      DirectionSet::make(scene.transport.get_string("directions"),
-                         static_cast<int>(scene.transport.get_int("rays")),
-                         static_cast<std::uint64_t>(scene.transport.get_int("seed")));
+  const DirectionSet set = DirectionSet::make(
+      scene.transport.get_string("directions"), static_cast<int>(scene.transport.get_int("rays")),
+      static_cast<std::uint64_t>(scene.transport.get_int("seed")));
   const Eigen::MatrixXd projection = basis->projection_matrix(set);
   times.add("directions + basis samples", clock.seconds());
 
@@ -87,7 +86,8 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   data.metrics["rays_cast"] = static_cast<double>(result.rays_cast);
   data.metrics["trace_project_seconds"] = result.trace_seconds;
   data.metrics["encode_seconds"] = encode_seconds;
-  data.metrics["squared_error"] = squared_error(data.transfer.coefficients, data.compressed.decode());
+  data.metrics["squared_error"] =
+      squared_error(data.transfer.coefficients, data.compressed.decode());
   data.metrics["stored_floats"] = data.compressed.stored_floats();
   return data;
 }
@@ -109,8 +109,8 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   PluginChoice basis_choice = scene.basis, renderer_choice = scene.renderer;
   auto basis = registry.create<Basis>(basis_choice.name, basis_choice.params, basis_choice.where);
   basis->load(data.basis_state);
-  auto renderer =
-      registry.create<Renderer>(renderer_choice.name, renderer_choice.params, renderer_choice.where);
+  auto renderer = registry.create<Renderer>(renderer_choice.name, renderer_choice.params,
+                                            renderer_choice.where);
   const Environment environment = scene.load_environment();
   times.add("load lighting + plug-ins", clock.seconds());
 
@@ -139,8 +139,8 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
 Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
                              const RunOptions& options, StageTimes& times) {
   PluginChoice renderer_choice = scene.renderer;
-  auto renderer =
-      registry.create<Renderer>(renderer_choice.name, renderer_choice.params, renderer_choice.where);
+  auto renderer = registry.create<Renderer>(renderer_choice.name, renderer_choice.params,
+                                            renderer_choice.where);
   const Environment environment = scene.load_environment();
   Stopwatch clock;
   Rendered out;
@@ -148,8 +148,8 @@ Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginReg
     const int samples = static_cast<int>(scene.ground_truth.get_int("samples"));
     Progress progress("ground truth", double(mesh.vertex_count()), "rays", options.quiet);
     out.vertex_radiance = ground_truth_radiance(
-        mesh, environment, samples,
-        static_cast<std::uint64_t>(scene.ground_truth.get_int("seed")), &progress);
+        mesh, environment, samples, static_cast<std::uint64_t>(scene.ground_truth.get_int("seed")),
+        &progress);
   }
   const Eigen::Vector3f albedo = scene.albedo();
   times.add("ground truth (Monte Carlo)", clock.seconds());

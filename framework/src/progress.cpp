@@ -1,16 +1,23 @@
 #include "prt/progress.hpp"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
-#include <unistd.h>
 
 namespace prt {
 
 Progress::Progress(std::string label, double total, std::string unit, bool quiet)
-    : label_(std::move(label)), unit_(std::move(unit)), total_(total), quiet_(quiet),
-      start_(std::chrono::steady_clock::now()), last_draw_(start_) {}
+    : label_(std::move(label)),
+      unit_(std::move(unit)),
+      total_(total),
+      quiet_(quiet),
+      start_(std::chrono::steady_clock::now()),
+      last_draw_(start_) {}
 
-Progress::~Progress() { finish(); }
+Progress::~Progress() {
+  finish();
+}
 
 namespace {
 void atomic_add(std::atomic<double>& value, double amount) {
@@ -54,8 +61,9 @@ void Progress::draw(bool final) {
   bar.resize(width, '.');
   const bool tty = isatty(2);
   std::fprintf(stderr, "%s%-22s [%s] %5.1f%%  %.3g %s/s  %s %.1fs%s", tty ? "\r" : "",
-               label_.c_str(), bar.c_str(), 100.0 * fraction, rate, unit_.empty() ? "items" : unit_.c_str(),
-               final ? "took" : "ETA", final ? elapsed : eta, (final || !tty) ? "\n" : "");
+               label_.c_str(), bar.c_str(), 100.0 * fraction, rate,
+               unit_.empty() ? "items" : unit_.c_str(), final ? "took" : "ETA",
+               final ? elapsed : eta, (final || !tty) ? "\n" : "");
   std::fflush(stderr);
 }
 

@@ -1,5 +1,7 @@
 #include "prt/registry.hpp"
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <boost/dll/shared_library.hpp>
 #include <cstdlib>
@@ -14,7 +16,9 @@
 namespace prt {
 namespace fs = std::filesystem;
 
-const char* host_build_key() { return PRT_BUILD_KEY; }
+const char* host_build_key() {
+  return PRT_BUILD_KEY;
+}
 
 ParamSchema PluginDescriptor::schema() const {
   ParamSchema schema;
@@ -80,6 +84,20 @@ PluginRegistry::PluginRegistry(const std::vector<fs::path>& directories) {
 
 PluginRegistry::~PluginRegistry() = default;
 
+namespace {
+// <libdir>/prt/plugins next to this library when it is an installed copy,
+// otherwise the plug-in directory of the build tree it was built in.
+fs::path own_plugin_directory() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<const void*>(&host_build_key), &info) && info.dli_fname) {
+    const fs::path installed = fs::path(info.dli_fname).parent_path() / "prt" / "plugins";
+    std::error_code error;
+    if (fs::is_directory(installed, error)) return installed;
+  }
+  return fs::path(PRT_PLUGIN_DIR);
+}
+}  // namespace
+
 std::vector<fs::path> PluginRegistry::default_directories() {
   std::vector<fs::path> directories;
   if (const char* extra = std::getenv("PRT_PLUGIN_PATH")) {
@@ -90,7 +108,7 @@ std::vector<fs::path> PluginRegistry::default_directories() {
       start = end + 1;
     }
   }
-  directories.insert(directories.begin(), fs::path(PRT_PLUGIN_DIR));
+  directories.insert(directories.begin(), own_plugin_directory());
   return directories;
 }
 
@@ -136,8 +154,7 @@ const PluginDescriptor& PluginRegistry::find(PluginKind kind, const std::string&
 }
 
 std::shared_ptr<PluginObject> PluginRegistry::create_object(PluginKind kind,
-                                                            const std::string& name,
-                                                            Params& params,
+                                                            const std::string& name, Params& params,
                                                             const SourceLocation& where) {
   const PluginDescriptor& d = find(kind, name, where);
   params.validate(d.schema());

@@ -1,9 +1,10 @@
 #include "prt/scene.hpp"
 
+#include <toml++/toml.h>
+
 #include <array>
 #include <fstream>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "prt/environment.hpp"
 #include "prt/mesh.hpp"
@@ -74,9 +75,9 @@ const ParamSchema& ground_truth_schema() {
   return s;
 }
 
-const std::array<std::string, 10> kSections = {"mesh",     "material", "transport", "basis",
-                                               "compressor", "lighting", "renderer", "camera",
-                                               "output",   "ground_truth"};
+const std::array<std::string, 10> kSections = {"mesh",       "material",    "transport", "basis",
+                                               "compressor", "lighting",    "renderer",  "camera",
+                                               "output",     "ground_truth"};
 
 SourceLocation location_of(const toml::source_region& region, const fs::path& file) {
   return {file.string(), static_cast<int>(region.begin.line),
@@ -91,9 +92,12 @@ ParamValue to_value(const toml::node& node, const SourceLocation& where, const s
   if (auto array = node.as_array()) {
     std::vector<double> values;
     for (const auto& item : *array) {
-      if (auto i = item.as_integer()) values.push_back(double(i->get()));
-      else if (auto f = item.as_floating_point()) values.push_back(f->get());
-      else throw Error(where, "parameter \"" + key + "\": lists may hold only numbers");
+      if (auto i = item.as_integer())
+        values.push_back(double(i->get()));
+      else if (auto f = item.as_floating_point())
+        values.push_back(f->get());
+      else
+        throw Error(where, "parameter \"" + key + "\": lists may hold only numbers");
     }
     return values;
   }
@@ -179,7 +183,8 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     const std::string name(key.str());
     const SourceLocation where = location_of(key.source(), file);
     if (std::find(valid.begin(), valid.end(), name) == valid.end()) {
-      std::string message = "unknown section [" + name + "]; valid: mesh, material, transport, "
+      std::string message = "unknown section [" + name +
+                            "]; valid: mesh, material, transport, "
                             "basis, compressor, lighting, renderer, camera, output, ground_truth";
       const std::string suggestion = closest_match(name, valid);
       if (!suggestion.empty()) message += " (did you mean [" + suggestion + "]?)";
@@ -245,11 +250,10 @@ Mesh SceneSpec::load_mesh() const {
 
 Environment SceneSpec::load_environment() const {
   const std::string map = lighting.get_string("environment");
-  Environment environment = map.empty()
-                                ? Environment::constant(Eigen::Vector3d(lighting.get_reals(
-                                                            "constant").data())
-                                                            .cast<float>())
-                                : Environment::load_exr(map);
+  Environment environment =
+      map.empty() ? Environment::constant(
+                        Eigen::Vector3d(lighting.get_reals("constant").data()).cast<float>())
+                  : Environment::load_exr(map);
   environment.set_intensity(static_cast<float>(lighting.get_real("intensity")));
   environment.set_rotation(rotation_about_up(lighting.get_real("rotation")));
   return environment;

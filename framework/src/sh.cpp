@@ -47,8 +47,8 @@ void evaluate(int order, double x, double y, double z, double* out) {
 
 Eigen::MatrixXd evaluate(int order, const Directions& directions) {
   const int n = coefficient_count(order);
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values(
-      directions.rows(), n);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values(directions.rows(),
+                                                                                n);
   for (Eigen::Index k = 0; k < directions.rows(); ++k)
     evaluate(order, directions(k, 0), directions(k, 1), directions(k, 2), values.row(k).data());
   return values;
@@ -81,9 +81,11 @@ class BandRotator {
             (std::abs(n) < l) ? double((l + n) * (l - n)) : double((2 * l) * (2 * l - 1));
         const int am = std::abs(m);
         const double u = std::sqrt(double((l + m) * (l - m)) / denominator);
-        const double v = 0.5 * std::sqrt((1.0 + d) * double((l + am - 1) * (l + am)) / denominator) *
+        const double v = 0.5 *
+                         std::sqrt((1.0 + d) * double((l + am - 1) * (l + am)) / denominator) *
                          (1.0 - 2.0 * d);
-        const double w = -0.5 * std::sqrt(double((l - am - 1) * (l - am)) / denominator) * (1.0 - d);
+        const double w =
+            -0.5 * std::sqrt(double((l - am - 1) * (l - am)) / denominator) * (1.0 - d);
         double value = 0.0;
         if (u != 0.0) value += u * P(0, m, n, l, prev);
         if (v != 0.0) value += v * V(m, n, l, prev);
@@ -161,8 +163,7 @@ Eigen::VectorXd clamped_cosine(int order, const Eigen::Vector3d& normal) {
   const Eigen::Vector3d n = normal.normalized();
   evaluate(order, n.x(), n.y(), n.z(), y.data());
   for (int l = 0; l < order; ++l)
-    for (int m = -l; m <= l; ++m)
-      y[index(l, m)] *= std::sqrt(4.0 * M_PI / (2.0 * l + 1.0)) * z[l];
+    for (int m = -l; m <= l; ++m) y[index(l, m)] *= std::sqrt(4.0 * M_PI / (2.0 * l + 1.0)) * z[l];
   return y;
 }
 

@@ -1,10 +1,10 @@
 #include "prt/transport.hpp"
 
-#include <Eigen/Geometry>
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
 #include <bit>
 #include <cmath>
 #include <optional>
@@ -39,14 +39,14 @@ RayCaster::RayCaster(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
   RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-      mesh.positions.size()));
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               mesh.positions.size()));
   for (std::size_t v = 0; v < mesh.positions.size(); ++v)
     for (int c = 0; c < 3; ++c) vertices[3 * v + c] = mesh.positions[v][c];
-  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-      mesh.triangles.size()));
+  auto* indices = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                              3 * sizeof(unsigned), mesh.triangles.size()));
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int c = 0; c < 3; ++c) indices[3 * t + c] = mesh.triangles[t][c];
   rtcCommitGeometry(geometry);
@@ -126,8 +126,8 @@ std::vector<float> to_float(const DirectionSet& set) {
 }  // namespace
 
 TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
-                                 const Eigen::MatrixXd& projection,
-                                 const TransportOptions& options, Progress* progress) {
+                                 const Eigen::MatrixXd& projection, const TransportOptions& options,
+                                 Progress* progress) {
   if (projection.rows() != set.size())
     throw Error("projection matrix has " + std::to_string(projection.rows()) + " rows for " +
                 std::to_string(set.size()) + " directions");
@@ -145,8 +145,10 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, kBlock), [&](const auto& range) {
     BlockRays block;
     block.build(mesh, set, dirs_f, caster ? caster->offset() : 0.f, range.begin(), range.end());
-    if (caster) block.trace(*caster);
-    else std::fill(block.escaped.begin(), block.escaped.end(), 1);
+    if (caster)
+      block.trace(*caster);
+    else
+      std::fill(block.escaped.begin(), block.escaped.end(), 1);
     // Cosine-weighted visibility / pi, then one GEMM with P (which holds the
     // quadrature weights).
     Eigen::MatrixXd weighted = Eigen::MatrixXd::Zero(range.size(), s);
@@ -171,15 +173,14 @@ std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& set, Progress* pr
   RayCaster caster(mesh);
   const std::vector<float> dirs_f = to_float(set);
   std::atomic<std::uint64_t> rays{0};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kBlock),
-                    [&](const auto& range) {
-                      BlockRays block;
-                      block.build(mesh, set, dirs_f, caster.offset(), range.begin(), range.end());
-                      block.trace(caster);
-                      rays += block.vertex.size();
-                      if (progress)
-                        progress->add(static_cast<double>(range.size()), double(block.vertex.size()));
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kBlock), [&](const auto& range) {
+        BlockRays block;
+        block.build(mesh, set, dirs_f, caster.offset(), range.begin(), range.end());
+        block.trace(caster);
+        rays += block.vertex.size();
+        if (progress) progress->add(static_cast<double>(range.size()), double(block.vertex.size()));
+      });
   return rays;
 }
 
@@ -235,7 +236,7 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
         // f = L V cos / pi = L cosine_pdf (albedo 1); balance heuristic:
         // f / (N (p_cosine + p_map)).
         const double weight = cosine_pdf[k] / (per_strategy * (cosine_pdf[k] + map_pdf[k]));
-        sum += weight * environment.radiance(d).cast<double>();
+        sum += weight * environment.texel_radiance(d).cast<double>();
       }
       radiance.row(static_cast<Eigen::Index>(v)) = sum.cast<float>().transpose();
     }

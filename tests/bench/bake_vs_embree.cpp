@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
     raw.push_back(raw_clock.seconds());
 
     Stopwatch bake_clock;
-    const Eigen::MatrixXd projection = set.weights.asDiagonal() * sh::evaluate(order, set.directions);
+    const Eigen::MatrixXd projection =
+        set.weights.asDiagonal() * sh::evaluate(order, set.directions);
     const TransportResult result = diffuse_transfer(mesh, set, projection, {true, false}, nullptr);
     bake.push_back(bake_clock.seconds());
     rays_bake = result.rays_cast;
@@ -53,7 +54,8 @@ int main(int argc, char** argv) {
   const double raw_s = raw[raw.size() / 2], bake_s = bake[bake.size() / 2];
   const double ratio = bake_s / raw_s;
   std::printf("rays per run: raw %llu, bake %llu%s\n", (unsigned long long)rays_raw,
-              (unsigned long long)rays_bake, rays_raw == rays_bake ? " (same rays)" : " (MISMATCH)");
+              (unsigned long long)rays_bake,
+              rays_raw == rays_bake ? " (same rays)" : " (MISMATCH)");
   std::printf("raw Embree trace : %8.3f s  %6.2f Mrays/s (median of %d)\n", raw_s,
               rays_raw / raw_s * 1e-6, repeats);
   std::printf("bake (trace+SH)  : %8.3f s  %6.2f Mrays/s\n", bake_s, rays_bake / bake_s * 1e-6);

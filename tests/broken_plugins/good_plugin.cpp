@@ -20,8 +20,12 @@ class ConstantBasis final : public prt::Basis {
     throw prt::Error("this test plug-in always fails to construct");
 #endif
   }
-  int size() const override { return 1; }
-  bool orthonormal() const override { return true; }
+  int size() const override {
+    return 1;
+  }
+  bool orthonormal() const override {
+    return true;
+  }
   Eigen::MatrixXd evaluate(const prt::Directions& d) const override {
     return Eigen::MatrixXd::Constant(d.rows(), 1, scale_ / std::sqrt(4.0 * M_PI));
   }

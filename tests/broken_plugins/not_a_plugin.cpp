@@ -1,2 +1,4 @@
 // A shared library named like a plug-in that exports no info record.
-extern "C" __attribute__((visibility("default"))) int prt_not_a_plugin() { return 42; }
+extern "C" __attribute__((visibility("default"))) int prt_not_a_plugin() {
+  return 42;
+}

@@ -104,9 +104,7 @@ TEST_CASE("damaged and foreign files are refused with a clear message", "[bake]"
   fs::resize_file(dir / "truncated.h5", size / 2);
   CHECK_THROWS_WITH(read_bake(dir / "truncated.h5"), Catch::Contains("truncated.h5"));
 
-  {
-    H5::H5File other((dir / "other.h5").string(), H5F_ACC_TRUNC);
-  }
+  { H5::H5File other((dir / "other.h5").string(), H5F_ACC_TRUNC); }
   CHECK_THROWS_WITH(read_bake(dir / "other.h5"), Catch::Contains("not a PRT bake"));
 
   fs::copy_file(dir / "whole.h5", dir / "future.h5", fs::copy_options::overwrite_existing);

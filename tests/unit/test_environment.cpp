@@ -53,13 +53,14 @@ TEST_CASE("projecting a sampled smooth map recovers its coefficients", "[environ
   CHECK(l(0, 0) == Approx(c).epsilon(1e-4));
   CHECK(l(0, 1) == Approx(2 * c).epsilon(1e-4));
   CHECK(l(1, 0) == Approx(0.5 * std::sqrt(4 * M_PI / 3)).epsilon(1e-4));  // y term
-  CHECK(std::abs(l(3, 0)) < 1e-6);                                         // no x term
+  CHECK(std::abs(l(3, 0)) < 1e-6);                                        // no x term
 }
 
 TEST_CASE("environment rotation: coefficient rotation agrees with re-sampling",
           "[environment][rotation]") {
   Environment env = smooth_map(512, 256);
-  env.set_rotation(rotation_about_up(70) * Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitX()).toRotationMatrix());
+  env.set_rotation(rotation_about_up(70) *
+                   Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitX()).toRotationMatrix());
   const Eigen::MatrixX3d by_rotation = env.project(TestSH(3, true));
   const Eigen::MatrixX3d by_sampling = env.project(TestSH(3, false));
   CHECK((by_rotation - by_sampling).cwiseAbs().maxCoeff() < 2e-3);

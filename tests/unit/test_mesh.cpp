@@ -16,8 +16,7 @@ fs::path write_temp(const std::string& name, const std::string& text) {
   std::ofstream(file) << text;
   return file;
 }
-const char* kTetra =
-    "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+const char* kTetra = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
 }  // namespace
 
 TEST_CASE("generated meshes are valid with unit normals", "[mesh]") {
@@ -85,10 +84,10 @@ TEST_CASE("bad meshes are reported clearly", "[mesh][extremes]") {
 
 TEST_CASE("degenerate faces are skipped and counted", "[mesh][extremes]") {
   // Face 2 repeats a vertex, face 3 is collinear (zero area).
-  const Mesh m = load_mesh(write_temp(
-      "degenerate.off",
-      "OFF\n7 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0 2 0\n0 3 0\n0 4 0\n3 0 1 2\n3 1 0 3\n"
-      "3 0 0 2\n3 4 5 6\n"));
+  const Mesh m = load_mesh(
+      write_temp("degenerate.off",
+                 "OFF\n7 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0 2 0\n0 3 0\n0 4 0\n3 0 1 2\n3 1 0 3\n"
+                 "3 0 0 2\n3 4 5 6\n"));
   CHECK(m.triangle_count() == 2);
   CHECK(m.skipped_degenerate_faces == 2);
 }

@@ -15,7 +15,9 @@ ParamSchema test_schema() {
            schema::reals("albedo", "0.8", 3, 0, 1, "colour"),
            schema::boolean("fast", "false", "speed switch")}};
 }
-SourceLocation at(int line, int column) { return {"scene.toml", line, column}; }
+SourceLocation at(int line, int column) {
+  return {"scene.toml", line, column};
+}
 }  // namespace
 
 TEST_CASE("edit distance and did-you-mean", "[params]") {

@@ -10,7 +10,9 @@ using namespace prt;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path case_dir(const std::string& name) { return fs::path(PRT_TEST_PLUGIN_DIR) / name; }
+fs::path case_dir(const std::string& name) {
+  return fs::path(PRT_TEST_PLUGIN_DIR) / name;
+}
 
 bool is_mapped(const std::string& fragment) {
   std::ifstream maps("/proc/self/maps");
@@ -58,8 +60,7 @@ TEST_CASE("objects keep their library mapped after the registry is gone", "[regi
   CHECK_FALSE(is_mapped("libprt-basis-good.so"));
 }
 
-TEST_CASE("plug-in parameters are validated against the schema before creation",
-          "[registry]") {
+TEST_CASE("plug-in parameters are validated against the schema before creation", "[registry]") {
   PluginRegistry r({case_dir("good")});
   Params p({"s.toml", 3, 1});
   p.set("scael", 1.0, {"s.toml", 4, 1});

@@ -44,9 +44,11 @@ TEST_CASE("a valid scene fills defaults for every section", "[scene]") {
 
 TEST_CASE("a misspelt plug-in key is reported in compiler style", "[scene]") {
   REQUIRE_THROWS_WITH(
-      parse("[mesh]\ngenerate = \"sphere\"\n[lighting]\nconstant = 1\n[basis]\nplugin = \"sh\"\nordr = 10\n"),
-      Catch::Contains("scene.toml:7:1: error: basis \"sh\": unknown parameter \"ordr\"; valid: order "
-                      "(did you mean \"order\"?)"));
+      parse("[mesh]\ngenerate = \"sphere\"\n[lighting]\nconstant = 1\n[basis]\nplugin = "
+            "\"sh\"\nordr = 10\n"),
+      Catch::Contains(
+          "scene.toml:7:1: error: basis \"sh\": unknown parameter \"ordr\"; valid: order "
+          "(did you mean \"order\"?)"));
 }
 
 TEST_CASE("scene errors name the place and the valid choices", "[scene]") {
@@ -56,13 +58,14 @@ TEST_CASE("scene errors name the place and the valid choices", "[scene]") {
                     Catch::Contains("did you mean \"fibonacci\""));
   CHECK_THROWS_WITH(parse(kValid + "[transport]\nshadowed = \"yes\"\n"),
                     Catch::Contains("must be a bool"));
-  CHECK_THROWS_WITH(parse(kValid + "[lightning]\nintensity = 2\n"),
-                    Catch::Contains("unknown section [lightning]") &&
-                        Catch::Contains("did you mean [lighting]"));
-  CHECK_THROWS_WITH(parse("[mesh]\ngenerate = \"sphere\"\n[lighting]\nconstant = 1\n[basis]\nplugin = \"shh\"\n"),
-                    Catch::Contains("scene.toml:6:10") &&
-                        Catch::Contains("no basis plug-in named \"shh\"; available: sh") &&
-                        Catch::Contains("did you mean \"sh\""));
+  CHECK_THROWS_WITH(
+      parse(kValid + "[lightning]\nintensity = 2\n"),
+      Catch::Contains("unknown section [lightning]") && Catch::Contains("did you mean [lighting]"));
+  CHECK_THROWS_WITH(
+      parse("[mesh]\ngenerate = \"sphere\"\n[lighting]\nconstant = 1\n[basis]\nplugin = \"shh\"\n"),
+      Catch::Contains("scene.toml:6:10") &&
+          Catch::Contains("no basis plug-in named \"shh\"; available: sh") &&
+          Catch::Contains("did you mean \"sh\""));
   CHECK_THROWS_WITH(parse("[mesh]\nfile = \"no/such/bunny.off\"\n[lighting]\nconstant = 1\n"),
                     Catch::Contains("scene.toml:2:1") && Catch::Contains("not found"));
   CHECK_THROWS_WITH(parse("[mesh]\n[lighting]\nconstant = 1\n"),

@@ -10,8 +10,8 @@ namespace prt {
 using Directions = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 struct DirectionSet {
-  std::string kind;    // "fibonacci", "stratified", "cubemap", "equirect", ...
-  Directions directions;  // s x 3, unit length
+  std::string kind;         // "fibonacci", "stratified", "cubemap", "equirect", ...
+  Directions directions;    // s x 3, unit length
   Eigen::VectorXd weights;  // s, solid angle of each sample; sums to 4 pi over the sphere
 
   Eigen::Index size() const { return directions.rows(); }

@@ -26,8 +26,11 @@ class Environment {
   void set_rotation(const Eigen::Matrix3d& rotation) { rotation_ = rotation; }
   const Eigen::Matrix3d& rotation() const { return rotation_; }
 
-  // Radiance arriving from world direction `direction` (bilinear).
+  // Radiance arriving from world direction `direction` (bilinear, for display).
   Eigen::Vector3f radiance(const Eigen::Vector3d& direction) const;
+  // The texel's constant radiance: the piecewise-constant function that the
+  // basis projection and the ground truth both integrate.
+  Eigen::Vector3f texel_radiance(const Eigen::Vector3d& direction) const;
 
   // Projects the environment into `basis`: size() x 3 (RGB). The map's texels
   // are integrated with their solid angles, a block of rows at a time, each

@@ -25,8 +25,8 @@ class EnvironmentSampler {
  private:
   int width_, height_;
   Eigen::Matrix3d rotation_;
-  std::vector<double> row_cdf_;       // height + 1
-  std::vector<double> column_cdf_;    // height x (width + 1)
+  std::vector<double> row_cdf_;            // height + 1
+  std::vector<double> column_cdf_;         // height x (width + 1)
   std::vector<double> texel_probability_;  // height x width
 };
 

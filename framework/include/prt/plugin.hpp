@@ -31,7 +31,7 @@
 #endif
 // Everything that must agree between host and plug-in for C++ objects and
 // Eigen matrices to cross the boundary safely.
-#define PRT_BUILD_KEY                                                                   \
+#define PRT_BUILD_KEY \
   PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(_GLIBCXX_USE_CXX11_ABI) ";eigen=" PRT_STRINGIFY( \
       EIGEN_WORLD_VERSION) "." PRT_STRINGIFY(EIGEN_MAJOR_VERSION) ";align=" PRT_STRINGIFY(  \
       EIGEN_MAX_ALIGN_BYTES) ";" PRT_BUILD_MODE
@@ -76,15 +76,15 @@ constexpr ParamSpecRecord integer(const char* name, const char* default_value, d
                                   double max, const char* help) {
   return make(name, ParamType::integer, default_value, min, max, "", help);
 }
-constexpr ParamSpecRecord real(const char* name, const char* default_value, double min,
-                               double max, const char* help) {
+constexpr ParamSpecRecord real(const char* name, const char* default_value, double min, double max,
+                               const char* help) {
   return make(name, ParamType::real, default_value, min, max, "", help);
 }
 constexpr ParamSpecRecord boolean(const char* name, const char* default_value, const char* help) {
   return make(name, ParamType::boolean, default_value, 0, 1, "", help);
 }
-constexpr ParamSpecRecord choice(const char* name, const char* default_value,
-                                 const char* choices, const char* help) {
+constexpr ParamSpecRecord choice(const char* name, const char* default_value, const char* choices,
+                                 const char* help) {
   return make(name, ParamType::string, default_value, 0, 0, choices, help);
 }
 constexpr ParamSpecRecord text(const char* name, const char* default_value, const char* help) {
@@ -95,9 +95,8 @@ constexpr ParamSpecRecord path(const char* name, bool required, const char* help
   return make(name, ParamType::path, "", 0, 0, "", help, 0, required);
 }
 // A list of reals of a fixed length (0 = any); a single number is broadcast.
-constexpr ParamSpecRecord reals(const char* name, const char* default_value,
-                                std::uint32_t length, double min, double max,
-                                const char* help) {
+constexpr ParamSpecRecord reals(const char* name, const char* default_value, std::uint32_t length,
+                                double min, double max, const char* help) {
   return make(name, ParamType::reals, default_value, min, max, "", help, length);
 }
 
@@ -146,13 +145,13 @@ PluginObject* create_guarded(const Params* params, char* error, std::size_t erro
 using PrtCreateFunction = prt::PluginObject*(const prt::Params*, char*, std::size_t) noexcept;
 using PrtDestroyFunction = void(prt::PluginObject*) noexcept;
 
-#define PRT_EXPORT_PLUGIN(Class, name)                                                      \
-  extern "C" PRT_PLUGIN_API const prt::PluginInfoRecord prt_plugin_info =                  \
-      prt::make_plugin_info<Class>(name, PRT_BUILD_KEY);                                    \
-  extern "C" PRT_PLUGIN_API prt::PluginObject* prt_plugin_create(                          \
-      const prt::Params* params, char* error, std::size_t error_size) noexcept {            \
-    return prt::detail::create_guarded<Class>(params, error, error_size);                   \
-  }                                                                                         \
-  extern "C" PRT_PLUGIN_API void prt_plugin_destroy(prt::PluginObject* object) noexcept {  \
-    delete object;                                                                          \
+#define PRT_EXPORT_PLUGIN(Class, name)                                                    \
+  extern "C" PRT_PLUGIN_API const prt::PluginInfoRecord prt_plugin_info =                 \
+      prt::make_plugin_info<Class>(name, PRT_BUILD_KEY);                                  \
+  extern "C" PRT_PLUGIN_API prt::PluginObject* prt_plugin_create(                         \
+      const prt::Params* params, char* error, std::size_t error_size) noexcept {          \
+    return prt::detail::create_guarded<Class>(params, error, error_size);                 \
+  }                                                                                       \
+  extern "C" PRT_PLUGIN_API void prt_plugin_destroy(prt::PluginObject* object) noexcept { \
+    delete object;                                                                        \
   }

@@ -19,8 +19,12 @@
 
 namespace prt::sh {
 
-inline int index(int l, int m) { return l * (l + 1) + m; }
-inline int coefficient_count(int order) { return order * order; }
+inline int index(int l, int m) {
+  return l * (l + 1) + m;
+}
+inline int coefficient_count(int order) {
+  return order * order;
+}
 
 // Writes the order^2 values at unit direction (x, y, z) into `out`.
 void evaluate(int order, double x, double y, double z, double* out);

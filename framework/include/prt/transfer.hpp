@@ -27,12 +27,12 @@ struct TransferSignal {
 // representatives (weights = the signal itself).
 struct CompressedTransfer {
   std::string compressor;
-  Eigen::Index dimension = 0;                 // n
-  int components = 0;                         // n' (the same for every cluster here)
+  Eigen::Index dimension = 0;                   // n
+  int components = 0;                           // n' (the same for every cluster here)
   std::vector<std::int32_t> cluster_of_vertex;  // v
-  MatrixXfRow weights;                        // v x n'
-  MatrixXfRow means;                          // clusters x n
-  std::vector<MatrixXfRow> representatives;   // per cluster: n' x n
+  MatrixXfRow weights;                          // v x n'
+  MatrixXfRow means;                            // clusters x n
+  std::vector<MatrixXfRow> representatives;     // per cluster: n' x n
 
   Eigen::Index vertices() const { return static_cast<Eigen::Index>(cluster_of_vertex.size()); }
   Eigen::Index clusters() const { return means.rows(); }

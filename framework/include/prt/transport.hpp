@@ -20,7 +20,8 @@ class VisibilityBits {
  public:
   VisibilityBits() = default;
   VisibilityBits(std::size_t vertices, std::size_t directions)
-      : directions_(directions), words_per_vertex_((directions + 63) / 64),
+      : directions_(directions),
+        words_per_vertex_((directions + 63) / 64),
         bits_(vertices * words_per_vertex_, 0) {}
   bool get(std::size_t vertex, std::size_t direction) const {
     return (bits_[vertex * words_per_vertex_ + direction / 64] >> (direction % 64)) & 1u;
@@ -64,10 +65,10 @@ struct TransportOptions {
 };
 
 struct TransportResult {
-  TransferSignal transfer;        // v x n, (1/pi) int V max(n.s, 0) y(s) ds
-  VisibilityBits visibility;      // when keep_visibility
+  TransferSignal transfer;    // v x n, (1/pi) int V max(n.s, 0) y(s) ds
+  VisibilityBits visibility;  // when keep_visibility
   std::uint64_t rays_cast = 0;
-  double trace_seconds = 0;       // wall time of the fused trace + project pass
+  double trace_seconds = 0;  // wall time of the fused trace + project pass
 };
 
 // Diffuse transfer per vertex: traces only directions above the tangent plane,
@@ -75,8 +76,8 @@ struct TransportResult {
 // basis's projection matrix P (s x n). Multithreaded with TBB; results do not
 // depend on the thread count.
 TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& directions,
-                                 const Eigen::MatrixXd& projection,
-                                 const TransportOptions& options, Progress* progress);
+                                 const Eigen::MatrixXd& projection, const TransportOptions& options,
+                                 Progress* progress);
 
 // Traces exactly the rays diffuse_transfer would, and nothing else: the
 // yardstick of the bake benchmark.

@@ -14,7 +14,8 @@ class CpuRenderer final : public Renderer {
   static constexpr const char* plugin_description =
       "software rasteriser with z-buffer and Gouraud shading; the reference for tests";
   static constexpr auto parameters() {
-    return std::array{schema::boolean("background", "true", "draw the environment behind the mesh")};
+    return std::array{
+        schema::boolean("background", "true", "draw the environment behind the mesh")};
   }
 
   explicit CpuRenderer(const Params& params) : background_(params.get_bool("background")) {}
@@ -25,9 +26,12 @@ class CpuRenderer final : public Renderer {
     Image image(camera.width, camera.height);
     if (background_ && in.background) draw_background(*in.background, camera, image);
     Eigen::MatrixX3f radiance;
-    if (in.vertex_radiance) radiance = *in.vertex_radiance;
-    else if (in.transfer) radiance = relight(*in.transfer, in.light);
-    else throw Error("cpu renderer: neither transfer nor vertex radiance given");
+    if (in.vertex_radiance)
+      radiance = *in.vertex_radiance;
+    else if (in.transfer)
+      radiance = relight(*in.transfer, in.light);
+    else
+      throw Error("cpu renderer: neither transfer nor vertex radiance given");
     if (radiance.rows() != static_cast<Eigen::Index>(in.mesh->vertex_count()))
       throw Error("cpu renderer: radiance rows do not match the mesh's vertices");
     for (int c = 0; c < 3; ++c) radiance.col(c) *= in.albedo[c];
