@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <optional>
@@ -83,44 +84,97 @@ void RayCaster::occluded(const float* origins, const float* directions, std::siz
   }
 }
 
+std::uint64_t RayCaster::trace_visibility(const Mesh& mesh, const std::uint32_t* vertices,
+                                          std::size_t count, const float* directions, std::size_t s,
+                                          std::uint64_t* bits) const {
+  constexpr unsigned kChunk = 1024;
+  const std::size_t words = VisibilityBits::words_for(s);
+  std::fill(bits, bits + count * words, 0);
+  RTCRay rays[kChunk];
+  std::uint32_t slot_of[kChunk], direction_of[kChunk];
+  unsigned filled = 0;
+  std::uint64_t cast = 0;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  auto flush = [&] {
+    cast += filled;
+    rtcOccluded1M(impl_->scene, &context, rays, filled, sizeof(RTCRay));
+    for (unsigned i = 0; i < filled; ++i)
+      if (rays[i].tfar >= 0.f)
+        bits[slot_of[i] * words + direction_of[i] / 64] |= std::uint64_t(1)
+                                                           << (direction_of[i] % 64);
+    filled = 0;
+  };
+  for (std::size_t slot = 0; slot < count; ++slot) {
+    const Eigen::Vector3f n = mesh.normals[vertices[slot]];
+    const Eigen::Vector3f o = mesh.positions[vertices[slot]] + offset_ * n;
+    for (std::size_t k = 0; k < s; ++k) {
+      const float* d = directions + 3 * k;
+      if (n.x() * d[0] + n.y() * d[1] + n.z() * d[2] <= 0.f) continue;
+      RTCRay& r = rays[filled];
+      r.org_x = o.x(), r.org_y = o.y(), r.org_z = o.z();
+      r.dir_x = d[0], r.dir_y = d[1], r.dir_z = d[2];
+      r.tnear = 0.f, r.tfar = INFINITY, r.time = 0.f;
+      r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
+      slot_of[filled] = static_cast<std::uint32_t>(slot);
+      direction_of[filled] = static_cast<std::uint32_t>(k);
+      if (++filled == kChunk) flush();
+    }
+  }
+  if (filled) flush();
+  return cast;
+}
+
+std::vector<std::uint32_t> morton_order(const Mesh& mesh) {
+  const Eigen::Vector3f lo = mesh.bounds_min();
+  const Eigen::Vector3f extent = (mesh.bounds_max() - lo).cwiseMax(1e-30f);
+  auto spread = [](std::uint64_t x) {  // 21 bits -> every third bit
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(mesh.vertex_count());
+  for (std::size_t v = 0; v < keyed.size(); ++v) {
+    const Eigen::Vector3f q = ((mesh.positions[v] - lo).cwiseQuotient(extent) * 2097151.f);
+    keyed[v] = {spread(std::uint64_t(q.x())) | spread(std::uint64_t(q.y())) << 1 |
+                    spread(std::uint64_t(q.z())) << 2,
+                static_cast<std::uint32_t>(v)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> order(keyed.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = keyed[i].second;
+  return order;
+}
+
 namespace {
 
-constexpr int kBlock = 64;  // vertices per task: one GEMM of kBlock x s by s x n
-
-// Rays of one vertex block toward directions above each vertex's tangent plane.
-struct BlockRays {
-  std::vector<float> origins, directions;
-  std::vector<std::uint32_t> vertex, direction;  // which (vertex, direction) each ray is
-  std::vector<std::uint8_t> escaped;
-
-  void build(const Mesh& mesh, const DirectionSet& set, const std::vector<float>& dirs_f,
-             float offset, std::size_t begin, std::size_t end) {
-    origins.clear(), directions.clear(), vertex.clear(), direction.clear();
-    const auto s = static_cast<std::size_t>(set.size());
-    for (std::size_t v = begin; v < end; ++v) {
-      const Eigen::Vector3f n = mesh.normals[v];
-      const Eigen::Vector3f o = mesh.positions[v] + offset * n;
-      for (std::size_t k = 0; k < s; ++k) {
-        const float* d = &dirs_f[3 * k];
-        if (n.x() * d[0] + n.y() * d[1] + n.z() * d[2] <= 0.f) continue;
-        origins.insert(origins.end(), {o.x(), o.y(), o.z()});
-        directions.insert(directions.end(), {d[0], d[1], d[2]});
-        vertex.push_back(static_cast<std::uint32_t>(v));
-        direction.push_back(static_cast<std::uint32_t>(k));
-      }
-    }
-    escaped.resize(vertex.size());
-  }
-  void trace(const RayCaster& caster) {
-    caster.occluded(origins.data(), directions.data(), vertex.size(), escaped.data());
-  }
-};
+constexpr std::size_t kBlock = 64;  // vertices per task: one GEMM of kBlock x s' by s' x n
 
 std::vector<float> to_float(const DirectionSet& set) {
   std::vector<float> out(3 * set.size());
   for (Eigen::Index k = 0; k < set.size(); ++k)
     for (int c = 0; c < 3; ++c) out[3 * k + c] = static_cast<float>(set.directions(k, c));
   return out;
+}
+
+// Unshadowed: every direction above the tangent plane counts as escaped.
+void upper_hemisphere_bits(const Mesh& mesh, const std::uint32_t* vertices, std::size_t count,
+                           const float* directions, std::size_t s, std::uint64_t* bits) {
+  const std::size_t words = VisibilityBits::words_for(s);
+  std::fill(bits, bits + count * words, 0);
+  for (std::size_t slot = 0; slot < count; ++slot) {
+    const Eigen::Vector3f n = mesh.normals[vertices[slot]];
+    for (std::size_t k = 0; k < s; ++k) {
+      const float* d = directions + 3 * k;
+      if (n.x() * d[0] + n.y() * d[1] + n.z() * d[2] > 0.f)
+        bits[slot * words + k / 64] |= std::uint64_t(1) << (k % 64);
+    }
+  }
 }
 
 }  // namespace
@@ -133,36 +187,55 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
                 std::to_string(set.size()) + " directions");
   const std::size_t v_count = mesh.vertex_count();
   const auto s = static_cast<std::size_t>(set.size());
+  const std::size_t words = VisibilityBits::words_for(s);
   TransportResult result;
   result.transfer.coefficients.resize(static_cast<Eigen::Index>(v_count), projection.cols());
   if (options.keep_visibility) result.visibility = VisibilityBits(v_count, s);
+  Stopwatch clock;
   std::optional<RayCaster> caster;
   if (options.shadowed) caster.emplace(mesh);
   const std::vector<float> dirs_f = to_float(set);
+  const std::vector<std::uint32_t> order = morton_order(mesh);
   std::atomic<std::uint64_t> rays{0};
 
-  Stopwatch clock;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, kBlock), [&](const auto& range) {
-    BlockRays block;
-    block.build(mesh, set, dirs_f, caster ? caster->offset() : 0.f, range.begin(), range.end());
-    if (caster)
-      block.trace(*caster);
-    else
-      std::fill(block.escaped.begin(), block.escaped.end(), 1);
-    // Cosine-weighted visibility / pi, then one GEMM with P (which holds the
-    // quadrature weights).
-    Eigen::MatrixXd weighted = Eigen::MatrixXd::Zero(range.size(), s);
-    for (std::size_t r = 0; r < block.vertex.size(); ++r) {
-      if (!block.escaped[r]) continue;
-      const std::size_t v = block.vertex[r], k = block.direction[r];
-      const double cosine = mesh.normals[v].cast<double>().dot(set.directions.row(k));
-      weighted(v - range.begin(), k) = cosine / M_PI;
-      if (options.keep_visibility) result.visibility.set(v, k);
+    const std::uint32_t* vertices = &order[range.begin()];
+    const std::size_t count = range.size();
+    std::vector<std::uint64_t> bits(count * words);
+    if (caster) {
+      const std::uint64_t cast =
+          caster->trace_visibility(mesh, vertices, count, dirs_f.data(), s, bits.data());
+      rays += cast;
+      if (progress) progress->add(double(count), double(cast));
+    } else {
+      upper_hemisphere_bits(mesh, vertices, count, dirs_f.data(), s, bits.data());
+      if (progress) progress->add(double(count));
     }
-    result.transfer.coefficients.middleRows(range.begin(), range.size()) =
-        (weighted * projection).cast<float>();
-    if (caster) rays += block.vertex.size();
-    if (progress) progress->add(static_cast<double>(range.size()), double(block.vertex.size()));
+    // Only directions some vertex of the block sees enter the product.
+    std::vector<std::uint32_t> used;
+    for (std::size_t w = 0; w < words; ++w) {
+      std::uint64_t any = 0;
+      for (std::size_t slot = 0; slot < count; ++slot) any |= bits[slot * words + w];
+      for (; any; any &= any - 1)
+        used.push_back(static_cast<std::uint32_t>(64 * w + std::countr_zero(any)));
+    }
+    // Cosine-weighted visibility / pi (P holds the quadrature weights), one GEMM.
+    Eigen::MatrixXd weighted = Eigen::MatrixXd::Zero(count, used.size());
+    Eigen::MatrixXd rows(used.size(), projection.cols());
+    for (std::size_t j = 0; j < used.size(); ++j) {
+      const std::uint32_t k = used[j];
+      rows.row(j) = projection.row(k);
+      for (std::size_t slot = 0; slot < count; ++slot)
+        if ((bits[slot * words + k / 64] >> (k % 64)) & 1u)
+          weighted(slot, j) =
+              mesh.normals[vertices[slot]].cast<double>().dot(set.directions.row(k)) / M_PI;
+    }
+    const Eigen::MatrixXf block = (weighted * rows).cast<float>();
+    for (std::size_t slot = 0; slot < count; ++slot) {
+      result.transfer.coefficients.row(vertices[slot]) = block.row(slot);
+      if (options.keep_visibility)
+        std::copy_n(&bits[slot * words], words, result.visibility.words(vertices[slot]));
+    }
   });
   result.trace_seconds = clock.seconds();
   result.rays_cast = rays;
@@ -171,16 +244,19 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
 
 std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& set, Progress* progress) {
   RayCaster caster(mesh);
+  const auto s = static_cast<std::size_t>(set.size());
+  const std::size_t words = VisibilityBits::words_for(s);
   const std::vector<float> dirs_f = to_float(set);
+  const std::vector<std::uint32_t> order = morton_order(mesh);
   std::atomic<std::uint64_t> rays{0};
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kBlock), [&](const auto& range) {
-        BlockRays block;
-        block.build(mesh, set, dirs_f, caster.offset(), range.begin(), range.end());
-        block.trace(caster);
-        rays += block.vertex.size();
-        if (progress) progress->add(static_cast<double>(range.size()), double(block.vertex.size()));
-      });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kBlock),
+                    [&](const auto& range) {
+                      std::vector<std::uint64_t> bits(range.size() * words);
+                      const std::uint64_t cast = caster.trace_visibility(
+                          mesh, &order[range.begin()], range.size(), dirs_f.data(), s, bits.data());
+                      rays += cast;
+                      if (progress) progress->add(double(range.size()), double(cast));
+                    });
   return rays;
 }
 

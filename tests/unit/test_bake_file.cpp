@@ -11,8 +11,9 @@ using namespace prt;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path temp_dir() {
-  const fs::path dir = fs::temp_directory_path() / "prt_bake_tests";
+// One folder per test case: ctest runs the cases in parallel processes.
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("prt_bake_tests_" + name);
   fs::create_directories(dir);
   return dir;
 }
@@ -40,16 +41,17 @@ BakeData sample_bake() {
   return d;
 }
 
-bool leftovers(const fs::path& dir) {
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+bool leftovers(const fs::path& file) {
+  const std::string prefix = "." + file.filename().string() + ".tmp-";
+  for (const auto& e : fs::directory_iterator(file.parent_path()))
+    if (e.path().filename().string().rfind(prefix, 0) == 0) return true;
   return false;
 }
 }  // namespace
 
 TEST_CASE("bake files round-trip every field", "[bake]") {
   const BakeData d = sample_bake();
-  const fs::path file = temp_dir() / "roundtrip.h5";
+  const fs::path file = temp_dir("roundtrip") / "roundtrip.h5";
   write_bake(file, d);
   const BakeData r = read_bake(file);
   CHECK(r.scene_text == d.scene_text);
@@ -67,22 +69,22 @@ TEST_CASE("bake files round-trip every field", "[bake]") {
   CHECK(r.compressed.representatives[1] == d.compressed.representatives[1]);
   CHECK(r.basis_state.matrices.at("mean") == d.basis_state.matrices.at("mean"));
   CHECK(r.metrics.at("trace_seconds") == 1.5);
-  CHECK_FALSE(leftovers(temp_dir()));
+  CHECK_FALSE(leftovers(file));
 }
 
 TEST_CASE("a failed write leaves neither the file nor a temporary", "[bake]") {
-  const fs::path file = temp_dir() / "never.h5";
+  const fs::path file = temp_dir("failed") / "never.h5";
   fs::remove(file);
   CHECK_THROWS(write_atomically(file, [](const fs::path& temporary) {
     std::ofstream(temporary) << "half";
     throw Error("interrupted");
   }));
   CHECK_FALSE(fs::exists(file));
-  CHECK_FALSE(leftovers(temp_dir()));
+  CHECK_FALSE(leftovers(file));
 }
 
 TEST_CASE("a failed rewrite keeps the previous complete file", "[bake]") {
-  const fs::path file = temp_dir() / "keep.h5";
+  const fs::path file = temp_dir("keep") / "keep.h5";
   write_bake(file, sample_bake());
   BakeData broken = sample_bake();
   broken.compressed.representatives.pop_back();  // inconsistent: cannot be written
@@ -91,7 +93,7 @@ TEST_CASE("a failed rewrite keeps the previous complete file", "[bake]") {
 }
 
 TEST_CASE("damaged and foreign files are refused with a clear message", "[bake]") {
-  const fs::path dir = temp_dir();
+  const fs::path dir = temp_dir("damaged");
   CHECK_THROWS_WITH(read_bake(dir / "missing.h5"), Catch::Contains("not found"));
 
   std::ofstream(dir / "garbage.h5") << "definitely not hdf5";

@@ -19,6 +19,7 @@ class Progress;
 class VisibilityBits {
  public:
   VisibilityBits() = default;
+  static std::size_t words_for(std::size_t directions) { return (directions + 63) / 64; }
   VisibilityBits(std::size_t vertices, std::size_t directions)
       : directions_(directions),
         words_per_vertex_((directions + 63) / 64),
@@ -32,6 +33,7 @@ class VisibilityBits {
   std::size_t directions() const { return directions_; }
   std::size_t vertices() const { return words_per_vertex_ ? bits_.size() / words_per_vertex_ : 0; }
   std::size_t count_visible(std::size_t vertex) const;
+  std::uint64_t* words(std::size_t vertex) { return &bits_[vertex * words_per_vertex_]; }
 
  private:
   std::size_t directions_ = 0, words_per_vertex_ = 0;
@@ -52,6 +54,13 @@ class RayCaster {
   // through Embree's stream API.
   void occluded(const float* origins, const float* directions, std::size_t count,
                 std::uint8_t* escaped) const;
+
+  // Visibility of `count` vertices over `s` directions (xyz floats): for each
+  // vertex, bits of (s + 63) / 64 words; a bit is set where the direction lies
+  // above the tangent plane and its ray escapes. Rays go straight into
+  // Embree's stream, with no intermediate arrays. Returns the rays cast.
+  std::uint64_t trace_visibility(const Mesh& mesh, const std::uint32_t* vertices, std::size_t count,
+                                 const float* directions, std::size_t s, std::uint64_t* bits) const;
 
  private:
   struct Impl;
@@ -78,6 +87,10 @@ struct TransportResult {
 TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& directions,
                                  const Eigen::MatrixXd& projection, const TransportOptions& options,
                                  Progress* progress);
+
+// Vertex indices sorted along a Morton curve of their positions, so that a
+// block of consecutive vertices traces rays through the same part of the BVH.
+std::vector<std::uint32_t> morton_order(const Mesh& mesh);
 
 // Traces exactly the rays diffuse_transfer would, and nothing else: the
 // yardstick of the bake benchmark.
