@@ -73,7 +73,9 @@ int render(Context& context, const RenderArgs& args) {
     }
   }
   clock = Stopwatch();
-  write_png(result.image, output, args.exposure);
+  const float exposure =
+      args.exposure > 0 ? args.exposure : static_cast<float>(scene.camera.get_real("exposure"));
+  write_png(result.image, output, exposure);
   times.add("write PNG", clock.seconds());
   std::cout << "rendered " << result.image.width << " x " << result.image.height << " -> "
             << output.string() << "\n";
@@ -125,7 +127,7 @@ int demo(Context& context, const DemoArgs& args) {
   const std::string scene =
       args.scene.empty() ? std::string(PRT_SOURCE_DIR) + "/scenes/bunny.toml" : args.scene;
   if (int code = bake(context, {scene, ""})) return code;
-  return render(context, {scene, "", "", false, false, 1.0f});
+  return render(context, {scene, "", "", false, false, 0.0f});
 }
 
 }  // namespace prt::cli

@@ -21,7 +21,7 @@ int bake(Context& context, const BakeArgs& args);
 struct RenderArgs {
   std::string scene, bake, output;
   bool ground_truth = false, compare = false;
-  float exposure = 1.0f;
+  float exposure = 0.0f;  // 0: the scene's [camera] exposure
 };
 int render(Context& context, const RenderArgs& args);
 

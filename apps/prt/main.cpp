@@ -25,7 +25,9 @@ int main(int argc, char** argv) {
                        "render the Monte Carlo ground truth instead of the bake");
   render_cmd->add_flag("--compare", render.compare,
                        "also compute the ground truth and print per-vertex RMS error");
-  render_cmd->add_option("--exposure", render.exposure, "exposure scale of the PNG")
+  render_cmd
+      ->add_option("--exposure", render.exposure,
+                   "exposure scale of the PNG (default: the scene's)")
       ->check(CLI::PositiveNumber);
 
   std::string info_file;

@@ -58,7 +58,8 @@ const ParamSchema& camera_schema() {
        reals("up", "0,1,0", 3, -kBig, kBig, "up vector"),
        real("fov", "40", 1, 170, "vertical field of view, degrees"),
        integer("width", "640", 1, 16384, "image width"),
-       integer("height", "480", 1, 16384, "image height")}};
+       integer("height", "480", 1, 16384, "image height"),
+       real("exposure", "1", 1e-6, 1e6, "scale applied to radiance before sRGB encoding")}};
   return s;
 }
 const ParamSchema& output_schema() {
