@@ -2,8 +2,10 @@
 
 #include <ImfArray.h>
 #include <ImfRgbaFile.h>
+#include <stb/stb_image.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "prt/error.hpp"
@@ -15,9 +17,58 @@ Eigen::Matrix3d rotation_about_up(double degrees) {
   return Eigen::AngleAxisd(degrees * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
 }
 
-Environment Environment::load_exr(const std::filesystem::path& file) {
+namespace {
+void require_file(const std::filesystem::path& file) {
   if (!std::filesystem::is_regular_file(file))
     throw Error(file.string() + ": environment map not found");
+}
+
+// Negative values are clamped to 0; NaN or Inf is refused with the pixel.
+std::vector<float> checked_pixels(const std::filesystem::path& file, const float* data, int width,
+                                  int height, int channels) {
+  std::vector<float> rgb(static_cast<std::size_t>(width) * height * 3);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const float value = data[(static_cast<std::size_t>(y) * width + x) * channels + c];
+        if (!std::isfinite(value))
+          throw Error(file.string() + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                      ") is NaN or infinite");
+        rgb[(static_cast<std::size_t>(y) * width + x) * 3 + c] = std::max(value, 0.f);
+      }
+  return rgb;
+}
+}  // namespace
+
+Environment Environment::load(const std::filesystem::path& file) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
+  if (extension == ".hdr") return load_hdr(file);
+  if (extension == ".exr") return load_exr(file);
+  throw Error(file.string() + ": unknown environment map format \"" + extension +
+              "\"; use .exr (OpenEXR) or .hdr (Radiance)");
+}
+
+Environment Environment::load_hdr(const std::filesystem::path& file) {
+  require_file(file);
+  int width = 0, height = 0, channels = 0;
+  float* data = stbi_loadf(file.c_str(), &width, &height, &channels, 3);
+  if (!data)
+    throw Error(file.string() + ": cannot read Radiance HDR image: " + stbi_failure_reason());
+  std::vector<float> rgb;
+  try {
+    rgb = checked_pixels(file, data, width, height, 3);
+  } catch (...) {
+    stbi_image_free(data);
+    throw;
+  }
+  stbi_image_free(data);
+  if (width < 2 || height < 1) throw Error(file.string() + ": environment map is too small");
+  return from_pixels(width, height, std::move(rgb));
+}
+
+Environment Environment::load_exr(const std::filesystem::path& file) {
+  require_file(file);
   Imf::Array2D<Imf::Rgba> pixels;
   int width = 0, height = 0;
   try {
@@ -32,19 +83,14 @@ Environment Environment::load_exr(const std::filesystem::path& file) {
     throw Error(file.string() + ": cannot read OpenEXR image: " + e.what());
   }
   if (width < 2 || height < 1) throw Error(file.string() + ": environment map is too small");
-  std::vector<float> rgb(static_cast<std::size_t>(width) * height * 3);
+  std::vector<float> flat(static_cast<std::size_t>(width) * height * 3);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       const Imf::Rgba& p = pixels[y][x];
-      const float values[3] = {p.r, p.g, p.b};
-      for (int c = 0; c < 3; ++c) {
-        if (!std::isfinite(values[c]))
-          throw Error(file.string() + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                      ") is NaN or infinite");
-        rgb[(static_cast<std::size_t>(y) * width + x) * 3 + c] = std::max(values[c], 0.f);
-      }
+      float* out = &flat[(static_cast<std::size_t>(y) * width + x) * 3];
+      out[0] = p.r, out[1] = p.g, out[2] = p.b;
     }
-  return from_pixels(width, height, std::move(rgb));
+  return from_pixels(width, height, checked_pixels(file, flat.data(), width, height, 3));
 }
 
 Environment Environment::constant(const Eigen::Vector3f& radiance) {

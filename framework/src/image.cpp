@@ -1,6 +1,9 @@
 #include "prt/image.hpp"
 
+// The one translation unit that holds stb's implementations.
+#define STB_IMAGE_IMPLEMENTATION
 #define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 
 #include <algorithm>

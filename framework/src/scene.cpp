@@ -44,7 +44,7 @@ const ParamSchema& transport_schema() {
 const ParamSchema& lighting_schema() {
   static const ParamSchema s{
       "section [lighting]",
-      {path("environment", false, "equirectangular EXR environment map"),
+      {path("environment", false, "equirectangular environment map (.exr or .hdr)"),
        reals("constant", "", 3, 0, kBig, "constant radiance instead of a map"),
        real("intensity", "1", 0, kBig, "radiance scale"),
        real("rotation", "0", -3600, 3600, "rotation of the environment about +y, degrees")}};
@@ -254,7 +254,7 @@ Environment SceneSpec::load_environment() const {
   Environment environment =
       map.empty() ? Environment::constant(
                         Eigen::Vector3d(lighting.get_reals("constant").data()).cast<float>())
-                  : Environment::load_exr(map);
+                  : Environment::load(map);
   environment.set_intensity(static_cast<float>(lighting.get_real("intensity")));
   environment.set_rotation(rotation_about_up(lighting.get_real("rotation")));
   return environment;

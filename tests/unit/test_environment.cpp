@@ -1,3 +1,5 @@
+#include <stb/stb_image_write.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -79,6 +81,21 @@ TEST_CASE("radiance lookup applies intensity and rotation", "[environment]") {
   CHECK(env.radiance({0, 1, 0}).x() == Approx(10.f));
   env.set_rotation(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix());
   CHECK(env.radiance({0, -1, 0}).x() == Approx(10.f));
+}
+
+TEST_CASE("Radiance HDR maps load like EXR maps", "[environment]") {
+  // A 4 x 2 RGBE file written by stb_image_write.
+  const auto file = std::filesystem::temp_directory_path() / "prt_test.hdr";
+  std::vector<float> rgb(4 * 2 * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = 0.5f * float(i % 7);
+  REQUIRE(stbi_write_hdr(file.c_str(), 4, 2, 3, rgb.data()));
+  const Environment env = Environment::load(file);
+  CHECK(env.width() == 4);
+  CHECK(env.height() == 2);
+  for (std::size_t i = 0; i < rgb.size(); ++i)
+    CHECK(env.pixels()[i] == Approx(rgb[i]).margin(0.02));
+  CHECK_THROWS_WITH(Environment::load("sky.png"),
+                    Catch::Contains("unknown environment map format"));
 }
 
 TEST_CASE("unreadable EXR files are refused with the file name", "[environment]") {

@@ -12,7 +12,10 @@ namespace prt {
 
 class Environment {
  public:
+  // Loads an equirectangular map: OpenEXR (.exr) or Radiance RGBE (.hdr).
+  static Environment load(const std::filesystem::path& file);
   static Environment load_exr(const std::filesystem::path& file);
+  static Environment load_hdr(const std::filesystem::path& file);
   static Environment constant(const Eigen::Vector3f& radiance);
   // From raw pixels (row-major RGB, top row = +y pole).
   static Environment from_pixels(int width, int height, std::vector<float> rgb);
