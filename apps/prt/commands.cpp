@@ -1,9 +1,11 @@
 #include "commands.hpp"
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include "prt/bake_file.hpp"
+#include "prt/compressor.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 
@@ -79,6 +81,65 @@ int render(Context& context, const RenderArgs& args) {
   times.add("write PNG", clock.seconds());
   std::cout << "rendered " << result.image.width << " x " << result.image.height << " -> "
             << output.string() << "\n";
+  print_times(times);
+  return 0;
+}
+
+namespace {
+
+// "key=value" from the command line, typed as TOML would type the value.
+void parse_parameter(const std::string& text, std::size_t index, Params& params) {
+  const auto equals = text.find('=');
+  const SourceLocation where{"command line parameter " + std::to_string(index + 1)};
+  if (equals == std::string::npos || equals == 0)
+    throw Error(where, "expected key=value, got \"" + text + "\"");
+  const std::string key = text.substr(0, equals), value = text.substr(equals + 1);
+  char* end = nullptr;
+  if (value == "true" || value == "false") {
+    params.set(key, value == "true", where);
+    return;
+  }
+  const long long integer = std::strtoll(value.c_str(), &end, 10);
+  if (!value.empty() && *end == '\0') {
+    params.set(key, static_cast<std::int64_t>(integer), where);
+    return;
+  }
+  const double real = std::strtod(value.c_str(), &end);
+  if (!value.empty() && *end == '\0') {
+    params.set(key, real, where);
+    return;
+  }
+  params.set(key, value, where);
+}
+
+}  // namespace
+
+int compress(Context& context, const CompressArgs& args) {
+  Stopwatch clock;
+  BakeData data = read_bake(args.bake);
+  StageTimes times;
+  times.add("read bake file", clock.seconds());
+  Params params(SourceLocation{"command line"});
+  for (std::size_t i = 0; i < args.parameters.size(); ++i)
+    parse_parameter(args.parameters[i], i, params);
+  auto compressor = context.registry.create<Compressor>(args.compressor, params);
+  clock = Stopwatch();
+  data.compressed = compressor->encode(data.transfer, &data.mesh);
+  const double seconds = clock.seconds();
+  times.add("compress (" + args.compressor + ")", seconds);
+  const CompressionReport report = measure(data.transfer, data.compressed, &data.mesh, seconds);
+  record(report, data.metrics);
+  const auto& info = context.registry.find(PluginKind::compressor, args.compressor);
+  data.compressor = {args.compressor, info.info.version, params.describe()};
+  const fs::path output = args.output.empty() ? fs::path(args.bake) : fs::path(args.output);
+  clock = Stopwatch();
+  write_bake(output, data);
+  times.add("write bake file", clock.seconds());
+  if (args.json) {
+    std::cout << report.json() << "\n";
+    return 0;
+  }
+  std::cout << args.compressor << " -> " << output.string() << "\n" << report.text();
   print_times(times);
   return 0;
 }

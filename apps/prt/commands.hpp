@@ -2,6 +2,7 @@
 // errors are thrown as prt::Error and reported by main.
 #pragma once
 #include <string>
+#include <vector>
 
 #include "prt/registry.hpp"
 
@@ -24,6 +25,13 @@ struct RenderArgs {
   float exposure = 0.0f;  // 0: the scene's [camera] exposure
 };
 int render(Context& context, const RenderArgs& args);
+
+struct CompressArgs {
+  std::string bake, output, compressor = "cpca";
+  std::vector<std::string> parameters;  // key=value
+  bool json = false;
+};
+int compress(Context& context, const CompressArgs& args);
 
 int info(const std::string& bake_file);
 int plugins(Context& context);

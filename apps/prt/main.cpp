@@ -30,6 +30,17 @@ int main(int argc, char** argv) {
                    "exposure scale of the PNG (default: the scene's)")
       ->check(CLI::PositiveNumber);
 
+  prt::cli::CompressArgs compress;
+  auto* compress_cmd =
+      app.add_subcommand("compress", "re-compress the transfer of a bake file with a compressor");
+  compress_cmd->add_option("bake", compress.bake, "bake file (.h5)")->required();
+  compress_cmd->add_option("-c,--compressor", compress.compressor, "compressor plug-in")
+      ->capture_default_str();
+  compress_cmd->add_option("-p,--param", compress.parameters,
+                           "compressor parameter key=value (repeatable)");
+  compress_cmd->add_option("-o,--output", compress.output, "output bake file (default: in place)");
+  compress_cmd->add_flag("--json", compress.json, "print the metrics as JSON");
+
   std::string info_file;
   auto* info_cmd = app.add_subcommand("info", "print a bake file's contents");
   info_cmd->add_option("bake", info_file, "bake file (.h5)")->required();
@@ -47,6 +58,7 @@ int main(int argc, char** argv) {
                               quiet};
     if (*bake_cmd) return prt::cli::bake(context, bake);
     if (*render_cmd) return prt::cli::render(context, render);
+    if (*compress_cmd) return prt::cli::compress(context, compress);
     if (*info_cmd) return prt::cli::info(info_file);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);

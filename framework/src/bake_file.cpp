@@ -177,10 +177,16 @@ void write_bake(const fs::path& file, const BakeData& data) {
                   c.cluster_of_vertex.size(), 1);
       write_matrix(compressed, "weights", c.weights);
       write_matrix(compressed, "means", c.means);
-      MatrixXfRow stacked(c.clusters() * c.components, c.dimension);
-      for (Eigen::Index k = 0; k < c.clusters(); ++k)
-        stacked.middleRows(k * c.components, c.components) = c.representatives[k];
+      std::vector<std::int32_t> counts(c.clusters());
+      Eigen::Index rows = 0;
+      for (Eigen::Index k = 0; k < c.clusters(); ++k) rows += counts[k] = c.components_of(k);
+      MatrixXfRow stacked(rows, c.dimension);
+      for (Eigen::Index k = 0, row = 0; k < c.clusters(); row += counts[k++])
+        stacked.middleRows(row, counts[k]) = c.representatives[k];
       write_matrix(compressed, "representatives", stacked);
+      write_array(compressed, "components_of_cluster", counts.data(), counts.size(), 1);
+      write_array(compressed, "supercluster_of_cluster", c.supercluster_of_cluster.data(),
+                  c.supercluster_of_cluster.size(), 1);
 
       H5::Group state = h5.createGroup("basis_state");
       for (const auto& [name, m] : data.basis_state.matrices) {
@@ -239,11 +245,18 @@ BakeData read_bake(const fs::path& file) {
     c.weights = read_matrix(compressed, "weights");
     c.means = read_matrix(compressed, "means");
     const MatrixXfRow stacked = read_matrix(compressed, "representatives");
-    if (stacked.rows() != c.clusters() * c.components || stacked.cols() != c.dimension ||
-        data.transfer.coefficients.rows() != c.vertices())
+    const auto counts = read_array<std::int32_t>(compressed, "components_of_cluster", rows, cols);
+    c.supercluster_of_cluster =
+        read_array<std::int32_t>(compressed, "supercluster_of_cluster", rows, cols);
+    Eigen::Index total = 0;
+    for (auto n : counts) total += n;
+    if (static_cast<Eigen::Index>(counts.size()) != c.clusters() || total != stacked.rows() ||
+        stacked.cols() != c.dimension || data.transfer.coefficients.rows() != c.vertices())
       throw Error("compressed transfer has inconsistent sizes");
-    for (Eigen::Index k = 0; k < c.clusters(); ++k)
-      c.representatives.push_back(stacked.middleRows(k * c.components, c.components));
+    for (Eigen::Index k = 0, row = 0; k < c.clusters(); row += counts[k++]) {
+      if (counts[k] < 0) throw Error("negative component count");
+      c.representatives.push_back(stacked.middleRows(row, counts[k]));
+    }
     c.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
 
     H5::Group state = h5.openGroup("basis_state");

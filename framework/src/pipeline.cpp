@@ -36,6 +36,20 @@ std::string transport_description(const SceneSpec& scene, const DirectionSet& se
 
 }  // namespace
 
+void record(const CompressionReport& r, std::map<std::string, double>& metrics) {
+  metrics["squared_error"] = r.squared_error;
+  metrics["vertex_squared_error_p50"] = r.vertex_error_p50;
+  metrics["vertex_squared_error_p90"] = r.vertex_error_p90;
+  metrics["vertex_squared_error_p99"] = r.vertex_error_p99;
+  metrics["vertex_squared_error_max"] = r.vertex_error_max;
+  metrics["stored_floats"] = r.stored_floats;
+  metrics["stored_bytes"] = r.stored_bytes;
+  metrics["encode_seconds"] = r.encode_seconds;
+  metrics["clusters"] = double(r.clusters);
+  metrics["overdraw"] = r.overdraw;
+  metrics["supercluster_overdraw"] = r.supercluster_overdraw;
+}
+
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
               StageTimes& times) {
   Stopwatch clock;
@@ -68,9 +82,13 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   times.add("trace + project", result.trace_seconds);
 
   clock = Stopwatch();
-  data.compressed = compressor->encode(result.transfer);
+  data.compressed = compressor->encode(result.transfer, &data.mesh);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + compressor_choice.name + ")", encode_seconds);
+  const CompressionReport report =
+      measure(result.transfer, data.compressed, &data.mesh, encode_seconds);
+  record(report, data.metrics);
+  if (!options.quiet) std::printf("%s", report.text().c_str());
 
   data.transfer = std::move(result.transfer);
   data.scene_file = scene.file.string();

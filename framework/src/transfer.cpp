@@ -12,7 +12,8 @@ MatrixXfRow CompressedTransfer::decode() const {
   for (Eigen::Index p = 0; p < vertices(); ++p) {
     const int k = cluster_of_vertex[p];
     out.row(p) = means.row(k);
-    if (components > 0) out.row(p) += weights.row(p) * representatives[k];
+    const int n_k = components_of(k);
+    if (n_k > 0) out.row(p) += weights.row(p).head(n_k) * representatives[k];
   }
   return out;
 }
@@ -22,14 +23,22 @@ void CompressedTransfer::validate(Eigen::Index vertex_count) const {
       means.cols() != dimension || static_cast<Eigen::Index>(representatives.size()) != clusters())
     throw Error("compressed transfer has inconsistent sizes");
   for (const auto& r : representatives)
-    if (r.rows() != components || r.cols() != dimension)
+    if (r.rows() > components || r.cols() != dimension)
       throw Error("compressed transfer has a representative block of the wrong size");
   for (auto k : cluster_of_vertex)
     if (k < 0 || k >= clusters()) throw Error("compressed transfer: cluster index out of range");
+  if (!supercluster_of_cluster.empty() &&
+      static_cast<Eigen::Index>(supercluster_of_cluster.size()) != clusters())
+    throw Error("compressed transfer: supercluster ids do not match the clusters");
+  for (auto s : supercluster_of_cluster)
+    if (s < 0) throw Error("compressed transfer: negative supercluster id");
 }
 
 double CompressedTransfer::stored_floats() const {
-  return double(vertices()) * components + double(clusters()) * (components + 1) * dimension;
+  double floats = 0;
+  for (auto k : cluster_of_vertex) floats += components_of(k);
+  for (Eigen::Index k = 0; k < clusters(); ++k) floats += double(components_of(k) + 1) * dimension;
+  return floats;
 }
 
 Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& light) {
@@ -40,16 +49,18 @@ Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& li
   const Eigen::MatrixX3f l = light.cast<float>();
   std::vector<Eigen::MatrixX3f> constants(t.clusters());
   for (Eigen::Index k = 0; k < t.clusters(); ++k) {
-    constants[k].resize(t.components + 1, 3);
+    const int n_k = t.components_of(k);
+    constants[k].resize(n_k + 1, 3);
     constants[k].row(0) = t.means.row(k) * l;
-    if (t.components > 0) constants[k].bottomRows(t.components) = t.representatives[k] * l;
+    if (n_k > 0) constants[k].bottomRows(n_k) = t.representatives[k] * l;
   }
   Eigen::MatrixX3f out(t.vertices(), 3);
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, t.vertices(), 4096), [&](const auto& r) {
     for (Eigen::Index p = r.begin(); p < r.end(); ++p) {
       const auto& c = constants[t.cluster_of_vertex[p]];
+      const Eigen::Index n_k = c.rows() - 1;
       Eigen::RowVector3f e = c.row(0);
-      if (t.components > 0) e += t.weights.row(p) * c.bottomRows(t.components);
+      if (n_k > 0) e += t.weights.row(p).head(n_k) * c.bottomRows(n_k);
       out.row(p) = e;
     }
   });

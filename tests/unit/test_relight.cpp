@@ -13,7 +13,7 @@ TEST_CASE("the exact compressor decodes to the signal and relights as t . l", "[
   auto none = registry.create<Compressor>("none", params);
   TransferSignal s;
   s.coefficients = MatrixXfRow::Random(50, 16);
-  const CompressedTransfer c = none->encode(s);
+  const CompressedTransfer c = none->encode(s, nullptr);
   CHECK(c.decode() == s.coefficients);
   CHECK(c.clusters() == 1);
   CHECK(c.stored_floats() == 50.0 * 16 + 1.0 * 17 * 16);

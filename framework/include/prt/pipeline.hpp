@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "prt/bake_file.hpp"
+#include "prt/compressor.hpp"
 #include "prt/image.hpp"
 #include "prt/registry.hpp"
 #include "prt/scene.hpp"
@@ -27,6 +28,9 @@ struct RunOptions {
 // Mesh -> rays -> projection -> compression. Fills times per stage.
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
               StageTimes& times);
+
+// Writes a compression report into bake-file metrics.
+void record(const CompressionReport& report, std::map<std::string, double>& metrics);
 
 // Checks that `data` was baked with the scene's basis and parameters.
 void check_bake_matches(const BakeData& data, const SceneSpec& scene);

@@ -21,18 +21,24 @@ struct TransferSignal {
   Eigen::Index dimension() const { return coefficients.cols(); }
 };
 
-// One form for every compressor: per vertex a cluster index and n' weights;
-// per cluster a mean and n' representative vectors. VQ is n' = 0, PCA is one
-// cluster, "none" is one cluster with zero mean and the identity as
-// representatives (weights = the signal itself).
+// One form for every compressor: per vertex a cluster index and n'_k weights;
+// per cluster a mean and n'_k representative vectors; optional supercluster
+// ids. VQ is n' = 0, PCA is one cluster, "none" is one cluster with zero mean
+// and the identity as representatives (weights = the signal itself). Adaptive
+// CPCA gives clusters different n'_k; weights are stored padded to the largest.
 struct CompressedTransfer {
   std::string compressor;
   Eigen::Index dimension = 0;                   // n
-  int components = 0;                           // n' (the same for every cluster here)
+  int components = 0;                           // max_k n'_k: columns of `weights`
   std::vector<std::int32_t> cluster_of_vertex;  // v
-  MatrixXfRow weights;                          // v x n'
+  MatrixXfRow weights;                          // v x components (zero past n'_k)
   MatrixXfRow means;                            // clusters x n
-  std::vector<MatrixXfRow> representatives;     // per cluster: n' x n
+  std::vector<MatrixXfRow> representatives;     // per cluster: n'_k x n
+  std::vector<std::int32_t> supercluster_of_cluster;  // empty, or one id per cluster
+
+  int components_of(Eigen::Index cluster) const {
+    return static_cast<int>(representatives[cluster].rows());
+  }
 
   Eigen::Index vertices() const { return static_cast<Eigen::Index>(cluster_of_vertex.size()); }
   Eigen::Index clusters() const { return means.rows(); }
@@ -42,7 +48,8 @@ struct CompressedTransfer {
   // Throws prt::Error unless the sizes and cluster indices agree with each
   // other and with `vertex_count`.
   void validate(Eigen::Index vertex_count) const;
-  // Floats stored: m_p n' + m_c (n' + 1) n.
+  // Floats stored: sum_p n'_k(p) + sum_k (n'_k + 1) n  (= m_p n' + m_c (n' + 1) n
+  // when every cluster has n' components).
   double stored_floats() const;
 };
 

@@ -15,7 +15,7 @@ class NoCompression final : public Compressor {
 
   explicit NoCompression(const Params&) {}
 
-  CompressedTransfer encode(const TransferSignal& signal) const override {
+  CompressedTransfer encode(const TransferSignal& signal, const Mesh*) const override {
     CompressedTransfer c;
     c.compressor = "none";
     c.dimension = signal.dimension();

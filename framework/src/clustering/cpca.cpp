@@ -1,0 +1,201 @@
+// Clustered PCA: static (VQ then PCA, §4.1), iterative (classification by
+// approximation error, components added one at a time, §4.2) and adaptive
+// (per-cluster component counts by D_i^2 / m_k under a total budget, §4.3).
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <limits>
+#include <numeric>
+
+#include "prt/clustering.hpp"
+#include "prt/error.hpp"
+#include "prt/progress.hpp"
+
+namespace prt::clustering {
+
+namespace {
+
+std::vector<ClusterModel> fit_all(const MatrixXfRow& x, const std::vector<std::int32_t>& labels,
+                                  int clusters, const std::vector<int>& components) {
+  const auto members = members_of(labels, clusters);
+  std::vector<ClusterModel> models(clusters);
+  tbb::parallel_for(0, clusters,
+                    [&](int k) { models[k] = fit_cluster(x, members[k], components[k]); });
+  return models;
+}
+
+// Assigns every row to the cluster of least approximation error:
+// |x - m_j|^2 - sum_i ((x - m_j) . u_ji)^2, from two float GEMMs per row block.
+// Returns the total error and fills each row's error.
+double classify(const MatrixXfRow& x, const std::vector<ClusterModel>& models,
+                std::vector<std::int32_t>& labels, std::vector<double>& errors) {
+  const int k = static_cast<int>(models.size());
+  const Eigen::Index n = x.cols();
+  std::vector<Eigen::Index> offset(k + 1, 0);
+  for (int j = 0; j < k; ++j) offset[j + 1] = offset[j] + models[j].basis.rows();
+  Eigen::MatrixXf means_t(n, k), basis_t(n, offset[k]);
+  Eigen::RowVectorXf mean_norms(k);
+  Eigen::RowVectorXf mean_projections(offset[k]);
+  for (int j = 0; j < k; ++j) {
+    means_t.col(j) = models[j].mean.transpose().cast<float>();
+    mean_norms[j] = static_cast<float>(models[j].mean.squaredNorm());
+    for (Eigen::Index i = 0; i < models[j].basis.rows(); ++i) {
+      basis_t.col(offset[j] + i) = models[j].basis.row(i).transpose().cast<float>();
+      mean_projections[offset[j] + i] =
+          static_cast<float>(models[j].basis.row(i).dot(models[j].mean));
+    }
+  }
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 512), [&](const auto& r) {
+    const Eigen::Index rows = r.end() - r.begin();
+    const auto block = x.middleRows(r.begin(), rows);
+    const Eigen::MatrixXf dots = block * means_t;
+    Eigen::MatrixXf projections = block * basis_t;
+    projections.rowwise() -= mean_projections;
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      const float row_norm = block.row(i).squaredNorm();
+      float best = std::numeric_limits<float>::infinity();
+      int best_label = 0;
+      for (int j = 0; j < k; ++j) {
+        float e = row_norm - 2.f * dots(i, j) + mean_norms[j];
+        const Eigen::Index count = offset[j + 1] - offset[j];
+        if (count) e -= projections.row(i).segment(offset[j], count).squaredNorm();
+        if (e < best) best = e, best_label = j;
+      }
+      labels[r.begin() + i] = best_label;
+    }
+  });
+  double total = 0;
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    errors[p] = approximation_error(x, p, models[labels[p]]);
+    total += errors[p];
+  }
+  return total;
+}
+
+// Gives each empty cluster the worst-approximated point of the most populous
+// cluster. Returns true when something moved.
+bool refill_empty(std::vector<std::int32_t>& labels, std::vector<double>& errors, int clusters) {
+  std::vector<Eigen::Index> count(clusters, 0);
+  for (auto l : labels) ++count[l];
+  bool moved = false;
+  for (int j = 0; j < clusters; ++j) {
+    if (count[j] > 0) continue;
+    const int largest =
+        static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
+    if (count[largest] < 2) break;
+    std::size_t worst = labels.size();
+    for (std::size_t p = 0; p < labels.size(); ++p)
+      if (labels[p] == largest && (worst == labels.size() || errors[p] > errors[worst])) worst = p;
+    labels[worst] = j;
+    errors[worst] = 0;
+    --count[largest];
+    count[j] = 1;
+    moved = true;
+  }
+  return moved;
+}
+
+IterationLog gemm_log(const MatrixXfRow& x, const std::vector<ClusterModel>& models, double seconds,
+                      double energy, const std::string& stage) {
+  Eigen::Index cols = 0;
+  for (const auto& m : models) cols += 1 + m.basis.rows();
+  return {seconds, energy, x.rows(), x.cols(), cols, stage};
+}
+
+// Adaptive allocation: candidate vector i of cluster k reduces the squared
+// error by D_i^2 and costs m_k weights plus its own n floats (the storage
+// formula), so taking them in decreasing D_i^2 / (m_k + n) while the total
+// stays within `budget` compares at exactly the storage of fixed n'. (Sloan
+// ranks by D_i^2 / m_k and counts weights only; the representative's n floats
+// make the comparison exact.)
+std::vector<int> allocate(const std::vector<ClusterModel>& models,
+                          const std::vector<std::vector<std::uint32_t>>& members, double budget,
+                          Eigen::Index dimension) {
+  struct Candidate {
+    double rate;
+    int cluster, index;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    const double cost = double(members[k].size() + dimension);
+    if (members[k].empty()) continue;
+    for (Eigen::Index i = 0; i < models[k].eigenvalues.size(); ++i)
+      if (models[k].eigenvalues[i] > 0)
+        candidates.push_back({models[k].eigenvalues[i] / cost, int(k), int(i)});
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
+    return a.rate != b.rate         ? a.rate > b.rate
+           : a.cluster != b.cluster ? a.cluster < b.cluster
+                                    : a.index < b.index;
+  });
+  std::vector<int> count(models.size(), 0);
+  double spent = 0;
+  for (const auto& c : candidates) {
+    const double cost = double(members[c.cluster].size() + dimension);
+    if (c.index != count[c.cluster] || spent + cost > budget) continue;  // in order, within budget
+    ++count[c.cluster];
+    spent += cost;
+  }
+  return count;
+}
+
+void truncate(std::vector<ClusterModel>& models, const std::vector<int>& count) {
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    models[k].basis.conservativeResize(count[k], Eigen::NoChange);
+    models[k].eigenvalues.conservativeResize(count[k]);
+  }
+}
+
+}  // namespace
+
+CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
+  if (options.components < 0) throw Error("CPCA: negative component count");
+  CpcaResult result;
+  Clusters vq = lbg(x, options.lbg);
+  result.log = vq.log;
+  result.labels = std::move(vq.labels);
+  const int k = static_cast<int>(vq.means.rows());
+  const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, x.cols()));
+  std::vector<double> errors(x.rows(), 0.0);
+
+  if (options.method != Method::static_pca) {
+    // Components one at a time; classification by approximation error.
+    for (int c = 1; c <= n_prime; ++c) {
+      for (int iteration = 0; iteration < options.iterations_per_component; ++iteration) {
+        Stopwatch clock;
+        const auto models = fit_all(x, result.labels, k, std::vector<int>(k, c));
+        const std::vector<std::int32_t> before = result.labels;
+        const double energy = classify(x, models, result.labels, errors);
+        const bool refilled = refill_empty(result.labels, errors, k);
+        result.log.push_back(gemm_log(x, models, clock.seconds(), energy, "iterative"));
+        if (!refilled && before == result.labels) break;  // LBG: no point switched
+      }
+    }
+  }
+  std::vector<int> count(k, n_prime);
+  if (options.method == Method::adaptive) {
+    const int widest = static_cast<int>(std::min<Eigen::Index>(x.cols(), 2 * n_prime + 8));
+    // Storage of fixed n' beyond the means: v n' weights + k n' n representatives.
+    const double budget = double(x.rows()) * n_prime + double(k) * n_prime * x.cols();
+    for (int iteration = 0; iteration < options.adaptive_iterations; ++iteration) {
+      Stopwatch clock;
+      auto models = fit_all(x, result.labels, k, std::vector<int>(k, widest));
+      count = allocate(models, members_of(result.labels, k), budget, x.cols());
+      truncate(models, count);
+      const double energy = classify(x, models, result.labels, errors);
+      refill_empty(result.labels, errors, k);
+      result.log.push_back(gemm_log(x, models, clock.seconds(), energy, "adaptive"));
+    }
+    // Final representatives for the final classification, same allocation.
+    auto models = fit_all(x, result.labels, k, std::vector<int>(k, widest));
+    count = allocate(models, members_of(result.labels, k), budget, x.cols());
+    truncate(models, count);
+    result.models = std::move(models);
+    return result;
+  }
+  result.models = fit_all(x, result.labels, k, count);
+  return result;
+}
+
+}  // namespace prt::clustering

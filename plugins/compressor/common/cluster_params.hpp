@@ -1,0 +1,81 @@
+// Parameters shared by the clustering compressors (VQ, CPCA): LBG options and
+// the cluster-coherence passes. Header-only so each plug-in stays one library.
+#pragma once
+#include <array>
+
+#include "prt/clustering.hpp"
+#include "prt/compressor.hpp"
+#include "prt/plugin.hpp"
+
+namespace prt::compressor_params {
+
+constexpr std::array<ParamSpecRecord, 10> clustering() {
+  using namespace schema;
+  return {integer("clusters", "256", 1, 1 << 24, "number of clusters"),
+          choice("init", "kmeans++", "kmeans++|hyperbox",
+                 "LBG start: k-means++ or the thesis's random points in the data's hyper-box"),
+          integer("iterations", "30", 1, 10000, "LBG iterations at most"),
+          real("tolerance", "1e-4", 0, 1, "LBG stops when the energy falls by less than this"),
+          integer("seed", "1", 0, 9.2e18, "random seed"),
+          real("alpha", "0", 0, 1e6,
+               "geometry coherence (Chen): weight of the distance to the cluster, per "
+               "bounding-box diagonal"),
+          boolean("reclassify", "false", "move boundary vertices to lower overdraw"),
+          real("error_budget", "0.05", 0, 10, "reclassification: allowed relative SE increase"),
+          choice("supercluster", "none", "none|greedy|chen", "group clusters into superclusters"),
+          integer("registers", "256", 1, 65536,
+                  "superclusters: constant registers; (n'+1) per cluster")};
+}
+
+inline clustering::LbgOptions lbg_options(const Params& p, const Mesh* mesh) {
+  clustering::LbgOptions o;
+  o.clusters = static_cast<int>(p.get_int("clusters"));
+  o.init = p.get_string("init") == "kmeans++" ? clustering::Init::kmeans_plus_plus
+                                              : clustering::Init::hyperbox;
+  o.max_iterations = static_cast<int>(p.get_int("iterations"));
+  o.tolerance = p.get_real("tolerance");
+  o.seed = static_cast<std::uint64_t>(p.get_int("seed"));
+  o.alpha = p.get_real("alpha");
+  o.mesh = mesh;
+  if (o.alpha > 0 && !mesh) p.fail("alpha", "geometry-coherent clustering needs a mesh");
+  return o;
+}
+
+// Reclassification, then superclustering, as the scene asks.
+inline void improve_coherence(const Params& p, const MatrixXfRow& x, const Mesh* mesh,
+                              CompressedTransfer& compressed) {
+  const bool reclassify = p.get_bool("reclassify");
+  const std::string method = p.get_string("supercluster");
+  if (!mesh) {
+    if (reclassify || method != "none")
+      p.fail(reclassify ? "reclassify" : "supercluster", "cluster coherence needs the mesh");
+    return;
+  }
+  if (reclassify) clustering::reclassify(x, *mesh, p.get_real("error_budget"), compressed);
+  if (method != "none") {
+    const int per_cluster = compressed.components + 1;  // RGB registers: c_0 .. c_n'
+    const int cap = std::max<int>(1, static_cast<int>(p.get_int("registers")) / per_cluster);
+    clustering::supercluster(*mesh, cap,
+                             method == "chen" ? clustering::SuperclusterMethod::chen_selection
+                                              : clustering::SuperclusterMethod::greedy_merge,
+                             compressed);
+  }
+}
+
+// Refuses NaN/Inf transfer with the vertex that holds it.
+inline void require_finite(const TransferSignal& signal) {
+  for (Eigen::Index p = 0; p < signal.vertices(); ++p)
+    if (!signal.coefficients.row(p).allFinite())
+      throw Error("transfer of vertex " + std::to_string(p) + " holds NaN or Inf");
+}
+
+template <std::size_t A, std::size_t B>
+constexpr std::array<ParamSpecRecord, A + B> join(const std::array<ParamSpecRecord, A>& a,
+                                                  const std::array<ParamSpecRecord, B>& b) {
+  std::array<ParamSpecRecord, A + B> out{};
+  for (std::size_t i = 0; i < A; ++i) out[i] = a[i];
+  for (std::size_t i = 0; i < B; ++i) out[A + i] = b[i];
+  return out;
+}
+
+}  // namespace prt::compressor_params

@@ -1,0 +1,34 @@
+// Vector quantisation: LBG clusters, each vertex stored as its cluster's mean
+// (n' = 0).
+#include "../common/cluster_params.hpp"
+
+namespace prt {
+
+class VectorQuantizer final : public Compressor {
+ public:
+  static constexpr const char* plugin_version = "1.0.0";
+  static constexpr const char* plugin_description =
+      "vector quantisation by LBG (hyper-box or k-means++ start, null-cluster splitting)";
+  static constexpr auto parameters() { return compressor_params::clustering(); }
+
+  explicit VectorQuantizer(const Params& params) : params_(params) {}
+
+  CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
+    compressor_params::require_finite(signal);
+    const auto clusters =
+        clustering::lbg(signal.coefficients, compressor_params::lbg_options(params_, mesh));
+    std::vector<clustering::ClusterModel> models(clusters.means.rows());
+    for (std::size_t k = 0; k < models.size(); ++k)
+      models[k] = {clusters.means.row(k), clustering::RowMatrixXd(0, clusters.means.cols()), {}};
+    CompressedTransfer c = clustering::assemble(signal.coefficients, clusters.labels, models, "vq");
+    compressor_params::improve_coherence(params_, signal.coefficients, mesh, c);
+    return c;
+  }
+
+ private:
+  Params params_;
+};
+
+}  // namespace prt
+
+PRT_EXPORT_PLUGIN(prt::VectorQuantizer, "vq")
