@@ -22,10 +22,10 @@ function(prt_add_plugin name)
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON)
   set_property(GLOBAL APPEND PROPERTY PRT_PLUGIN_TARGETS ${target})
-  if(TARGET PRT::basis_conformance AND ARG_KIND STREQUAL "basis")
-    add_test(NAME conformance.basis.${name}
-             COMMAND PRT::basis_conformance --plugin ${name})
-    set_tests_properties(conformance.basis.${name} PROPERTIES
+  if(TARGET PRT::${ARG_KIND}_conformance)
+    add_test(NAME conformance.${ARG_KIND}.${name}
+             COMMAND PRT::${ARG_KIND}_conformance --plugin ${name})
+    set_tests_properties(conformance.${ARG_KIND}.${name} PROPERTIES
       ENVIRONMENT "PRT_PLUGIN_PATH=${ARG_OUTPUT_DIR}")
   endif()
 endfunction()

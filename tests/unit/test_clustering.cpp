@@ -1,0 +1,170 @@
+#include <catch2/catch.hpp>
+#include <map>
+#include <numeric>
+#include <random>
+#include <set>
+
+#include "prt/clustering.hpp"
+#include "prt/compressor.hpp"
+
+using namespace prt;
+using namespace prt::clustering;
+
+namespace {
+// `clusters` well-separated blobs in n dimensions, each of low rank.
+MatrixXfRow blobs(int points, int n, int clusters, std::uint64_t seed, float spread = 0.05f,
+                  float axis_scale = 1.0f) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> g;
+  MatrixXfRow centres(clusters, n), axes(clusters, n);
+  for (auto& v : centres.reshaped()) v = 3.f * g(rng);
+  for (auto& v : axes.reshaped()) v = g(rng);
+  MatrixXfRow x(points, n);
+  for (int p = 0; p < points; ++p) {
+    const int k = p % clusters;
+    x.row(p) = centres.row(k) + axis_scale * g(rng) * axes.row(k);
+    for (int d = 0; d < n; ++d) x(p, d) += spread * g(rng);
+  }
+  return x;
+}
+
+double se_of(const MatrixXfRow& x, const CompressedTransfer& c) {
+  return squared_error(x, c.decode());
+}
+}  // namespace
+
+TEST_CASE("LBG separates well-separated blobs with either start", "[clustering]") {
+  const MatrixXfRow x = blobs(800, 12, 8, 1, 0.3f, 0.0f);  // round, well apart
+  for (Init init : {Init::kmeans_plus_plus, Init::hyperbox}) {
+    LbgOptions o;
+    o.clusters = 8;
+    o.init = init;
+    o.max_iterations = 100;
+    const Clusters c = lbg(x, o);
+    std::vector<std::set<int>> labels_of_blob(8);
+    for (int p = 0; p < 800; ++p) labels_of_blob[p % 8].insert(c.labels[p]);
+    int pure = 0;
+    for (const auto& s : labels_of_blob) pure += s.size() == 1;
+    INFO("init " << int(init));
+    CHECK(pure == 8);
+    CHECK(c.means.allFinite());
+  }
+}
+
+TEST_CASE("LBG is deterministic for a seed and handles its extremes", "[clustering][extremes]") {
+  const MatrixXfRow x = blobs(300, 6, 5, 2);
+  LbgOptions o;
+  o.clusters = 5;
+  CHECK(lbg(x, o).labels == lbg(x, o).labels);
+  // One cluster per point: zero energy.
+  o.clusters = 300;
+  CHECK(lbg(x, o).energy < 1e-9);
+  // More clusters than points, identical points, one point: no NaN.
+  const MatrixXfRow same = MatrixXfRow::Constant(10, 4, 0.5f);
+  o.clusters = 16;
+  const Clusters c = lbg(same, o);
+  CHECK(c.energy == 0.0);
+  CHECK(c.means.allFinite());
+  const Clusters one = lbg(MatrixXfRow::Constant(1, 3, 2.f), o);
+  CHECK(one.means.rows() == 1);
+  CHECK(one.means(0, 0) == 2.0);
+}
+
+TEST_CASE("16k clusters run without empty clusters", "[clustering][extremes]") {
+  const MatrixXfRow x = blobs(20000, 8, 50, 3, 0.3f);
+  LbgOptions o;
+  o.clusters = 16384;
+  o.max_iterations = 2;
+  const Clusters c = lbg(x, o);
+  std::vector<int> count(16384, 0);
+  for (auto l : c.labels) ++count[l];
+  CHECK(*std::min_element(count.begin(), count.end()) >= 1);
+}
+
+TEST_CASE("cluster PCA: orthonormal, exact at full rank, safe when degenerate",
+          "[clustering][extremes]") {
+  const MatrixXfRow x = blobs(200, 10, 1, 4, 0.3f);
+  std::vector<std::uint32_t> all(200);
+  std::iota(all.begin(), all.end(), 0u);
+  const ClusterModel full = fit_cluster(x, all, 10);
+  CHECK((full.basis * full.basis.transpose() - Eigen::MatrixXd::Identity(10, 10))
+            .cwiseAbs()
+            .maxCoeff() < 1e-9);
+  for (int p = 0; p < 200; ++p) CHECK(approximation_error(x, p, full) < 1e-9);
+  // Eigenvalues descending and equal to the captured energy.
+  for (int i = 1; i < 10; ++i) CHECK(full.eigenvalues[i] <= full.eigenvalues[i - 1]);
+  // Fewer points than components (C C^T side): exact, extra rows zero.
+  const std::vector<std::uint32_t> three{0, 1, 2};
+  const ClusterModel small = fit_cluster(x, three, 8);
+  CHECK(small.basis.allFinite());
+  CHECK(small.basis.row(7).norm() == 0.0);
+  for (auto p : three) CHECK(approximation_error(x, p, small) < 1e-9);
+  // Identical points and an empty cluster.
+  const MatrixXfRow same = MatrixXfRow::Constant(5, 4, 1.f);
+  const ClusterModel flat = fit_cluster(same, {0, 1, 2, 3, 4}, 3);
+  CHECK(flat.basis.cwiseAbs().maxCoeff() == 0.0);
+  CHECK(flat.mean.isApprox(Eigen::RowVectorXd::Ones(4)));
+  CHECK(fit_cluster(same, {}, 3).mean.allFinite());
+}
+
+TEST_CASE("iterative CPCA beats static, adaptive beats iterative at equal storage",
+          "[clustering][cpca]") {
+  const MatrixXfRow x = blobs(3000, 24, 40, 5, 0.2f);
+  CpcaOptions o;
+  o.lbg.clusters = 16;
+  o.components = 3;
+  auto run = [&](Method m) {
+    o.method = m;
+    const CpcaResult r = cpca(x, o);
+    return assemble(x, r.labels, r.models, "cpca");
+  };
+  const CompressedTransfer s = run(Method::static_pca), i = run(Method::iterative),
+                           a = run(Method::adaptive);
+  CHECK(se_of(x, i) < se_of(x, s));
+  CHECK(se_of(x, a) < se_of(x, i));
+  CHECK(a.stored_floats() <= i.stored_floats());
+  CHECK(i.stored_floats() == s.stored_floats());
+}
+
+TEST_CASE("overdraw counts distinct clusters per triangle", "[clustering][coherence]") {
+  Mesh m = make_plane(1);  // 4 vertices, 2 triangles
+  CHECK(average_overdraw(m, {0, 0, 0, 0}) == 1.0);
+  CHECK(average_overdraw(m, {0, 1, 2, 3}) == 3.0);
+}
+
+TEST_CASE("reclassification stays within its error budget and lowers overdraw",
+          "[clustering][coherence]") {
+  const Mesh sphere = make_sphere(3);
+  // A smooth signal over the sphere: clusters follow it, but boundaries are ragged.
+  MatrixXfRow x(sphere.vertex_count(), 6);
+  std::mt19937_64 rng(6);
+  std::normal_distribution<float> noise;
+  for (std::size_t v = 0; v < sphere.vertex_count(); ++v) {
+    const Eigen::Vector3f p = sphere.positions[v];
+    x.row(v) << p.x(), p.y(), p.z(), p.x() * p.y(), p.y() * p.z(), 0.f;
+    for (int d = 0; d < 6; ++d) x(v, d) += 0.2f * noise(rng);
+  }
+  CpcaOptions o;
+  o.lbg.clusters = 24;
+  o.components = 1;
+  const CpcaResult r = cpca(x, o);
+  CompressedTransfer c = assemble(x, r.labels, r.models, "cpca");
+  const double se_before = se_of(x, c),
+               overdraw_before = average_overdraw(sphere, c.cluster_of_vertex);
+  const std::size_t moved = reclassify(x, sphere, 0.05, c);
+  CHECK(moved > 0);
+  CHECK(se_of(x, c) <= 1.05 * se_before + 1e-9);
+  CHECK(average_overdraw(sphere, c.cluster_of_vertex) < overdraw_before);
+  c.validate(static_cast<Eigen::Index>(sphere.vertex_count()));
+
+  for (auto method : {SuperclusterMethod::greedy_merge, SuperclusterMethod::chen_selection}) {
+    CompressedTransfer s = c;
+    supercluster(sphere, 5, method, s);
+    std::map<int, int> size;
+    for (auto id : s.supercluster_of_cluster) ++size[id];
+    for (const auto& [id, count] : size) CHECK(count <= 5);
+    CHECK(average_overdraw(sphere, supercluster_of_vertex(s)) <
+          average_overdraw(sphere, s.cluster_of_vertex));
+    CHECK(se_of(x, s) == se_of(x, c));  // superclusters do not change the approximation
+  }
+}
