@@ -46,7 +46,7 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--prt", default=os.path.join(os.path.dirname(__file__), "..", "build",
                                                      "bin", "prt"))
-    parser.add_argument("--init", default="hyperbox", help="prt's LBG initialisation")
+    parser.add_argument("--init", default="kmeans++", help="prt's LBG start (kmeans++, as the peer, or hyperbox)")
     args = parser.parse_args()
 
     with h5py.File(args.bake, "r") as f:
