@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "prt/error.hpp"
+#include "prt/progress.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"prt: precomputed radiance transfer with plug-in bases, compressors and renderers"};
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
   demo_cmd->add_option("scene", demo.scene, "scene (default: scenes/bunny.toml)");
 
   CLI11_PARSE(app, argc, argv);
+  prt::Progress::set_enabled(!quiet);
   try {
     prt::cli::Context context{prt::PluginRegistry(prt::PluginRegistry::default_directories()),
                               quiet};

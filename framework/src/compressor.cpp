@@ -47,6 +47,7 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
   r.stored_bytes = 4 * r.stored_floats;
   r.encode_seconds = encode_seconds;
   r.clusters = static_cast<std::size_t>(compressed.clusters());
+  r.statistics = compressed.statistics;
   if (mesh) {
     r.overdraw = average_overdraw(*mesh, compressed.cluster_of_vertex);
     r.supercluster_overdraw = average_overdraw(*mesh, supercluster_of_vertex(compressed));
@@ -64,7 +65,15 @@ std::string CompressionReport::json() const {
                 squared_error, vertex_error_p50, vertex_error_p90, vertex_error_p99,
                 vertex_error_max, stored_floats, stored_bytes, encode_seconds, clusters, overdraw,
                 supercluster_overdraw);
-  return buffer;
+  std::string out = buffer;
+  out.pop_back();  // the closing brace; statistics follow
+  out += ", \"statistics\": {";
+  for (auto it = statistics.begin(); it != statistics.end(); ++it) {
+    std::snprintf(buffer, sizeof buffer, "%s\"%s\": %.9g", it == statistics.begin() ? "" : ", ",
+                  it->first.c_str(), it->second);
+    out += buffer;
+  }
+  return out + "}}";
 }
 
 std::string CompressionReport::text() const {
@@ -76,7 +85,12 @@ std::string CompressionReport::text() const {
                 squared_error, vertex_error_p50, vertex_error_p90, vertex_error_p99,
                 vertex_error_max, stored_floats, stored_bytes / 1e6, clusters, encode_seconds,
                 overdraw, supercluster_overdraw);
-  return buffer;
+  std::string out = buffer;
+  for (const auto& [name, value] : statistics) {
+    std::snprintf(buffer, sizeof buffer, "  %s = %.6g\n", name.c_str(), value);
+    out += buffer;
+  }
+  return out;
 }
 
 }  // namespace prt

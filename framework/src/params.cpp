@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace prt {
@@ -135,9 +136,9 @@ ParamValue parse_default(const ParamSpecRecord& spec) {
 }
 
 std::string range_text(const ParamSpecRecord& spec) {
-  std::ostringstream s;
-  s << "[" << spec.min << ", " << spec.max << "]";
-  return s.str();
+  char text[96];
+  std::snprintf(text, sizeof text, "[%.10g, %.10g]", spec.min, spec.max);
+  return text;
 }
 
 }  // namespace

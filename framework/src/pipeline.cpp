@@ -48,6 +48,7 @@ void record(const CompressionReport& r, std::map<std::string, double>& metrics) 
   metrics["clusters"] = double(r.clusters);
   metrics["overdraw"] = r.overdraw;
   metrics["supercluster_overdraw"] = r.supercluster_overdraw;
+  for (const auto& [name, value] : r.statistics) metrics[name] = value;
 }
 
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,

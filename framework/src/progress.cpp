@@ -7,11 +7,19 @@
 
 namespace prt {
 
+namespace {
+std::atomic<bool> enabled{true};
+}  // namespace
+
+void Progress::set_enabled(bool on) {
+  enabled = on;
+}
+
 Progress::Progress(std::string label, double total, std::string unit, bool quiet)
     : label_(std::move(label)),
       unit_(std::move(unit)),
       total_(total),
-      quiet_(quiet),
+      quiet_(quiet || !enabled),
       start_(std::chrono::steady_clock::now()),
       last_draw_(start_) {}
 

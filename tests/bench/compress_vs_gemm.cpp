@@ -52,9 +52,8 @@ int main(int argc, char** argv) {
   options.lbg.init = clustering::Init::kmeans_plus_plus;
   const BakeData data = read_bake(file);
   const MatrixXfRow& x = data.transfer.coefficients;
-  std::printf("%s: %lld x %lld, %d clusters, n' = %d, %s CPCA\n", file.c_str(),
-              (long long)x.rows(), (long long)x.cols(), options.lbg.clusters, options.components,
-              method.c_str());
+  std::printf("%s: %lld x %lld, %d clusters, n' = %d, %s CPCA\n", file.c_str(), (long long)x.rows(),
+              (long long)x.cols(), options.lbg.clusters, options.components, method.c_str());
   Stopwatch total;
   const auto result = clustering::cpca(x, options);
   const double seconds = total.seconds();

@@ -69,7 +69,7 @@ expect_error "corrupt bake" 'corrupt.h5: not a PRT bake file' -- render good.tom
 expect_error "missing bake" 'out.h5: bake file not found' -- render good.toml
 
 good_scene | sed 's/^rays = 64/rays = 0/' >"$work/range.toml"
-expect_error "out of range" 'range.toml:10:1: error: section \[transport\]: parameter "rays" = 0 is out of range' -- bake range.toml
+expect_error "out of range" 'range.toml:10:1: error: section \[transport\]: parameter "rays" = 0 is out of range \[1, 4194304\]' -- bake range.toml
 
 # A good scene still works end to end in the same folder.
 if (cd "$work" && "$prt" -q bake good.toml >/dev/null && "$prt" -q render good.toml >/dev/null) &&
@@ -79,6 +79,20 @@ if (cd "$work" && "$prt" -q bake good.toml >/dev/null && "$prt" -q render good.t
 else
   echo "FAIL good scene"
   failures=$((failures + 1))
+fi
+# A misspelt compressor parameter changes nothing in the bake file.
+if [ -s "$work/out.h5" ]; then
+  before=$(md5sum <"$work/out.h5")
+  if (cd "$work" && ! "$prt" -q compress out.h5 -c cpca -p clustrs=4 2>"$work/stderr") &&
+    grep -q 'command line parameter 1: error: compressor "cpca": unknown parameter "clustrs".*did you mean "clusters"' "$work/stderr" &&
+    [ "$(wc -l <"$work/stderr")" -eq 1 ] && [ "$(md5sum <"$work/out.h5")" = "$before" ]; then
+    echo "ok   misspelt compressor parameter: $(cat "$work/stderr")"
+    pass=$((pass + 1))
+  else
+    echo "FAIL misspelt compressor parameter"
+    sed 's/^/    stderr: /' "$work/stderr"
+    failures=$((failures + 1))
+  fi
 fi
 echo "$pass passed, $failures failed"
 [ "$failures" -eq 0 ]

@@ -40,6 +40,28 @@ EOT
   [ -s "$work/bunny$order.png" ] || { echo "FAIL: no image for order $order"; exit 1; }
 done
 "$prt" info "$work/bunny10.h5" | grep -q "37706 vertices" || { echo "FAIL: info"; exit 1; }
+
+# Compress the order-10 bake with static CPCA, then render from the compressed form.
+json=$("$prt" -q compress "$work/bunny10.h5" -o "$work/cpca.h5" -c cpca \
+  -p clusters=64 -p components=4 -p reclassify=true -p supercluster=greedy --json)
+echo "cpca: $json"
+out=$(cd "$work" && "$prt" -q render bunny10.toml --bake cpca.h5 -o cpca.png --compare)
+echo "cpca render: $(grep "RMS per vertex" <<<"$out")"
+python3 - "$json" "$(sed -E 's/.*RMS per vertex ([0-9.eE+-]+).*/\1/' <<<"$(grep "RMS per vertex" <<<"$out")")" "${rms[10]}" <<'PY'
+import json, sys
+r = json.loads(sys.argv[1])
+rms_cpca, rms_exact = float(sys.argv[2]), float(sys.argv[3])
+checks = {
+    "SE is positive and finite": 0 < r["squared_error"] < float("inf"),
+    "64 clusters": r["clusters"] == 64,
+    "storage = v n' + m_c (n'+1) n": r["stored_floats"] == 37706 * 4 + 64 * 5 * 100,
+    "superclusters lower overdraw": r["supercluster_overdraw"] < r["overdraw"],
+    "compression costs accuracy, within reason": rms_exact <= rms_cpca < 3 * rms_exact + 0.05,
+}
+for name, ok in checks.items():
+    print(f"{'ok  ' if ok else 'FAIL'} {name}")
+sys.exit(0 if all(checks.values()) else 1)
+PY
 python3 - "${rms[3]}" "${rms[5]}" "${rms[10]}" <<'PY'
 import sys
 r3, r5, r10 = map(float, sys.argv[1:])

@@ -25,6 +25,7 @@ struct CompressionReport {
   double overdraw = 0;               // average distinct clusters per triangle (0 without a mesh)
   double supercluster_overdraw = 0;  // the same over superclusters (= overdraw without them)
   std::size_t clusters = 0;
+  std::map<std::string, double> statistics;  // the compressor's own figures
 
   std::string json() const;
   std::string text() const;

@@ -15,6 +15,8 @@ class Progress {
   Progress(std::string label, double total, std::string rate_unit = "", bool quiet = false);
   ~Progress();
   void add(double items, double work = 0);
+  // Switches every progress bar of the process off or on (the CLI's --quiet).
+  static void set_enabled(bool enabled);
   void finish();
 
  private:

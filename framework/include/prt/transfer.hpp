@@ -3,6 +3,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -28,13 +29,16 @@ struct TransferSignal {
 // CPCA gives clusters different n'_k; weights are stored padded to the largest.
 struct CompressedTransfer {
   std::string compressor;
-  Eigen::Index dimension = 0;                   // n
-  int components = 0;                           // max_k n'_k: columns of `weights`
-  std::vector<std::int32_t> cluster_of_vertex;  // v
-  MatrixXfRow weights;                          // v x components (zero past n'_k)
-  MatrixXfRow means;                            // clusters x n
-  std::vector<MatrixXfRow> representatives;     // per cluster: n'_k x n
+  Eigen::Index dimension = 0;                         // n
+  int components = 0;                                 // max_k n'_k: columns of `weights`
+  std::vector<std::int32_t> cluster_of_vertex;        // v
+  MatrixXfRow weights;                                // v x components (zero past n'_k)
+  MatrixXfRow means;                                  // clusters x n
+  std::vector<MatrixXfRow> representatives;           // per cluster: n'_k x n
   std::vector<std::int32_t> supercluster_of_cluster;  // empty, or one id per cluster
+  // Figures a compressor reports about its own run (e.g. overdraw before the
+  // coherence passes); they end up in the encode report and the bake metrics.
+  std::map<std::string, double> statistics;
 
   int components_of(Eigen::Index cluster) const {
     return static_cast<int>(representatives[cluster].rows());

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
@@ -159,7 +160,12 @@ CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
   const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, x.cols()));
   std::vector<double> errors(x.rows(), 0.0);
 
+  std::optional<Progress> progress;
   if (options.method != Method::static_pca) {
+    const int passes = n_prime * options.iterations_per_component +
+                       (options.method == Method::adaptive ? options.adaptive_iterations : 0);
+    progress.emplace(options.method == Method::adaptive ? "adaptive CPCA" : "iterative CPCA",
+                     passes, "passes");
     // Components one at a time; classification by approximation error.
     for (int c = 1; c <= n_prime; ++c) {
       for (int iteration = 0; iteration < options.iterations_per_component; ++iteration) {
@@ -169,7 +175,11 @@ CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
         const double energy = classify(x, models, result.labels, errors);
         const bool refilled = refill_empty(result.labels, errors, k);
         result.log.push_back(gemm_log(x, models, clock.seconds(), energy, "iterative"));
-        if (!refilled && before == result.labels) break;  // LBG: no point switched
+        progress->add(1, 1);
+        if (!refilled && before == result.labels) {  // LBG: no point switched
+          progress->add(options.iterations_per_component - iteration - 1, 0);
+          break;
+        }
       }
     }
   }
@@ -186,6 +196,7 @@ CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
       const double energy = classify(x, models, result.labels, errors);
       refill_empty(result.labels, errors, k);
       result.log.push_back(gemm_log(x, models, clock.seconds(), energy, "adaptive"));
+      progress->add(1, 1);
     }
     // Final representatives for the final classification, same allocation.
     auto models = fit_all(x, result.labels, k, std::vector<int>(k, widest));

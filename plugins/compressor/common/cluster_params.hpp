@@ -1,6 +1,7 @@
 // Parameters shared by the clustering compressors (VQ, CPCA): LBG options and
 // the cluster-coherence passes. Header-only so each plug-in stays one library.
 #pragma once
+#include <algorithm>
 #include <array>
 
 #include "prt/clustering.hpp"
@@ -51,7 +52,12 @@ inline void improve_coherence(const Params& p, const MatrixXfRow& x, const Mesh*
       p.fail(reclassify ? "reclassify" : "supercluster", "cluster coherence needs the mesh");
     return;
   }
-  if (reclassify) clustering::reclassify(x, *mesh, p.get_real("error_budget"), compressed);
+  if (reclassify || method != "none")
+    compressed.statistics["overdraw_before_coherence"] =
+        average_overdraw(*mesh, compressed.cluster_of_vertex);
+  if (reclassify)
+    compressed.statistics["reclassified_vertices"] = static_cast<double>(
+        clustering::reclassify(x, *mesh, p.get_real("error_budget"), compressed));
   if (method != "none") {
     const int per_cluster = compressed.components + 1;  // RGB registers: c_0 .. c_n'
     const int cap = std::max<int>(1, static_cast<int>(p.get_int("registers")) / per_cluster);
@@ -59,6 +65,9 @@ inline void improve_coherence(const Params& p, const MatrixXfRow& x, const Mesh*
                              method == "chen" ? clustering::SuperclusterMethod::chen_selection
                                               : clustering::SuperclusterMethod::greedy_merge,
                              compressed);
+    compressed.statistics["superclusters"] =
+        1.0 + *std::max_element(compressed.supercluster_of_cluster.begin(),
+                                compressed.supercluster_of_cluster.end());
   }
 }
 
