@@ -33,6 +33,14 @@ struct CompressArgs {
 };
 int compress(Context& context, const CompressArgs& args);
 
+struct AnalyzeArgs {
+  int order = 5;
+  double cutoff = 1e-10;
+  std::vector<int> odd_orders{8}, even_orders{5, 7};
+  bool json = false;
+};
+int analyze_hemisphere(const AnalyzeArgs& args);
+
 int info(const std::string& bake_file);
 int plugins(Context& context);
 

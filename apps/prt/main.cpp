@@ -42,6 +42,24 @@ int main(int argc, char** argv) {
   compress_cmd->add_option("-o,--output", compress.output, "output bake file (default: in place)");
   compress_cmd->add_flag("--json", compress.json, "print the metrics as JSON");
 
+  prt::cli::AnalyzeArgs analyze;
+  auto* analyze_cmd = app.add_subcommand("analyze", "numerical analyses");
+  auto* hemisphere_cmd = analyze_cmd->add_subcommand(
+      "hemisphere", "conditioning and errors of hemispherical SH projections (Sloan 2003 §9)");
+  analyze_cmd->require_subcommand(1);
+  hemisphere_cmd->add_option("--order", analyze.order, "SH order N (N^2 functions)")
+      ->check(CLI::Range(1, 12))
+      ->capture_default_str();
+  hemisphere_cmd
+      ->add_option("--cutoff", analyze.cutoff,
+                   "least squares: discard singular values below this x the largest")
+      ->capture_default_str();
+  hemisphere_cmd->add_option("--odd", analyze.odd_orders, "orders of the odd-reflection bases")
+      ->capture_default_str();
+  hemisphere_cmd->add_option("--even", analyze.even_orders, "orders of the even-reflection bases")
+      ->capture_default_str();
+  hemisphere_cmd->add_flag("--json", analyze.json, "print JSON");
+
   std::string info_file;
   auto* info_cmd = app.add_subcommand("info", "print a bake file's contents");
   info_cmd->add_option("bake", info_file, "bake file (.h5)")->required();
@@ -62,6 +80,7 @@ int main(int argc, char** argv) {
     if (*render_cmd) return prt::cli::render(context, render);
     if (*compress_cmd) return prt::cli::compress(context, compress);
     if (*info_cmd) return prt::cli::info(info_file);
+    if (*hemisphere_cmd) return prt::cli::analyze_hemisphere(analyze);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);
   } catch (const std::exception& e) {
