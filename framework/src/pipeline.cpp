@@ -59,6 +59,12 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   auto compressor = registry.create<Compressor>(compressor_choice.name, compressor_choice.params,
                                                 compressor_choice.where);
   times.add("load plug-ins", clock.seconds());
+  if (basis->domain() != Domain::sphere)
+    throw Error(basis_choice.where,
+                "basis \"" + basis_choice.name +
+                    "\" is defined over the hemisphere of a local frame (for exit radiance of "
+                    "glossy transfer); diffuse transfer is a function over the whole sphere: use "
+                    "a sphere basis such as \"sh\"");
 
   clock = Stopwatch();
   BakeData data;

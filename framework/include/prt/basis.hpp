@@ -2,6 +2,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "prt/direction_set.hpp"
@@ -41,6 +42,11 @@ class Basis : public PluginObject {
   // size() x size() matrix that maps coefficients of f to those of f(R^T .).
   virtual bool can_rotate() const { return false; }
   virtual Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& rotation) const;
+
+  // A direction set on which the basis's own projection is exact (e.g. the
+  // upper-hemisphere rule of a hemispherical basis, a basis's lattice), used by
+  // the conformance tests; none for bases happy with any sphere rule.
+  virtual std::optional<DirectionSet> native_directions() const { return std::nullopt; }
 
   // Capability: fitting to data (data-driven bases such as eigentransport).
   virtual bool can_fit() const { return false; }
