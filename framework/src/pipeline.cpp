@@ -75,8 +75,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const DirectionSet set = DirectionSet::make(
       scene.transport.get_string("directions"), static_cast<int>(scene.transport.get_int("rays")),
       static_cast<std::uint64_t>(scene.transport.get_int("seed")));
-  const Eigen::MatrixXd projection = basis->projection_matrix(set);
-  times.add("directions + basis samples", clock.seconds());
+  times.add("directions", clock.seconds());
 
   TransportOptions transport;
   transport.shadowed = scene.transport.get_bool("shadowed");
@@ -84,7 +83,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   {
     Progress progress("bake transfer", double(data.mesh.vertex_count()),
                       transport.shadowed ? "rays" : "", options.quiet);
-    result = diffuse_transfer(data.mesh, set, projection, transport, &progress);
+    result = diffuse_transfer(data.mesh, set, *basis, transport, &progress);
   }
   times.add("trace + project", result.trace_seconds);
 

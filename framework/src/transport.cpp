@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <random>
 
+#include "prt/basis.hpp"
 #include "prt/environment.hpp"
 #include "prt/environment_sampler.hpp"
 #include "prt/error.hpp"
@@ -179,17 +181,20 @@ void upper_hemisphere_bits(const Mesh& mesh, const std::uint32_t* vertices, std:
 
 }  // namespace
 
-TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
-                                 const Eigen::MatrixXd& projection, const TransportOptions& options,
-                                 Progress* progress) {
-  if (projection.rows() != set.size())
-    throw Error("projection matrix has " + std::to_string(projection.rows()) + " rows for " +
-                std::to_string(set.size()) + " directions");
+namespace {
+
+// Projects one block: `bits` of `count` vertices -> count x n coefficients.
+using BlockProjection = std::function<Eigen::MatrixXf(
+    const std::uint32_t* vertices, std::size_t count, const std::vector<std::uint64_t>& bits)>;
+
+TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eigen::Index n,
+                                  const BlockProjection& project, const TransportOptions& options,
+                                  Progress* progress) {
   const std::size_t v_count = mesh.vertex_count();
   const auto s = static_cast<std::size_t>(set.size());
   const std::size_t words = VisibilityBits::words_for(s);
   TransportResult result;
-  result.transfer.coefficients.resize(static_cast<Eigen::Index>(v_count), projection.cols());
+  result.transfer.coefficients.resize(static_cast<Eigen::Index>(v_count), n);
   if (options.keep_visibility) result.visibility = VisibilityBits(v_count, s);
   Stopwatch clock;
   std::optional<RayCaster> caster;
@@ -211,6 +216,34 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
       upper_hemisphere_bits(mesh, vertices, count, dirs_f.data(), s, bits.data());
       if (progress) progress->add(double(count));
     }
+    const Eigen::MatrixXf block = project(vertices, count, bits);
+    for (std::size_t slot = 0; slot < count; ++slot) {
+      result.transfer.coefficients.row(vertices[slot]) = block.row(slot);
+      if (options.keep_visibility)
+        std::copy_n(&bits[slot * words], words, result.visibility.words(vertices[slot]));
+    }
+  });
+  result.trace_seconds = clock.seconds();
+  result.rays_cast = rays;
+  return result;
+}
+
+double cosine_over_pi(const Mesh& mesh, std::uint32_t vertex, const DirectionSet& set,
+                      std::size_t k) {
+  return mesh.normals[vertex].cast<double>().dot(set.directions.row(k)) / M_PI;
+}
+
+}  // namespace
+
+TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
+                                 const Eigen::MatrixXd& projection, const TransportOptions& options,
+                                 Progress* progress) {
+  if (projection.rows() != set.size())
+    throw Error("projection matrix has " + std::to_string(projection.rows()) + " rows for " +
+                std::to_string(set.size()) + " directions");
+  const std::size_t words = VisibilityBits::words_for(set.size());
+  auto project = [&](const std::uint32_t* vertices, std::size_t count,
+                     const std::vector<std::uint64_t>& bits) -> Eigen::MatrixXf {
     // Only directions some vertex of the block sees enter the product.
     std::vector<std::uint32_t> used;
     for (std::size_t w = 0; w < words; ++w) {
@@ -227,19 +260,30 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
       rows.row(j) = projection.row(k);
       for (std::size_t slot = 0; slot < count; ++slot)
         if ((bits[slot * words + k / 64] >> (k % 64)) & 1u)
-          weighted(slot, j) =
-              mesh.normals[vertices[slot]].cast<double>().dot(set.directions.row(k)) / M_PI;
+          weighted(slot, j) = cosine_over_pi(mesh, vertices[slot], set, k);
     }
-    const Eigen::MatrixXf block = (weighted * rows).cast<float>();
-    for (std::size_t slot = 0; slot < count; ++slot) {
-      result.transfer.coefficients.row(vertices[slot]) = block.row(slot);
-      if (options.keep_visibility)
-        std::copy_n(&bits[slot * words], words, result.visibility.words(vertices[slot]));
-    }
-  });
-  result.trace_seconds = clock.seconds();
-  result.rays_cast = rays;
-  return result;
+    return (weighted * rows).cast<float>();
+  };
+  return trace_and_project(mesh, set, projection.cols(), project, options, progress);
+}
+
+TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set, const Basis& basis,
+                                 const TransportOptions& options, Progress* progress) {
+  if (!basis.has_fast_projection(set))
+    return diffuse_transfer(mesh, set, basis.projection_matrix(set), options, progress);
+  const std::size_t words = VisibilityBits::words_for(set.size());
+  auto project = [&](const std::uint32_t* vertices, std::size_t count,
+                     const std::vector<std::uint64_t>& bits) -> Eigen::MatrixXf {
+    Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(count, set.size());
+    for (std::size_t slot = 0; slot < count; ++slot)
+      for (std::size_t w = 0; w < words; ++w)
+        for (std::uint64_t b = bits[slot * words + w]; b; b &= b - 1) {
+          const std::size_t k = 64 * w + std::countr_zero(b);
+          samples(slot, k) = cosine_over_pi(mesh, vertices[slot], set, k);
+        }
+    return basis.project(samples, set).cast<float>();
+  };
+  return trace_and_project(mesh, set, basis.size(), project, options, progress);
 }
 
 std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& set, Progress* progress) {

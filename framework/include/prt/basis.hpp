@@ -36,7 +36,11 @@ class Basis : public PluginObject {
   virtual Eigen::MatrixXd projection_matrix(const DirectionSet& set) const;
 
   // Projects a batch of functions sampled on `set` (m x s) to m x size().
-  Eigen::MatrixXd project(const Eigen::MatrixXd& samples, const DirectionSet& set) const;
+  // Default: samples * projection_matrix(set). Bases with a fast transform
+  // (e.g. Haar on its cube map) override it and say so below, so the bake
+  // never forms the s x size() matrix.
+  virtual Eigen::MatrixXd project(const Eigen::MatrixXd& samples, const DirectionSet& set) const;
+  virtual bool has_fast_projection(const DirectionSet&) const { return false; }
 
   // Capability: rotation of coefficient vectors. rotation_matrix(R) returns the
   // size() x size() matrix that maps coefficients of f to those of f(R^T .).

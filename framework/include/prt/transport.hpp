@@ -92,6 +92,13 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& direction
 // block of consecutive vertices traces rays through the same part of the BVH.
 std::vector<std::uint32_t> morton_order(const Mesh& mesh);
 
+// The same through a basis: its fast projection when it has one for `set`,
+// otherwise its projection matrix.
+class Basis;
+TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& directions,
+                                 const Basis& basis, const TransportOptions& options,
+                                 Progress* progress);
+
 // Traces exactly the rays diffuse_transfer would, and nothing else: the
 // yardstick of the bake benchmark.
 std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& directions, Progress* progress);

@@ -25,7 +25,8 @@ class HemisphericalHarmonics final : public Basis {
                "how functions known on the hemisphere are projected"),
         real("cutoff", "1e-10", 0, 1,
              "least squares: singular values of A below this x the largest are discarded"),
-        boolean("reduced", "false", "drop the nearly redundant l=1, m=0 function (N_i = 24 at order 5)")};
+        boolean("reduced", "false",
+                "drop the nearly redundant l=1, m=0 function (N_i = 24 at order 5)")};
   }
 
   explicit HemisphericalHarmonics(const Params& params)
