@@ -187,6 +187,8 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_array(compressed, "components_of_cluster", counts.data(), counts.size(), 1);
       write_array(compressed, "supercluster_of_cluster", c.supercluster_of_cluster.data(),
                   c.supercluster_of_cluster.size(), 1);
+      write_array(compressed, "weight_index", c.weight_index.data(), c.sparse() ? c.vertices() : 0,
+                  c.sparse() ? c.components : 0);
 
       H5::Group state = h5.createGroup("basis_state");
       for (const auto& [name, m] : data.basis_state.matrices) {
@@ -248,6 +250,7 @@ BakeData read_bake(const fs::path& file) {
     const auto counts = read_array<std::int32_t>(compressed, "components_of_cluster", rows, cols);
     c.supercluster_of_cluster =
         read_array<std::int32_t>(compressed, "supercluster_of_cluster", rows, cols);
+    c.weight_index = read_array<std::int32_t>(compressed, "weight_index", rows, cols);
     Eigen::Index total = 0;
     for (auto n : counts) total += n;
     if (static_cast<Eigen::Index>(counts.size()) != c.clusters() || total != stacked.rows() ||

@@ -65,6 +65,12 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
                     "\" is defined over the hemisphere of a local frame (for exit radiance of "
                     "glossy transfer); diffuse transfer is a function over the whole sphere: use "
                     "a sphere basis such as \"sh\"");
+  if (basis->approximation_terms() > 0 && compressor_choice.name != "none")
+    throw Error(compressor_choice.where,
+                "basis \"" + basis_choice.name +
+                    "\" approximates non-linearly (keeps the largest coefficients); it cannot be "
+                    "combined with compressor \"" +
+                    compressor_choice.name + "\": use \"none\"");
 
   clock = Stopwatch();
   BakeData data;
@@ -88,7 +94,9 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   times.add("trace + project", result.trace_seconds);
 
   clock = Stopwatch();
-  data.compressed = compressor->encode(result.transfer, &data.mesh);
+  const int terms = basis->approximation_terms();
+  data.compressed = terms > 0 ? keep_largest(result.transfer, terms)
+                              : compressor->encode(result.transfer, &data.mesh);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + compressor_choice.name + ")", encode_seconds);
   const CompressionReport report =

@@ -3,12 +3,23 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <numeric>
+
 #include "prt/error.hpp"
 
 namespace prt {
 
 MatrixXfRow CompressedTransfer::decode() const {
   MatrixXfRow out(vertices(), dimension);
+  if (sparse()) {
+    for (Eigen::Index p = 0; p < vertices(); ++p) {
+      out.row(p) = means.row(cluster_of_vertex[p]);
+      for (int j = 0; j < components; ++j)
+        out(p, weight_index[p * components + j]) += weights(p, j);
+    }
+    return out;
+  }
   for (Eigen::Index p = 0; p < vertices(); ++p) {
     const int k = cluster_of_vertex[p];
     out.row(p) = means.row(k);
@@ -32,9 +43,46 @@ void CompressedTransfer::validate(Eigen::Index vertex_count) const {
     throw Error("compressed transfer: supercluster ids do not match the clusters");
   for (auto s : supercluster_of_cluster)
     if (s < 0) throw Error("compressed transfer: negative supercluster id");
+  if (sparse()) {
+    if (static_cast<Eigen::Index>(weight_index.size()) != vertices() * components)
+      throw Error("compressed transfer: sparse indices do not match the weights");
+    for (auto i : weight_index)
+      if (i < 0 || i >= dimension) throw Error("compressed transfer: sparse index out of range");
+  }
+}
+
+CompressedTransfer keep_largest(const TransferSignal& signal, int terms) {
+  const Eigen::Index n = signal.dimension(), v = signal.vertices();
+  const int k = static_cast<int>(std::min<Eigen::Index>(std::max(terms, 1), n));
+  CompressedTransfer c;
+  c.compressor = "largest-" + std::to_string(k);
+  c.dimension = n;
+  c.components = k;
+  c.cluster_of_vertex.assign(v, 0);
+  c.means = MatrixXfRow::Zero(1, n);
+  c.representatives.push_back(MatrixXfRow(0, n));
+  c.weights.resize(v, k);
+  c.weight_index.resize(static_cast<std::size_t>(v) * k);
+  tbb::parallel_for(Eigen::Index(0), v, [&](Eigen::Index p) {
+    std::vector<std::int32_t> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    const auto row = signal.coefficients.row(p);
+    std::partial_sort(order.begin(), order.begin() + k, order.end(), [&](int a, int b) {
+      const float fa = std::abs(row[a]), fb = std::abs(row[b]);
+      return fa != fb ? fa > fb : a < b;  // ties by index: deterministic
+    });
+    std::sort(order.begin(), order.begin() + k);  // ascending index: friendlier gathers
+    for (int j = 0; j < k; ++j) {
+      c.weight_index[p * k + j] = order[j];
+      c.weights(p, j) = row[order[j]];
+    }
+  });
+  return c;
 }
 
 double CompressedTransfer::stored_floats() const {
+  // Sparse: a value and a 32-bit index per kept term, plus the mean.
+  if (sparse()) return 2.0 * vertices() * components + double(dimension);
   double floats = 0;
   for (auto k : cluster_of_vertex) floats += components_of(k);
   for (Eigen::Index k = 0; k < clusters(); ++k) floats += double(components_of(k) + 1) * dimension;
@@ -45,8 +93,19 @@ Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& li
   if (light.rows() != t.dimension)
     throw Error("light vector has " + std::to_string(light.rows()) + " coefficients, transfer " +
                 std::to_string(t.dimension));
-  // Per-cluster constants: row 0 = mean . l, rows 1..n' = representatives . l.
   const Eigen::MatrixX3f l = light.cast<float>();
+  if (t.sparse()) {  // sparse dot products with the full light vector
+    Eigen::MatrixX3f out(t.vertices(), 3);
+    const Eigen::RowVector3f base = t.means.row(0) * l;
+    tbb::parallel_for(Eigen::Index(0), t.vertices(), [&](Eigen::Index p) {
+      Eigen::RowVector3f e = base;
+      for (int j = 0; j < t.components; ++j)
+        e += t.weights(p, j) * l.row(t.weight_index[p * t.components + j]);
+      out.row(p) = e;
+    });
+    return out;
+  }
+  // Per-cluster constants: row 0 = mean . l, rows 1..n' = representatives . l.
   std::vector<Eigen::MatrixX3f> constants(t.clusters());
   for (Eigen::Index k = 0; k < t.clusters(); ++k) {
     const int n_k = t.components_of(k);

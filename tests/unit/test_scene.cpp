@@ -64,8 +64,8 @@ TEST_CASE("scene errors name the place and the valid choices", "[scene]") {
   CHECK_THROWS_WITH(
       parse("[mesh]\ngenerate = \"sphere\"\n[lighting]\nconstant = 1\n[basis]\nplugin = \"shh\"\n"),
       Catch::Contains("scene.toml:6:10") &&
-          Catch::Contains("no basis plug-in named \"shh\"; available: hsh, sh") &&
-          Catch::Contains("did you mean \"sh\""));
+          Catch::Contains("no basis plug-in named \"shh\"; available: ") &&
+          Catch::Contains(", sh") && Catch::Contains("did you mean \"sh\""));
   CHECK_THROWS_WITH(parse("[mesh]\nfile = \"no/such/bunny.off\"\n[lighting]\nconstant = 1\n"),
                     Catch::Contains("scene.toml:2:1") && Catch::Contains("not found"));
   CHECK_THROWS_WITH(parse("[mesh]\n[lighting]\nconstant = 1\n"),

@@ -52,6 +52,10 @@ class Basis : public PluginObject {
   // the conformance tests; none for bases happy with any sphere rule.
   virtual std::optional<DirectionSet> native_directions() const { return std::nullopt; }
 
+  // Capability: non-linear approximation keeping this many largest
+  // coefficients per vertex, stored sparsely (0: none).
+  virtual int approximation_terms() const { return 0; }
+
   // Capability: fitting to data (data-driven bases such as eigentransport).
   virtual bool can_fit() const { return false; }
 

@@ -36,6 +36,11 @@ struct CompressedTransfer {
   MatrixXfRow means;                                  // clusters x n
   std::vector<MatrixXfRow> representatives;           // per cluster: n'_k x n
   std::vector<std::int32_t> supercluster_of_cluster;  // empty, or one id per cluster
+  // Sparse form (non-linear approximation, e.g. Haar keeping the k largest
+  // coefficients): when non-empty, v x components indices into the n basis
+  // coefficients, and t_p = mean_0 + sum_j weights(p, j) e_{index(p, j)}.
+  std::vector<std::int32_t> weight_index;
+  bool sparse() const { return !weight_index.empty(); }
   // Figures a compressor reports about its own run (e.g. overdraw before the
   // coherence passes); they end up in the encode report and the bake metrics.
   std::map<std::string, double> statistics;
@@ -56,6 +61,10 @@ struct CompressedTransfer {
   // when every cluster has n' components).
   double stored_floats() const;
 };
+
+// Non-linear approximation: keeps the `terms` largest-magnitude coefficients of
+// each vertex, stored sparsely (index + value).
+CompressedTransfer keep_largest(const TransferSignal& signal, int terms);
 
 // Per-vertex exit radiance (v x 3, linear RGB) for a light vector (n x 3):
 // per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki.

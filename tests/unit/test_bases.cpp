@@ -1,0 +1,108 @@
+// Basis plug-ins beyond the conformance kit: Haar's fast projections agree
+// with the dense product, the sparse non-linear approximation, and hsh.
+#include <catch2/catch.hpp>
+#include <random>
+
+#include "prt/bake_file.hpp"
+#include "prt/basis.hpp"
+#include "prt/hemisphere.hpp"
+#include "prt/registry.hpp"
+#include "prt/sh.hpp"
+
+using namespace prt;
+
+namespace {
+PluginRegistry& registry() {
+  static PluginRegistry r({PRT_BUILD_PLUGIN_DIR});
+  return r;
+}
+std::shared_ptr<Basis> make(const std::string& name, std::map<std::string, ParamValue> values) {
+  Params p;
+  for (auto& [key, value] : values) p.set(key, value);
+  return registry().create<Basis>(name, p);
+}
+Eigen::MatrixXd random_samples(Eigen::Index rows, Eigen::Index cols, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd m(rows, cols);
+  for (auto& x : m.reshaped()) x = g(rng);
+  return m;
+}
+}  // namespace
+
+TEST_CASE("Haar: fast projections equal the dense product on any direction set", "[haar]") {
+  const auto haar = make("haar", {{"resolution", std::int64_t(8)}});
+  CHECK(haar->size() == 384);
+  for (const DirectionSet& set : {DirectionSet::cubemap(8), DirectionSet::fibonacci(2000)}) {
+    const Eigen::MatrixXd f = random_samples(3, set.size(), 1);
+    const Eigen::MatrixXd fast = haar->project(f, set);
+    const Eigen::MatrixXd dense = f * haar->projection_matrix(set);
+    INFO(set.kind);
+    CHECK((fast - dense).cwiseAbs().maxCoeff() < 1e-10 * dense.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST_CASE("Haar: exact reconstruction on its lattice with all coefficients", "[haar]") {
+  const auto haar = make("haar", {{"resolution", std::int64_t(4)}});
+  const DirectionSet lattice = DirectionSet::cubemap(4);
+  const Eigen::MatrixXd f = random_samples(2, lattice.size(), 2);
+  const Eigen::MatrixXd c = haar->project(f, lattice);
+  const Eigen::MatrixXd back = c * haar->evaluate(lattice.directions).transpose();
+  CHECK((back - f).cwiseAbs().maxCoeff() < 1e-12);
+  // The integral of a product is the dot product of coefficients (Parseval
+  // under the lattice's solid angles): what shading relies on.
+  const double integral =
+      (f.row(0).array() * f.row(1).array() * lattice.weights.transpose().array()).sum();
+  CHECK(c.row(0).dot(c.row(1)) == Approx(integral).epsilon(1e-12));
+  CHECK_THROWS_WITH(make("haar", {{"resolution", std::int64_t(6)}}), Catch::Contains("power of 2"));
+}
+
+TEST_CASE("the k largest coefficients, stored sparsely", "[haar][sparse]") {
+  TransferSignal s;
+  s.coefficients = MatrixXfRow(2, 5);
+  s.coefficients << 0.1f, -3.f, 0.2f, 2.f, 0.f,  //
+      1.f, 1.f, -4.f, 0.5f, 0.25f;
+  const CompressedTransfer c = keep_largest(s, 2);
+  REQUIRE(c.sparse());
+  REQUIRE_NOTHROW(c.validate(2));
+  CHECK(c.weight_index == std::vector<std::int32_t>{1, 3, 0, 2});  // ties broken by index
+  MatrixXfRow expected = MatrixXfRow::Zero(2, 5);
+  expected(0, 1) = -3.f, expected(0, 3) = 2.f, expected(1, 0) = 1.f, expected(1, 2) = -4.f;
+  CHECK(c.decode() == expected);
+  const Eigen::MatrixX3d light = random_samples(5, 3, 3);
+  const Eigen::MatrixX3f lit = relight(c, light);
+  CHECK((lit - (expected.cast<double>() * light).cast<float>()).cwiseAbs().maxCoeff() < 1e-5f);
+  CHECK(c.stored_floats() == 2.0 * 2 * 2 + 5);
+  // All terms kept: exact.
+  CHECK(keep_largest(s, 5).decode() == s.coefficients);
+  CHECK(keep_largest(s, 99).components == 5);
+}
+
+TEST_CASE("sparse compressed transfer survives the bake file", "[sparse][bake]") {
+  BakeData d;
+  d.mesh = make_box();
+  d.basis = {"haar", "1", "k = 2\n"};
+  d.compressor = {"none", "1", ""};
+  d.transfer.coefficients = MatrixXfRow::Random(d.mesh.vertex_count(), 6);
+  d.compressed = keep_largest(d.transfer, 2);
+  const auto file = std::filesystem::temp_directory_path() / "prt_sparse.h5";
+  write_bake(file, d);
+  const BakeData r = read_bake(file);
+  CHECK(r.compressed.weight_index == d.compressed.weight_index);
+  CHECK(r.compressed.decode() == d.compressed.decode());
+}
+
+TEST_CASE("hsh: least squares recovers an order-N function from the hemisphere only", "[hsh]") {
+  const auto hsh = make("hsh", {{"order", std::int64_t(5)}});
+  const DirectionSet upper = hemisphere::upper_quadrature(6);
+  const Eigen::RowVectorXd c = random_samples(1, 25, 4);
+  const Eigen::RowVectorXd samples = c * sh::evaluate(5, upper.directions).transpose();
+  CHECK((hsh->project(samples, upper) - c).norm() < 1e-8 * c.norm());
+  // The zero-hemisphere projection does not (Sloan's 35% worst case).
+  const auto zero = make("hsh", {{"order", std::int64_t(5)}, {"projection", std::string("zero")}});
+  CHECK((zero->project(samples, upper) - c).norm() > 1e-3 * c.norm());
+  // The reduced basis has 24 functions and refuses other projections.
+  CHECK(make("hsh", {{"order", std::int64_t(5)}, {"reduced", true}})->size() == 24);
+  CHECK_THROWS_WITH(make("hsh", {{"reduced", true}, {"projection", std::string("odd")}}),
+                    Catch::Contains("least-squares"));
+}
