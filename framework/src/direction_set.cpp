@@ -83,6 +83,30 @@ Eigen::Vector3d cube_direction(int face, double a, double b) {
 
 }  // namespace
 
+int cubemap_texel(const Eigen::Vector3d& d, int resolution) {
+  // Inverse of cube_direction(): face, then face coordinates (a, b) in [-1, 1].
+  const Eigen::Vector3d m = d.cwiseAbs();
+  int face;
+  double a, b;
+  if (m.x() >= m.y() && m.x() >= m.z()) {
+    face = d.x() > 0 ? 0 : 1;
+    a = (d.x() > 0 ? -d.z() : d.z()) / m.x();
+    b = -d.y() / m.x();
+  } else if (m.y() >= m.z()) {
+    face = d.y() > 0 ? 2 : 3;
+    a = d.x() / m.y();
+    b = (d.y() > 0 ? d.z() : -d.z()) / m.y();
+  } else {
+    face = d.z() > 0 ? 4 : 5;
+    a = (d.z() > 0 ? d.x() : -d.x()) / m.z();
+    b = -d.y() / m.z();
+  }
+  const int R = resolution;
+  const int i = std::clamp(static_cast<int>((a + 1) * 0.5 * R), 0, R - 1);
+  const int j = std::clamp(static_cast<int>((b + 1) * 0.5 * R), 0, R - 1);
+  return (face * R + j) * R + i;
+}
+
 DirectionSet DirectionSet::cubemap(int resolution) {
   if (resolution < 1) throw Error("cube-map direction set needs resolution >= 1");
   const int R = resolution;

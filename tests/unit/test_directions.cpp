@@ -63,3 +63,11 @@ TEST_CASE("equirect uv and direction are inverse", "[directions]") {
     }
   CHECK(equirect_direction(0.3, 0.0).y() == Approx(1.0));  // top row is +y
 }
+
+TEST_CASE("every cube-map texel centre maps back to its own texel", "[directions]") {
+  for (int r : {1, 4, 32}) {
+    const DirectionSet set = DirectionSet::cubemap(r);
+    for (Eigen::Index k = 0; k < set.size(); ++k)
+      REQUIRE(cubemap_texel(set.directions.row(k).transpose(), r) == k);
+  }
+}

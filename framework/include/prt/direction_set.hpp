@@ -31,6 +31,10 @@ struct DirectionSet {
   static DirectionSet make(const std::string& kind, int count, std::uint64_t seed);
 };
 
+// Index of the cube-map texel (resolution R) containing a direction, in the
+// order of DirectionSet::cubemap: (face * R + row) * R + column.
+int cubemap_texel(const Eigen::Vector3d& direction, int resolution);
+
 // Equirectangular convention (y up): u = 0.5 + atan2(x, -z) / 2 pi, v = acos(y) / pi.
 Eigen::Vector3d equirect_direction(double u, double v);
 Eigen::Vector2d equirect_uv(const Eigen::Vector3d& direction);

@@ -89,29 +89,7 @@ class HaarCubeMap final : public Basis {
     return set.kind == "cubemap" && set.size() == size();
   }
 
-  // Texel index (face * R + row) * R + column, as DirectionSet::cubemap orders them.
-  int texel_of(const Eigen::Vector3d& d) const {
-    const Eigen::Vector3d a = d.cwiseAbs();
-    int face;
-    double u, v;  // face coordinates in [-1, 1], matching cube_direction()
-    if (a.x() >= a.y() && a.x() >= a.z()) {
-      face = d.x() > 0 ? 0 : 1;
-      u = (d.x() > 0 ? -d.z() : d.z()) / a.x();
-      v = -d.y() / a.x();
-    } else if (a.y() >= a.z()) {
-      face = d.y() > 0 ? 2 : 3;
-      u = d.x() / a.y();
-      v = (d.y() > 0 ? d.z() : -d.z()) / a.y();
-    } else {
-      face = d.z() > 0 ? 4 : 5;
-      u = (d.z() > 0 ? d.x() : -d.x()) / a.z();
-      v = -d.y() / a.z();
-    }
-    const int R = resolution_;
-    const int i = std::clamp(static_cast<int>((u + 1) * 0.5 * R), 0, R - 1);
-    const int j = std::clamp(static_cast<int>((v + 1) * 0.5 * R), 0, R - 1);
-    return (face * R + j) * R + i;
-  }
+  int texel_of(const Eigen::Vector3d& d) const { return cubemap_texel(d, resolution_); }
 
   // In-place non-standard 2-D Haar transform of each face (orthonormal):
   // per level, each 2 x 2 block becomes its average and three details, the
