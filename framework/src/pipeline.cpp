@@ -89,9 +89,25 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   {
     Progress progress("bake transfer", double(data.mesh.vertex_count()),
                       transport.shadowed ? "rays" : "", options.quiet);
-    result = diffuse_transfer(data.mesh, set, *basis, transport, &progress);
+    if (basis->can_fit()) {
+      // Trace once keeping the bits, fit the basis to them, then project.
+      transport.keep_visibility = true;
+      result =
+          diffuse_transfer(data.mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
+    } else {
+      result = diffuse_transfer(data.mesh, set, *basis, transport, &progress);
+    }
   }
   times.add("trace + project", result.trace_seconds);
+  if (basis->can_fit()) {
+    clock = Stopwatch();
+    basis->fit({&data.mesh, &set, &result.visibility});
+    times.add("fit basis (" + basis_choice.name + ")", clock.seconds());
+    clock = Stopwatch();
+    result.transfer = project_visibility(data.mesh, set, result.visibility, *basis);
+    times.add("project", clock.seconds());
+    result.visibility = VisibilityBits();  // not needed past here
+  }
 
   clock = Stopwatch();
   const int terms = basis->approximation_terms();

@@ -286,6 +286,32 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set, cons
   return trace_and_project(mesh, set, basis.size(), project, options, progress);
 }
 
+void transport_rows(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
+                    std::size_t begin, std::size_t end, Eigen::MatrixXd& rows) {
+  rows.setZero(static_cast<Eigen::Index>(end - begin), set.size());
+  for (std::size_t v = begin; v < end; ++v)
+    for (Eigen::Index k = 0; k < set.size(); ++k)
+      if (visibility.get(v, static_cast<std::size_t>(k)))
+        rows(static_cast<Eigen::Index>(v - begin), k) =
+            cosine_over_pi(mesh, static_cast<std::uint32_t>(v), set, static_cast<std::size_t>(k));
+}
+
+TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
+                                  const VisibilityBits& visibility, const Basis& basis) {
+  TransferSignal out;
+  out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), basis.size());
+  const bool fast = basis.has_fast_projection(set);
+  const Eigen::MatrixXd projection = fast ? Eigen::MatrixXd() : basis.projection_matrix(set);
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kBlock), [&](const auto& range) {
+        Eigen::MatrixXd rows;
+        transport_rows(mesh, set, visibility, range.begin(), range.end(), rows);
+        out.coefficients.middleRows(range.begin(), range.size()) =
+            (fast ? basis.project(rows, set) : Eigen::MatrixXd(rows * projection)).cast<float>();
+      });
+  return out;
+}
+
 std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& set, Progress* progress) {
   RayCaster caster(mesh);
   const auto s = static_cast<std::size_t>(set.size());

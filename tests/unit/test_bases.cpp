@@ -1,5 +1,6 @@
 // Basis plug-ins beyond the conformance kit: Haar's fast projections agree
 // with the dense product, the sparse non-linear approximation, and hsh.
+#include <Eigen/SVD>
 #include <catch2/catch.hpp>
 #include <random>
 
@@ -8,6 +9,7 @@
 #include "prt/hemisphere.hpp"
 #include "prt/registry.hpp"
 #include "prt/sh.hpp"
+#include "prt/transport.hpp"
 
 using namespace prt;
 
@@ -105,4 +107,46 @@ TEST_CASE("hsh: least squares recovers an order-N function from the hemisphere o
   CHECK(make("hsh", {{"order", std::int64_t(5)}, {"reduced", true}})->size() == 24);
   CHECK_THROWS_WITH(make("hsh", {{"reduced", true}, {"projection", std::string("odd")}}),
                     Catch::Contains("least-squares"));
+}
+
+TEST_CASE("eigentransport: the randomized SVD finds the exact principal subspace", "[eigen]") {
+  // A sphere over a plane, 6 x 4 x 4 cube map: small enough for an exact SVD.
+  Mesh scene = make_sphere(2);
+  const Mesh plane = make_plane(6, 5.0f);
+  const auto base = static_cast<std::uint32_t>(scene.positions.size());
+  for (std::size_t v = 0; v < plane.vertex_count(); ++v) {
+    scene.positions.push_back(plane.positions[v] - Eigen::Vector3f(0, 1.1f, 0));
+    scene.normals.push_back(plane.normals[v]);
+  }
+  for (auto t : plane.triangles) scene.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  const DirectionSet lattice = DirectionSet::cubemap(4);
+  TransportOptions options;
+  options.keep_visibility = true;
+  const TransportResult r =
+      diffuse_transfer(scene, lattice, Eigen::MatrixXd(lattice.size(), 0), options, nullptr);
+  auto eigen = make("eigen", {{"d", std::int64_t(6)}});
+  eigen->fit({&scene, &lattice, &r.visibility});
+  const Eigen::MatrixXd fitted = eigen->save().matrices.at("eigentransports");  // d x s
+  REQUIRE(fitted.rows() == 6);
+
+  Eigen::MatrixXd t;
+  transport_rows(scene, lattice, r.visibility, 0, scene.vertex_count(), t);
+  t = t * lattice.weights.cwiseSqrt().asDiagonal();
+  t.rowwise() -= t.colwise().mean();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(t, Eigen::ComputeThinV);
+  const Eigen::MatrixXd exact = svd.matrixV().leftCols(6).transpose();
+  // Same subspace: |E_fit E_exact^T|_F^2 = d when the row spaces coincide.
+  CHECK((fitted * exact.transpose()).squaredNorm() == Approx(6.0).epsilon(1e-6));
+  // The variance option picks the fewest components reaching the fraction.
+  auto by_variance = make("eigen", {{"d", std::int64_t(40)}, {"variance", 0.9}});
+  by_variance->fit({&scene, &lattice, &r.visibility});
+  const Eigen::VectorXd s2 = svd.singularValues().array().square();
+  int needed = 0;
+  for (double captured = 0; captured < 0.9 * s2.sum(); ++needed) captured += s2[needed];
+  CHECK(by_variance->size() == needed);
+  // Saved state restores an identical basis elsewhere.
+  auto restored = make("eigen", {});
+  restored->load(eigen->save());
+  CHECK(restored->evaluate(lattice.directions) == eigen->evaluate(lattice.directions));
+  CHECK_THROWS_WITH(make("eigen", {})->evaluate(lattice.directions), Catch::Contains("not fitted"));
 }

@@ -24,7 +24,7 @@ bool is_mapped(const std::string& fragment) {
 
 TEST_CASE("the build's plug-ins are discovered from their info records", "[registry]") {
   PluginRegistry r({PRT_BUILD_PLUGIN_DIR});
-  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"haar", "hsh", "sh"});
+  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sh"});
   CHECK(r.names(PluginKind::compressor) == std::vector<std::string>{"cpca", "none", "pca", "vq"});
   CHECK(r.names(PluginKind::renderer) == std::vector<std::string>{"cpu"});
   const auto& sh = r.find(PluginKind::basis, "sh");

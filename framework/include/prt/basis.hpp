@@ -10,6 +10,17 @@
 
 namespace prt {
 
+struct Mesh;
+class VisibilityBits;
+
+// What a data-driven basis is fitted to: the mesh, the direction set and the
+// traced visibility (1 bit per vertex and direction).
+struct FitData {
+  const Mesh* mesh = nullptr;
+  const DirectionSet* directions = nullptr;
+  const VisibilityBits* visibility = nullptr;
+};
+
 enum class Domain { sphere, hemisphere };
 
 // Fitted state of a data-driven basis, stored in the bake file.
@@ -58,6 +69,7 @@ class Basis : public PluginObject {
 
   // Capability: fitting to data (data-driven bases such as eigentransport).
   virtual bool can_fit() const { return false; }
+  virtual void fit(const FitData&) {}
 
   // Fitted state, saved to and restored from the bake file.
   virtual BasisState save() const { return {}; }

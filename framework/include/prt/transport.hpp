@@ -99,6 +99,17 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& direction
                                  const Basis& basis, const TransportOptions& options,
                                  Progress* progress);
 
+// Cosine-weighted visibility / pi of vertices [begin, end) over the set, from
+// stored visibility bits: rows of the v x s transport matrix.
+void transport_rows(const Mesh& mesh, const DirectionSet& directions,
+                    const VisibilityBits& visibility, std::size_t begin, std::size_t end,
+                    Eigen::MatrixXd& rows);
+
+// Diffuse transfer from stored visibility (no rays): used after fitting a
+// data-driven basis to the same visibility.
+TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& directions,
+                                  const VisibilityBits& visibility, const Basis& basis);
+
 // Traces exactly the rays diffuse_transfer would, and nothing else: the
 // yardstick of the bake benchmark.
 std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& directions, Progress* progress);
