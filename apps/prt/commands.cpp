@@ -85,8 +85,6 @@ int render(Context& context, const RenderArgs& args) {
   return 0;
 }
 
-namespace {
-
 // "key=value" from the command line, typed as TOML would type the value.
 void parse_parameter(const std::string& text, std::size_t index, Params& params) {
   const auto equals = text.find('=');
@@ -111,8 +109,6 @@ void parse_parameter(const std::string& text, std::size_t index, Params& params)
   }
   params.set(key, value, where);
 }
-
-}  // namespace
 
 int compress(Context& context, const CompressArgs& args) {
   Stopwatch clock;

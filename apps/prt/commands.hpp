@@ -41,6 +41,14 @@ struct AnalyzeArgs {
 };
 int analyze_hemisphere(const AnalyzeArgs& args);
 
+struct CompareArgs {
+  std::string scene, bases, csv, json;
+};
+int compare_bases(Context& context, const CompareArgs& args);
+
+// "key=value" typed as TOML would type it, located at command-line item `index`.
+void parse_parameter(const std::string& text, std::size_t index, Params& params);
+
 int info(const std::string& bake_file);
 int plugins(Context& context);
 

@@ -60,6 +60,17 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   hemisphere_cmd->add_flag("--json", analyze.json, "print JSON");
 
+  prt::cli::CompareArgs compare;
+  auto* compare_cmd = app.add_subcommand(
+      "compare-bases", "trace once, then compare bases by transport and shading error");
+  compare_cmd->add_option("scene", compare.scene, "scene description (.toml)")->required();
+  compare_cmd
+      ->add_option("--bases", compare.bases,
+                   "comma-separated name[:key=value...], e.g. sh:order=10,haar:k=96,eigen:d=48")
+      ->required();
+  compare_cmd->add_option("--csv", compare.csv, "write the table as CSV");
+  compare_cmd->add_option("--json", compare.json, "write the table as JSON");
+
   std::string info_file;
   auto* info_cmd = app.add_subcommand("info", "print a bake file's contents");
   info_cmd->add_option("bake", info_file, "bake file (.h5)")->required();
@@ -81,6 +92,7 @@ int main(int argc, char** argv) {
     if (*compress_cmd) return prt::cli::compress(context, compress);
     if (*info_cmd) return prt::cli::info(info_file);
     if (*hemisphere_cmd) return prt::cli::analyze_hemisphere(analyze);
+    if (*compare_cmd) return prt::cli::compare_bases(context, compare);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);
   } catch (const std::exception& e) {

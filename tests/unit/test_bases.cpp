@@ -134,16 +134,19 @@ TEST_CASE("eigentransport: the randomized SVD finds the exact principal subspace
   t = t * lattice.weights.cwiseSqrt().asDiagonal();
   t.rowwise() -= t.colwise().mean();
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(t, Eigen::ComputeThinV);
-  const Eigen::MatrixXd exact = svd.matrixV().leftCols(6).transpose();
-  // Same subspace: |E_fit E_exact^T|_F^2 = d when the row spaces coincide.
-  CHECK((fitted * exact.transpose()).squaredNorm() == Approx(6.0).epsilon(1e-6));
+  // Rows 1..5: the top 5 principal directions (same subspace: |E E_exact^T|^2 = 5).
+  const Eigen::MatrixXd exact = svd.matrixV().leftCols(5).transpose();
+  CHECK((fitted.bottomRows(5) * exact.transpose()).squaredNorm() == Approx(5.0).epsilon(1e-6));
+  // Row 0: the mean's direction outside them; all rows orthonormal.
+  CHECK((fitted * fitted.transpose() - Eigen::MatrixXd::Identity(6, 6)).cwiseAbs().maxCoeff() <
+        1e-10);
   // The variance option picks the fewest components reaching the fraction.
   auto by_variance = make("eigen", {{"d", std::int64_t(40)}, {"variance", 0.9}});
   by_variance->fit({&scene, &lattice, &r.visibility});
   const Eigen::VectorXd s2 = svd.singularValues().array().square();
   int needed = 0;
   for (double captured = 0; captured < 0.9 * s2.sum(); ++needed) captured += s2[needed];
-  CHECK(by_variance->size() == needed);
+  CHECK(by_variance->size() == needed + 1);  // + the mean direction
   // Saved state restores an identical basis elsewhere.
   auto restored = make("eigen", {});
   restored->load(eigen->save());

@@ -33,7 +33,9 @@ class Eigentransport final : public Basis {
   static constexpr auto parameters() {
     using namespace schema;
     return std::array{
-        integer("d", "48", 1, 4096, "eigentransports (the most, when variance is set)"),
+        integer("d", "48", 1, 4096,
+                "basis functions: the mean direction and d - 1 eigentransports (the most, when "
+                "variance is set)"),
         real("variance", "0", 0, 1,
              "if > 0: the fewest eigentransports capturing this fraction of the variance"),
         integer("oversampling", "10", 0, 1000, "randomized SVD: extra columns"),
@@ -144,14 +146,28 @@ class Eigentransport final : public Basis {
       double captured = 0;
       for (int i = 0; i < sigma.size(); ++i) {
         captured += sigma[i] * sigma[i];
-        if (captured >= variance_ * total_energy || i + 1 == d) {
-          d = std::min(d, i + 1);
+        if (captured >= variance_ * total_energy || i + 2 >= d) {
+          d = std::min(d, i + 2);  // i + 1 eigentransports and the mean direction
           break;
         }
       }
     }
-    eigen_ = svd.matrixV().leftCols(d).transpose();
-    captured_variance_ = sigma.head(d).squaredNorm() / std::max(total_energy, 1e-300);
+    // The first function is the mean transport's part outside the span of the
+    // other d - 1: with it, projecting the uncentred transport reproduces the
+    // PCA reconstruction mean + (T - mean) B^T B exactly, and the coefficients
+    // are the mean-compensated ones of §4.3 (d in all, no s-dimensional mean).
+    const int components = std::max(1, d - 1);
+    const Eigen::MatrixXd pcs = svd.matrixV().leftCols(components).transpose();
+    Eigen::RowVectorXd outside = mean_ - (mean_ * pcs.transpose()) * pcs;
+    const bool with_mean = d > 1 && outside.norm() > 1e-12 * std::max(1.0, mean_.norm());
+    eigen_.resize(with_mean ? d : components, s);
+    if (with_mean) {
+      eigen_.row(0) = outside / outside.norm();
+      eigen_.bottomRows(components) = pcs;
+    } else {
+      eigen_ = pcs;
+    }
+    captured_variance_ = sigma.head(components).squaredNorm() / std::max(total_energy, 1e-300);
   }
 
   BasisState save() const override {
