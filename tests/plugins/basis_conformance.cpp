@@ -117,3 +117,36 @@ TEST_CASE_METHOD(Fixture, "saved state restores an identical basis", "[conforman
   CHECK(fresh->size() == basis->size());
   CHECK(fresh->evaluate(set.directions) == basis->evaluate(set.directions));
 }
+
+TEST_CASE_METHOD(Fixture, "every integer parameter works at its smallest and largest value",
+                 "[conformance][extremes]") {
+  const ParamSchema schema = registry.find(PluginKind::basis, conformance::plugin_name).schema();
+  Directions extremes(4, 3);
+  extremes << 0, 0, 1, 0, 0, -1, 1, 0, 0, 0.6, 0, 0.8;
+  for (const auto& spec : schema.specs) {
+    if (spec.type != ParamType::integer || std::string(spec.name) == "seed") continue;
+    for (double value : {spec.min, spec.max}) {
+      INFO(spec.name << " = " << value);
+      Params p;
+      p.set(spec.name, static_cast<std::int64_t>(value));
+      std::shared_ptr<Basis> b;
+      try {
+        b = fitted(registry.create<Basis>(conformance::plugin_name, p));
+      } catch (const Error& e) {
+        // A value the schema allows may still be refused with a clear message
+        // (e.g. a resolution that is not a power of 2) -- but never crash.
+        CHECK(std::string(e.what()).find(spec.name) != std::string::npos);
+        continue;
+      }
+      const Eigen::MatrixXd v = b->evaluate(extremes);
+      CHECK(v.allFinite());
+      CHECK(v.cols() == b->size());
+      if (value == spec.min) {  // small enough for the round trip
+        const DirectionSet native = b->native_directions().value_or(gauss_product_sphere(64));
+        const Eigen::MatrixXd c = random_coefficients(2, b->size(), 5);
+        const Eigen::MatrixXd back = b->project(c * b->evaluate(native.directions).transpose(), native);
+        CHECK((back - c).norm() <= 1e-8 * c.norm());
+      }
+    }
+  }
+}
