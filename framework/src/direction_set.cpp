@@ -83,11 +83,9 @@ Eigen::Vector3d cube_direction(int face, double a, double b) {
 
 }  // namespace
 
-int cubemap_texel(const Eigen::Vector3d& d, int resolution) {
-  // Inverse of cube_direction(): face, then face coordinates (a, b) in [-1, 1].
+void cubemap_coordinates(const Eigen::Vector3d& d, int& face, double& a, double& b) {
+  // Inverse of cube_direction().
   const Eigen::Vector3d m = d.cwiseAbs();
-  int face;
-  double a, b;
   if (m.x() >= m.y() && m.x() >= m.z()) {
     face = d.x() > 0 ? 0 : 1;
     a = (d.x() > 0 ? -d.z() : d.z()) / m.x();
@@ -101,6 +99,12 @@ int cubemap_texel(const Eigen::Vector3d& d, int resolution) {
     a = (d.z() > 0 ? d.x() : -d.x()) / m.z();
     b = -d.y() / m.z();
   }
+}
+
+int cubemap_texel(const Eigen::Vector3d& d, int resolution) {
+  int face;
+  double a, b;
+  cubemap_coordinates(d, face, a, b);
   const int R = resolution;
   const int i = std::clamp(static_cast<int>((a + 1) * 0.5 * R), 0, R - 1);
   const int j = std::clamp(static_cast<int>((b + 1) * 0.5 * R), 0, R - 1);

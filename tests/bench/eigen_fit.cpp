@@ -57,14 +57,16 @@ int main(int argc, char** argv) {
 
   const double dense_gb = double(mesh.vertex_count()) * set.size() * 8 / 1e9;
   std::printf("trace (bits only)   : %8.3f s\n", trace_seconds);
-  std::printf("fit (randomized SVD): %8.3f s   = %.2f x one GEMM %zux%lldx%d (%.3f s, one thread)\n",
-              fit_seconds, fit_seconds / gemm_seconds, mesh.vertex_count(), (long long)set.size(),
-              d + 10, gemm_seconds);
+  std::printf(
+      "fit (randomized SVD): %8.3f s   = %.2f x one GEMM %zux%lldx%d (%.3f s, one thread)\n",
+      fit_seconds, fit_seconds / gemm_seconds, mesh.vertex_count(), (long long)set.size(), d + 10,
+      gemm_seconds);
   std::printf("visibility bits     : %8.1f MB\n",
               double(mesh.vertex_count()) * ((set.size() + 63) / 64) * 8 / 1e6);
   std::printf("peak RSS, trace+fit : %8.1f MB (a dense double v x s transport matrix: %.2f GB)\n",
               usage.ru_maxrss / 1024.0, dense_gb);
-  std::printf("the fit streams C six times (C Omega, two power iterations of C^T Q and C Q, "
-              "Q^T C), each pass one GEMM of this shape\n");
+  std::printf(
+      "the fit streams C six times (C Omega, two power iterations of C^T Q and C Q, "
+      "Q^T C), each pass one GEMM of this shape\n");
   return c.allFinite() ? 0 : 1;
 }

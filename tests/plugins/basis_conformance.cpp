@@ -91,6 +91,11 @@ TEST_CASE_METHOD(Fixture, "projection is linear and scales from 1e-6 to 1e6", "[
     CHECK((scaled / scale - pf).norm() < 1e-12 * pf.norm());
   }
   CHECK(basis->project(Eigen::MatrixXd::Zero(1, set.size()), set).cwiseAbs().maxCoeff() == 0.0);
+  // A constant function (every basis must cope, even if it is not in the span).
+  const Eigen::MatrixXd constant =
+      basis->project(Eigen::MatrixXd::Constant(1, set.size(), 2.5), set);
+  CHECK(constant.allFinite());
+  CHECK(constant.cwiseAbs().maxCoeff() > 0);
 }
 
 TEST_CASE_METHOD(Fixture, "rotation is consistent with re-projection and composes",
@@ -144,7 +149,8 @@ TEST_CASE_METHOD(Fixture, "every integer parameter works at its smallest and lar
       if (value == spec.min) {  // small enough for the round trip
         const DirectionSet native = b->native_directions().value_or(gauss_product_sphere(64));
         const Eigen::MatrixXd c = random_coefficients(2, b->size(), 5);
-        const Eigen::MatrixXd back = b->project(c * b->evaluate(native.directions).transpose(), native);
+        const Eigen::MatrixXd back =
+            b->project(c * b->evaluate(native.directions).transpose(), native);
         CHECK((back - c).norm() <= 1e-8 * c.norm());
       }
     }

@@ -31,6 +31,10 @@ struct DirectionSet {
   static DirectionSet make(const std::string& kind, int count, std::uint64_t seed);
 };
 
+// Cube-map face (+X -X +Y -Y +Z -Z) of a direction and its coordinates (a, b)
+// in [-1, 1] on that face, as DirectionSet::cubemap lays texels out.
+void cubemap_coordinates(const Eigen::Vector3d& direction, int& face, double& a, double& b);
+
 // Index of the cube-map texel (resolution R) containing a direction, in the
 // order of DirectionSet::cubemap: (face * R + row) * R + column.
 int cubemap_texel(const Eigen::Vector3d& direction, int resolution);
