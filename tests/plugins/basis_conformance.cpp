@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
+#include "../common/scenes.hpp"
 #include "conformance.hpp"
 #include "prt/basis.hpp"
 #include "prt/mesh.hpp"
@@ -20,19 +21,9 @@ namespace {
 // over a plane, traced on a 6 x 8 x 8 cube map.
 std::shared_ptr<Basis> fitted(std::shared_ptr<Basis> basis) {
   if (!basis->can_fit()) return basis;
-  Mesh scene = make_sphere(2);
-  const Mesh plane = make_plane(6, 5.0f);
-  const auto base = static_cast<std::uint32_t>(scene.positions.size());
-  for (std::size_t v = 0; v < plane.vertex_count(); ++v) {
-    scene.positions.push_back(plane.positions[v] - Eigen::Vector3f(0, 1.1f, 0));
-    scene.normals.push_back(plane.normals[v]);
-  }
-  for (auto t : plane.triangles) scene.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  const Mesh scene = test::sphere_over_plane();
   const DirectionSet lattice = DirectionSet::cubemap(8);
-  TransportOptions options;
-  options.keep_visibility = true;
-  const TransportResult r =
-      diffuse_transfer(scene, lattice, Eigen::MatrixXd(lattice.size(), 0), options, nullptr);
+  const TransportResult r = test::trace_visibility_only(scene, lattice);
   basis->fit({&scene, &lattice, &r.visibility});
   return basis;
 }

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
+#include "../common/scenes.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/hemisphere.hpp"
@@ -111,19 +112,9 @@ TEST_CASE("hsh: least squares recovers an order-N function from the hemisphere o
 
 TEST_CASE("eigentransport: the randomized SVD finds the exact principal subspace", "[eigen]") {
   // A sphere over a plane, 6 x 4 x 4 cube map: small enough for an exact SVD.
-  Mesh scene = make_sphere(2);
-  const Mesh plane = make_plane(6, 5.0f);
-  const auto base = static_cast<std::uint32_t>(scene.positions.size());
-  for (std::size_t v = 0; v < plane.vertex_count(); ++v) {
-    scene.positions.push_back(plane.positions[v] - Eigen::Vector3f(0, 1.1f, 0));
-    scene.normals.push_back(plane.normals[v]);
-  }
-  for (auto t : plane.triangles) scene.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  const Mesh scene = test::sphere_over_plane();
   const DirectionSet lattice = DirectionSet::cubemap(4);
-  TransportOptions options;
-  options.keep_visibility = true;
-  const TransportResult r =
-      diffuse_transfer(scene, lattice, Eigen::MatrixXd(lattice.size(), 0), options, nullptr);
+  const TransportResult r = test::trace_visibility_only(scene, lattice);
   auto eigen = make("eigen", {{"d", std::int64_t(6)}});
   eigen->fit({&scene, &lattice, &r.visibility});
   const Eigen::MatrixXd fitted = eigen->save().matrices.at("eigentransports");  // d x s

@@ -2,6 +2,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "../common/scenes.hpp"
 #include "prt/environment.hpp"
 #include "prt/mesh.hpp"
 #include "prt/sh.hpp"
@@ -63,15 +64,9 @@ TEST_CASE("a plane sees nothing above it: shadowed equals unshadowed", "[transpo
 }
 
 TEST_CASE("transfer is bit-identical across runs and thread counts", "[transport]") {
-  const Mesh sphere = make_sphere(3);
-  Mesh scene = sphere;  // add a plane under the sphere so some rays are blocked
-  const Mesh plane = make_plane(8, 6.0f);
-  const auto base = static_cast<std::uint32_t>(scene.positions.size());
-  for (std::size_t v = 0; v < plane.vertex_count(); ++v) {
-    scene.positions.push_back(plane.positions[v] - Eigen::Vector3f(0, 1.2f, 0));
-    scene.normals.push_back(plane.normals[v]);
-  }
-  for (auto t : plane.triangles) scene.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  // A plane under the sphere, so some rays are blocked.
+  const Mesh scene = test::sphere_over_plane(3, 8, 6.0f, -1.2f);
+  const auto base = static_cast<std::uint32_t>(make_sphere(3).vertex_count());
   const DirectionSet set = DirectionSet::stratified(700, 9);
   const auto p = sh_projection(5, set);
   const auto two = diffuse_transfer(scene, set, p, {true, false}, nullptr);

@@ -71,6 +71,16 @@ inline void improve_coherence(const Params& p, const MatrixXfRow& x, const Mesh*
   }
 }
 
+// The compressed form of clusters and their models, then the coherence passes.
+inline CompressedTransfer finish(const std::string& name, const Params& p, const MatrixXfRow& x,
+                                 const std::vector<std::int32_t>& labels,
+                                 const std::vector<clustering::ClusterModel>& models,
+                                 const Mesh* mesh) {
+  CompressedTransfer c = clustering::assemble(x, labels, models, name);
+  improve_coherence(p, x, mesh, c);
+  return c;
+}
+
 // Refuses NaN/Inf transfer with the vertex that holds it.
 inline void require_finite(const TransferSignal& signal) {
   for (Eigen::Index p = 0; p < signal.vertices(); ++p)

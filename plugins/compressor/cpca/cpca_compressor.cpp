@@ -36,10 +36,8 @@ class ClusteredPca final : public Compressor {
         static_cast<int>(params_.get_int("iterations_per_component"));
     options.adaptive_iterations = static_cast<int>(params_.get_int("adaptive_iterations"));
     const auto result = clustering::cpca(signal.coefficients, options);
-    CompressedTransfer c =
-        clustering::assemble(signal.coefficients, result.labels, result.models, "cpca");
-    compressor_params::improve_coherence(params_, signal.coefficients, mesh, c);
-    return c;
+    return compressor_params::finish("cpca", params_, signal.coefficients, result.labels,
+                                     result.models, mesh);
   }
 
  private:

@@ -20,9 +20,8 @@ class VectorQuantizer final : public Compressor {
     std::vector<clustering::ClusterModel> models(clusters.means.rows());
     for (std::size_t k = 0; k < models.size(); ++k)
       models[k] = {clusters.means.row(k), clustering::RowMatrixXd(0, clusters.means.cols()), {}};
-    CompressedTransfer c = clustering::assemble(signal.coefficients, clusters.labels, models, "vq");
-    compressor_params::improve_coherence(params_, signal.coefficients, mesh, c);
-    return c;
+    return compressor_params::finish("vq", params_, signal.coefficients, clusters.labels, models,
+                                     mesh);
   }
 
  private:
