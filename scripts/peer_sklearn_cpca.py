@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Static CPCA by scikit-learn (KMeans + per-cluster PCA) next to prt's, on the
 same transfer read from a bake file, in one run.
 
