@@ -80,7 +80,6 @@ int compare_bases(Context& context, const CompareArgs& args) {
     Progress progress("trace once", double(mesh.vertex_count()), "rays");
     traced = diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), options, &progress);
   }
-  StageTimes unused;
   const Environment environment = scene.load_environment();
   Eigen::MatrixX3f truth;
   {
