@@ -11,8 +11,10 @@ namespace fs = std::filesystem;
 void write_atomically(const fs::path& file, const std::function<void(const fs::path&)>& write) {
   const fs::path folder = file.parent_path();
   if (!folder.empty()) fs::create_directories(folder);
-  const fs::path temporary =
-      folder / ("." + file.filename().string() + ".tmp-" + std::to_string(getpid()));
+  // Built by appends: GCC 12 warns falsely (-Wrestrict) on "." + std::string.
+  std::string name = ".";
+  name.append(file.filename().string()).append(".tmp-").append(std::to_string(getpid()));
+  const fs::path temporary = folder / name;
   try {
     write(temporary);
     fs::rename(temporary, file);
