@@ -101,7 +101,8 @@ std::string describe_value(const ParamValue& value) {
         else {
           std::vector<std::string> items;
           for (double x : v) items.push_back(describe_value(ParamValue(x)));
-          return "[" + join(items, ", ") + "]";
+          std::string list = "[";  // appends: GCC 12 warns falsely on "[" + std::string
+          return list.append(join(items, ", ")).append("]");
         }
       },
       value);
