@@ -179,10 +179,6 @@ void upper_hemisphere_bits(const Mesh& mesh, const std::uint32_t* vertices, std:
   }
 }
 
-}  // namespace
-
-namespace {
-
 // Projects one block: `bits` of `count` vertices -> count x n coefficients.
 using BlockProjection = std::function<Eigen::MatrixXf(
     const std::uint32_t* vertices, std::size_t count, const std::vector<std::uint64_t>& bits)>;
@@ -233,6 +229,22 @@ double cosine_over_pi(const Mesh& mesh, std::uint32_t vertex, const DirectionSet
   return mesh.normals[vertex].cast<double>().dot(set.directions.row(k)) / M_PI;
 }
 
+// Dense rows of cosine-weighted visibility / pi for `count` vertices whose
+// visibility words lie consecutively at `bits`; vertex_of(slot) names each.
+template <class VertexOf>
+Eigen::MatrixXd rows_from_bits(const Mesh& mesh, const DirectionSet& set, std::size_t count,
+                               VertexOf vertex_of, const std::uint64_t* bits) {
+  const std::size_t words = VisibilityBits::words_for(set.size());
+  Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(count, set.size());
+  for (std::size_t slot = 0; slot < count; ++slot)
+    for (std::size_t w = 0; w < words; ++w)
+      for (std::uint64_t b = bits[slot * words + w]; b; b &= b - 1) {
+        const std::size_t k = 64 * w + std::countr_zero(b);
+        rows(slot, k) = cosine_over_pi(mesh, vertex_of(slot), set, k);
+      }
+  return rows;
+}
+
 }  // namespace
 
 TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
@@ -271,29 +283,19 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set, cons
                                  const TransportOptions& options, Progress* progress) {
   if (!basis.has_fast_projection(set))
     return diffuse_transfer(mesh, set, basis.projection_matrix(set), options, progress);
-  const std::size_t words = VisibilityBits::words_for(set.size());
   auto project = [&](const std::uint32_t* vertices, std::size_t count,
                      const std::vector<std::uint64_t>& bits) -> Eigen::MatrixXf {
-    Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(count, set.size());
-    for (std::size_t slot = 0; slot < count; ++slot)
-      for (std::size_t w = 0; w < words; ++w)
-        for (std::uint64_t b = bits[slot * words + w]; b; b &= b - 1) {
-          const std::size_t k = 64 * w + std::countr_zero(b);
-          samples(slot, k) = cosine_over_pi(mesh, vertices[slot], set, k);
-        }
-    return basis.project(samples, set).cast<float>();
+    const auto vertex_of = [vertices](std::size_t slot) { return vertices[slot]; };
+    return basis.project(rows_from_bits(mesh, set, count, vertex_of, bits.data()), set)
+        .cast<float>();
   };
   return trace_and_project(mesh, set, basis.size(), project, options, progress);
 }
 
 void transport_rows(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
                     std::size_t begin, std::size_t end, Eigen::MatrixXd& rows) {
-  rows.setZero(static_cast<Eigen::Index>(end - begin), set.size());
-  for (std::size_t v = begin; v < end; ++v)
-    for (Eigen::Index k = 0; k < set.size(); ++k)
-      if (visibility.get(v, static_cast<std::size_t>(k)))
-        rows(static_cast<Eigen::Index>(v - begin), k) =
-            cosine_over_pi(mesh, static_cast<std::uint32_t>(v), set, static_cast<std::size_t>(k));
+  const auto vertex_of = [begin](std::size_t slot) { return std::uint32_t(begin + slot); };
+  rows = rows_from_bits(mesh, set, end - begin, vertex_of, visibility.words(begin));
 }
 
 TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
