@@ -49,9 +49,7 @@ struct Row {
 int compare_bases(Context& context, const CompareArgs& args) {
   const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
   const Mesh mesh = scene.load_mesh();
-  const DirectionSet set = DirectionSet::make(
-      scene.transport.get_string("directions"), static_cast<int>(scene.transport.get_int("rays")),
-      static_cast<std::uint64_t>(scene.transport.get_int("seed")));
+  const DirectionSet set = scene.directions();
   std::vector<BasisSpec> specs;
   std::stringstream list(args.bases);
   for (std::string item; std::getline(list, item, ',');) specs.push_back(parse_spec(item));

@@ -78,9 +78,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   times.add("load mesh", clock.seconds());
 
   clock = Stopwatch();
-  const DirectionSet set = DirectionSet::make(
-      scene.transport.get_string("directions"), static_cast<int>(scene.transport.get_int("rays")),
-      static_cast<std::uint64_t>(scene.transport.get_int("seed")));
+  const DirectionSet set = scene.directions();
   times.add("directions", clock.seconds());
 
   TransportOptions transport;

@@ -249,6 +249,12 @@ Mesh SceneSpec::load_mesh() const {
   return make_generated(mesh.get_string("generate"), static_cast<int>(mesh.get_int("detail")));
 }
 
+DirectionSet SceneSpec::directions() const {
+  return DirectionSet::make(transport.get_string("directions"),
+                            static_cast<int>(transport.get_int("rays")),
+                            static_cast<std::uint64_t>(transport.get_int("seed")));
+}
+
 Environment SceneSpec::load_environment() const {
   const std::string map = lighting.get_string("environment");
   Environment environment =

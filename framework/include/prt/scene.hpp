@@ -5,6 +5,7 @@
 #include <string>
 
 #include "prt/camera.hpp"
+#include "prt/direction_set.hpp"
 #include "prt/params.hpp"
 
 namespace prt {
@@ -39,6 +40,7 @@ struct SceneSpec {
   std::filesystem::path image_path() const;
 
   Mesh load_mesh() const;
+  DirectionSet directions() const;  // [transport] directions, rays, seed
   Environment load_environment() const;
   Camera make_camera(const Mesh& mesh) const;
   Eigen::Vector3f albedo() const;
