@@ -168,6 +168,12 @@ void write_bake(const fs::path& file, const BakeData& data) {
 
       H5::Group transfer = h5.createGroup("transfer");
       write_text(transfer, "kind", data.transfer.kind);
+      write_text(transfer, "material", data.material);
+      write_number(transfer, "bounces", data.bounces);
+      write_number(transfer, "subsurface", data.subsurface ? 1 : 0);
+      write_number(transfer, "exit_order", data.transfer.exit.order);
+      write_array(transfer, "exit_kept", data.transfer.exit.kept.data(),
+                  data.transfer.exit.kept.size(), 1);
       write_matrix(transfer, "coefficients", data.transfer.coefficients);
 
       const CompressedTransfer& c = data.compressed;
@@ -235,8 +241,19 @@ BakeData read_bake(const fs::path& file) {
         read_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles");
     data.mesh.validate("mesh");
 
+    hsize_t rows, cols;
     H5::Group transfer = h5.openGroup("transfer");
     data.transfer.kind = read_text(transfer, "kind");
+    data.material = read_text(transfer, "material");
+    data.bounces = static_cast<int>(read_number(transfer, "bounces"));
+    data.subsurface = read_number(transfer, "subsurface") != 0;
+    data.transfer.exit.order = static_cast<int>(read_number(transfer, "exit_order"));
+    data.transfer.exit.kept = read_array<int>(transfer, "exit_kept", rows, cols);
+    const ExitBasis& exit = data.transfer.exit;
+    if ((data.transfer.kind == "glossy") != exit.glossy() || exit.order > kMaxExitOrder)
+      throw Error("transfer kind \"" + data.transfer.kind + "\" disagrees with its exit basis");
+    for (int i : exit.kept)
+      if (i < 0 || i >= exit.order * exit.order) throw Error("exit basis index out of range");
     data.transfer.coefficients = read_matrix(transfer, "coefficients");
 
     H5::Group compressed = h5.openGroup("compressed");
@@ -244,7 +261,6 @@ BakeData read_bake(const fs::path& file) {
     c.compressor = read_text(compressed, "compressor");
     c.components = static_cast<int>(read_number(compressed, "components"));
     c.dimension = static_cast<Eigen::Index>(read_number(compressed, "dimension"));
-    hsize_t rows, cols;
     c.cluster_of_vertex = read_array<std::int32_t>(compressed, "cluster_of_vertex", rows, cols);
     c.weights = read_matrix(compressed, "weights");
     c.means = read_matrix(compressed, "means");

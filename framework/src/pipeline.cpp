@@ -7,6 +7,9 @@
 #include "prt/basis.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
+#include "prt/glossy.hpp"
+#include "prt/interreflection.hpp"
+#include "prt/subsurface.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
 #include "prt/transport.hpp"
@@ -32,6 +35,26 @@ std::string transport_description(const SceneSpec& scene, const DirectionSet& se
   return set.kind + " " + std::to_string(set.size()) + " directions, " +
          (scene.transport.get_bool("shadowed") ? "shadowed" : "unshadowed") +
          ", seed=" + std::to_string(scene.transport.get_int("seed"));
+}
+
+// The SH order of the light basis of glossy transfer.
+int sh_order_of(const Basis& basis) {
+  const int order = static_cast<int>(std::lround(std::sqrt(double(basis.size()))));
+  if (order * order != basis.size() || !basis.can_rotate())
+    throw Error("glossy transfer needs a rotating SH light basis");
+  return order;
+}
+
+// The subsurface term is view-independent exit radiance: diffuse transfer
+// adds it to the vector; glossy transfer adds it to the constant exit row
+// (y_00 = 1 / (2 sqrt(pi)), so a constant c has coefficient 2 sqrt(pi) c).
+void add_subsurface(const MatrixXfRow& scattered, TransferSignal& transfer) {
+  if (!transfer.exit.glossy()) {
+    transfer.coefficients += scattered;
+    return;
+  }
+  transfer.coefficients.leftCols(scattered.cols()) +=
+      static_cast<float>(2.0 * std::sqrt(M_PI)) * scattered;
 }
 
 }  // namespace
@@ -65,6 +88,11 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
                     "\" is defined over the hemisphere of a local frame (for exit radiance of "
                     "glossy transfer); diffuse transfer is a function over the whole sphere: use "
                     "a sphere basis such as \"sh\"");
+  if (scene.glossy() && basis_choice.name != "sh")
+    throw Error(basis_choice.where,
+                "glossy transfer rotates the light into each vertex's frame and projects it over "
+                "the hemisphere in spherical harmonics; use basis \"sh\" (not \"" +
+                    basis_choice.name + "\")");
   if (basis->approximation_terms() > 0 && compressor_choice.name != "none")
     throw Error(compressor_choice.where,
                 "basis \"" + basis_choice.name +
@@ -81,31 +109,68 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const DirectionSet set = scene.directions();
   times.add("directions", clock.seconds());
 
+  const bool glossy = scene.glossy(), subsurface = scene.material.get_bool("subsurface");
+  const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
   TransportOptions transport;
   transport.shadowed = scene.transport.get_bool("shadowed");
+  transport.keep_hits = bounces > 0;
+  // Bases fitted to the visibility and glossy matrices need the bits kept;
+  // everything else projects while tracing.
+  transport.keep_visibility = basis->can_fit() || glossy;
   TransportResult result;
   {
     Progress progress("bake transfer", double(data.mesh.vertex_count()),
                       transport.shadowed ? "rays" : "", options.quiet);
-    if (basis->can_fit()) {
-      // Trace once keeping the bits, fit the basis to them, then project.
-      transport.keep_visibility = true;
-      result =
-          diffuse_transfer(data.mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
-    } else {
-      result = diffuse_transfer(data.mesh, set, *basis, transport, &progress);
-    }
+    result = transport.keep_visibility
+                 ? diffuse_transfer(data.mesh, set, Eigen::MatrixXd(set.size(), 0), transport,
+                                    &progress)
+                 : diffuse_transfer(data.mesh, set, *basis, transport, &progress);
   }
-  times.add("trace + project", result.trace_seconds);
+  times.add(transport.keep_visibility ? "trace" : "trace + project", result.trace_seconds);
   if (basis->can_fit()) {
     clock = Stopwatch();
     basis->fit({&data.mesh, &set, &result.visibility});
     times.add("fit basis (" + basis_choice.name + ")", clock.seconds());
+  }
+  if (transport.keep_visibility && (!glossy || subsurface)) {
     clock = Stopwatch();
     result.transfer = project_visibility(data.mesh, set, result.visibility, *basis);
     times.add("project", clock.seconds());
-    result.visibility = VisibilityBits();  // not needed past here
   }
+  if (bounces > 0) {
+    clock = Stopwatch();
+    Progress progress("inter-reflection", bounces, "", options.quiet);
+    Interreflection light = interreflect(data.mesh, set, result.hits, result.transfer.coefficients,
+                                         bounces, scene.bounce_albedo(), &progress);
+    result.transfer.coefficients = std::move(light.total);
+    for (std::size_t b = 0; b < light.bounce_norms.size(); ++b)
+      data.metrics["bounce_" + std::to_string(b + 1) + "_norm"] = light.bounce_norms[b];
+    result.hits = HitLists();
+    times.add("inter-reflection (" + std::to_string(bounces) + " bounces)", clock.seconds());
+  }
+  MatrixXfRow scattered;
+  if (subsurface) {
+    clock = Stopwatch();
+    scattered = subsurface_transfer(data.mesh, result.transfer.coefficients, scene.subsurface());
+    times.add("subsurface (hierarchical diffusion)", clock.seconds());
+  }
+  if (glossy) {
+    clock = Stopwatch();
+    const GlossyChain chain = GlossyChain::make(
+        scene.brdf(), scene.exit_basis(), sh_order_of(*basis),
+        scene.material.get_string("projection") == "least-squares",
+        scene.material.get_real("cutoff"));
+    times.add("BRDF matrix", clock.seconds());
+    clock = Stopwatch();
+    Progress progress("glossy matrices", double(data.mesh.vertex_count()), "", options.quiet);
+    result.transfer =
+        glossy_transfer(data.mesh, set, result.visibility, *basis, chain, &progress);
+    times.add("glossy matrices (" + std::to_string(chain.exit.rows()) + "x" +
+                  std::to_string(basis->size()) + ")",
+              clock.seconds());
+  }
+  if (subsurface) add_subsurface(scattered, result.transfer);
+  result.visibility = VisibilityBits();  // not needed past here
 
   clock = Stopwatch();
   const int terms = basis->approximation_terms();
@@ -128,6 +193,9 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   data.compressor = {compressor_choice.name, compressor_info.info.version,
                      compressor_choice.params.describe()};
   data.albedo = scene.albedo();
+  data.material = scene.brdf().describe();
+  data.bounces = bounces;
+  data.subsurface = subsurface;
   data.basis_state = basis->save();
   data.metrics["rays_cast"] = static_cast<double>(result.rays_cast);
   data.metrics["trace_project_seconds"] = result.trace_seconds;
@@ -139,6 +207,17 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
 }
 
 void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
+  const std::string material = scene.brdf().describe();
+  const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  if (data.material != material || data.bounces != bounces ||
+      data.subsurface != scene.material.get_bool("subsurface") ||
+      data.transfer.exit.kept != scene.exit_basis().kept)
+    throw Error(scene.material.location(),
+                "the bake file was made for material \"" + data.material + "\" with " +
+                    std::to_string(data.bounces) + " bounces" +
+                    (data.subsurface ? " and subsurface" : "") + ", but the scene asks for \"" +
+                    material + "\" with " + std::to_string(bounces) +
+                    " bounces (or another exit basis); bake again");
   const std::string wanted = scene.basis.params.describe();
   if (data.basis.name != scene.basis.name || data.basis.parameters != wanted)
     throw Error(scene.basis.where,
@@ -172,7 +251,19 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
 
   clock = Stopwatch();
   Rendered out;
-  out.vertex_radiance = relight(data.compressed, input.light);
+  const ExitBasis& exit = data.transfer.exit;
+  const MatrixXfRow exit_radiance = exit_coefficients(data.compressed, input.light, exit.rows());
+  std::vector<Frame> frames;
+  if (exit.glossy()) {
+    frames = tangent_frames(data.mesh);
+    out.vertex_radiance = evaluate_exit(
+        exit_radiance, exit, local_view_directions(data.mesh, frames, input.camera.position));
+    input.exit_coefficients = &exit_radiance;
+    input.exit_basis = &exit;
+    input.frames = &frames;
+  } else {
+    out.vertex_radiance = exit_radiance;
+  }
   for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data.albedo[c];
   times.add("relight vertices", clock.seconds());
 
@@ -190,12 +281,31 @@ Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginReg
   const Environment environment = scene.load_environment();
   Stopwatch clock;
   Rendered out;
+  const int samples = static_cast<int>(scene.ground_truth.get_int("samples"));
+  const auto seed = static_cast<std::uint64_t>(scene.ground_truth.get_int("seed"));
+  const Camera camera = scene.make_camera(mesh);
   {
-    const int samples = static_cast<int>(scene.ground_truth.get_int("samples"));
+    // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
+    Reflectance reflectance;
+    std::vector<Frame> frames;
+    std::vector<Eigen::Vector3d> views;
+    const Brdf brdf = scene.brdf();
+    if (brdf.glossy()) {
+      frames = tangent_frames(mesh);
+      views = local_view_directions(mesh, frames, camera.position);
+      reflectance = [&](std::size_t v, const Eigen::Vector3d& light) {
+        return M_PI * brdf.evaluate(frames[v] * light, views[v]);
+      };
+    }
     Progress progress("ground truth", double(mesh.vertex_count()), "rays", options.quiet);
-    out.vertex_radiance = ground_truth_radiance(
-        mesh, environment, samples, static_cast<std::uint64_t>(scene.ground_truth.get_int("seed")),
-        &progress);
+    out.vertex_radiance =
+        ground_truth_radiance(mesh, environment, samples, seed, &progress, reflectance);
+  }
+  if (const int bounces = static_cast<int>(scene.transport.get_int("bounces")); bounces > 0) {
+    Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
+                      options.quiet);
+    out.vertex_radiance = ground_truth_bounces(mesh, out.vertex_radiance, bounces,
+                                               scene.bounce_albedo(), samples, seed, &progress);
   }
   const Eigen::Vector3f albedo = scene.albedo();
   times.add("ground truth (Monte Carlo)", clock.seconds());
@@ -206,7 +316,7 @@ Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginReg
   for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= albedo[c];
   input.vertex_radiance = &unit_albedo;
   input.albedo = albedo;
-  input.camera = scene.make_camera(mesh);
+  input.camera = camera;
   input.background = &environment;
   out.image = renderer->render(input);
   times.add("rasterise (" + renderer_choice.name + ")", clock.seconds());

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "prt/environment.hpp"
+#include "prt/glossy.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
@@ -28,8 +29,33 @@ const ParamSchema& mesh_schema() {
   return s;
 }
 const ParamSchema& material_schema() {
-  static const ParamSchema s{"section [material]",
-                             {reals("albedo", "0.8", 3, 0, 1, "diffuse albedo (RGB or grey)")}};
+  static const ParamSchema s{
+      "section [material]",
+      {reals("albedo", "0.8", 3, 0, 1, "RGB tint of the whole reflectance (RGB or grey)"),
+       choice("brdf", "lambert", "lambert|phong|ward|cook-torrance",
+              "reflectance model: lambert bakes vectors, the others glossy matrices"),
+       real("diffuse", "1", 0, 1, "kd: weight of the Lambertian part"),
+       real("specular", "0.5", 0, 1, "ks: weight of the glossy lobe"),
+       real("exponent", "32", 0, 10000, "phong: lobe exponent"),
+       reals("anisotropic_roughness", "0.1,0.3", 2, 1e-3, 10,
+             "ward: roughness along the tangent and the bitangent"),
+       real("roughness", "0.3", 1e-3, 10, "cook-torrance: Beckmann slope m"),
+       real("fresnel", "0.04", 0, 1, "cook-torrance: Schlick reflectance at normal incidence"),
+       integer("exit_order", "5", 1, kMaxExitOrder,
+               "glossy: SH order of exit radiance over the local hemisphere (N_r = order^2)"),
+       boolean("exit_reduced", "false",
+               "glossy: drop the nearly redundant l=1,m=0 exit function (N_r = 24 at order 5)"),
+       choice("projection", "least-squares", "least-squares|zero",
+              "glossy: hemispherical projection of transferred and exit radiance"),
+       real("cutoff", "1e-10", 0, 1,
+            "glossy least squares: singular values of A below this x the largest are dropped"),
+       boolean("subsurface", "false", "add Jensen-Buhler multiple scattering"),
+       real("sigma_a", "0.0041", 1e-9, 1e6, "subsurface: absorption coefficient, 1/mm"),
+       real("sigma_s", "2.62", 1e-9, 1e6, "subsurface: reduced scattering coefficient, 1/mm"),
+       real("eta", "1.5", 1.0, 4.0, "subsurface: relative index of refraction"),
+       real("mm_per_unit", "100", 1e-9, 1e9, "subsurface: millimetres per mesh unit"),
+       real("subsurface_error", "0.3", 0, 10,
+            "subsurface hierarchy: group radius / distance below which a group is one point")}};
   return s;
 }
 const ParamSchema& transport_schema() {
@@ -38,6 +64,8 @@ const ParamSchema& transport_schema() {
       {choice("directions", "fibonacci", "fibonacci|stratified|cubemap", "direction set"),
        integer("rays", "1024", 1, 4194304, "directions per vertex over the sphere"),
        boolean("shadowed", "true", "trace visibility (false: unshadowed transfer)"),
+       integer("bounces", "0", 0, 64,
+               "diffuse inter-reflection bounces gathered from the shadow rays' hits"),
        integer("seed", "1", 0, 9.2e18, "seed of stratified directions")}};
   return s;
 }
@@ -221,6 +249,20 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     throw Error(scene.lighting.location(),
                 "section [lighting]: give exactly one of \"environment\" or \"constant\"");
 
+  const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  if (bounces > 0 && scene.glossy())
+    throw Error(scene.transport.location("bounces"),
+                "section [transport]: inter-reflection is implemented for diffuse transfer only; "
+                "use bounces = 0 with brdf = \"" + scene.material.get_string("brdf") + "\"");
+  if (bounces > 0 && !scene.transport.get_bool("shadowed"))
+    throw Error(scene.transport.location("bounces"),
+                "section [transport]: bounces gather light from the shadow rays' hits; they need "
+                "shadowed = true");
+  if (bounces > 0 && scene.bounce_albedo() >= 1.0)
+    throw Error(scene.material.location("albedo"),
+                "section [material]: inter-reflection needs an albedo below 1 (diffuse x mean "
+                "albedo is " + std::to_string(scene.bounce_albedo()) + ")");
+
   scene.basis = read_plugin(root, "basis", "sh", PluginKind::basis, registry, scene);
   scene.compressor =
       read_plugin(root, "compressor", "none", PluginKind::compressor, registry, scene);
@@ -280,9 +322,40 @@ Camera SceneSpec::make_camera(const Mesh& m) const {
   return c;
 }
 
+Brdf SceneSpec::brdf() const {
+  return Brdf::from_material(material);
+}
+
+bool SceneSpec::glossy() const {
+  return brdf().glossy();
+}
+
+ExitBasis SceneSpec::exit_basis() const {
+  if (!glossy()) return {};
+  return ExitBasis::hemisphere(static_cast<int>(material.get_int("exit_order")),
+                               material.get_bool("exit_reduced"));
+}
+
+double SceneSpec::bounce_albedo() const {
+  return albedo().cast<double>().mean();  // lambert: albedo() includes kd
+}
+
+SubsurfaceMaterial SceneSpec::subsurface() const {
+  SubsurfaceMaterial m;
+  m.sigma_a = material.get_real("sigma_a");
+  m.sigma_s = material.get_real("sigma_s");
+  m.eta = material.get_real("eta");
+  m.mm_per_unit = material.get_real("mm_per_unit");
+  m.error = material.get_real("subsurface_error");
+  return m;
+}
+
 Eigen::Vector3f SceneSpec::albedo() const {
   const auto a = material.get_reals("albedo");
-  return {float(a[0]), float(a[1]), float(a[2])};
+  // A Lambertian transfer vector carries no reflectance: kd scales the tint.
+  // A glossy matrix carries the whole BRDF, kd included.
+  const float kd = glossy() ? 1.f : static_cast<float>(material.get_real("diffuse"));
+  return kd * Eigen::Vector3f(float(a[0]), float(a[1]), float(a[2]));
 }
 
 }  // namespace prt

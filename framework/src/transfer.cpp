@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "prt/error.hpp"
+#include "prt/sh.hpp"
 
 namespace prt {
 
@@ -89,41 +90,76 @@ double CompressedTransfer::stored_floats() const {
   return floats;
 }
 
-Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& light) {
-  if (light.rows() != t.dimension)
-    throw Error("light vector has " + std::to_string(light.rows()) + " coefficients, transfer " +
-                std::to_string(t.dimension));
+ExitBasis ExitBasis::hemisphere(int order, bool reduced) {
+  ExitBasis b;
+  b.order = order;
+  for (int i = 0; i < order * order; ++i)
+    if (!(reduced && i == sh::index(1, 0))) b.kept.push_back(i);
+  return b;
+}
+
+void ExitBasis::evaluate(const Eigen::Vector3d& local, double* out) const {
+  if (!glossy()) {
+    out[0] = 1.0;
+    return;
+  }
+  double all[kMaxExitCoefficients];
+  sh::evaluate(order, local.x(), local.y(), local.z(), all);
+  for (std::size_t i = 0; i < kept.size(); ++i) out[i] = all[kept[i]];
+}
+
+MatrixXfRow exit_coefficients(const CompressedTransfer& t, const Eigen::MatrixX3d& light,
+                              int rows) {
+  const Eigen::Index n_i = light.rows();
+  if (rows < 1 || n_i * rows != t.dimension)
+    throw Error("light vector has " + std::to_string(n_i) + " coefficients, but the transfer's " +
+                std::to_string(t.dimension) + " do not form " + std::to_string(rows) + " rows of " +
+                std::to_string(n_i));
   const Eigen::MatrixX3f l = light.cast<float>();
-  if (t.sparse()) {  // sparse dot products with the full light vector
-    Eigen::MatrixX3f out(t.vertices(), 3);
-    const Eigen::RowVector3f base = t.means.row(0) * l;
+  using Rows3 = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  // One stored vector (rows x N_i, row-major) times the light, flattened.
+  auto times_light = [&](const float* vector) -> Eigen::RowVectorXf {
+    const Rows3 e = Eigen::Map<const MatrixXfRow>(vector, rows, n_i) * l;
+    return Eigen::Map<const Eigen::RowVectorXf>(e.data(), 3 * rows);
+  };
+  MatrixXfRow out(t.vertices(), 3 * rows);
+  if (t.sparse()) {  // sparse products with the full light vector
+    const Eigen::RowVectorXf base = times_light(t.means.row(0).data());
     tbb::parallel_for(Eigen::Index(0), t.vertices(), [&](Eigen::Index p) {
-      Eigen::RowVector3f e = base;
-      for (int j = 0; j < t.components; ++j)
-        e += t.weights(p, j) * l.row(t.weight_index[p * t.components + j]);
+      Eigen::RowVectorXf e = base;
+      for (int j = 0; j < t.components; ++j) {
+        const int index = t.weight_index[p * t.components + j];
+        const int row = index / n_i, column = index % n_i;
+        e.segment<3>(3 * row) += t.weights(p, j) * l.row(column);
+      }
       out.row(p) = e;
     });
     return out;
   }
-  // Per-cluster constants: row 0 = mean . l, rows 1..n' = representatives . l.
-  std::vector<Eigen::MatrixX3f> constants(t.clusters());
+  // Per-cluster constants: row 0 = M_k0 l, rows 1..n' = M_ki l.
+  std::vector<MatrixXfRow> constants(t.clusters());
   for (Eigen::Index k = 0; k < t.clusters(); ++k) {
     const int n_k = t.components_of(k);
-    constants[k].resize(n_k + 1, 3);
-    constants[k].row(0) = t.means.row(k) * l;
-    if (n_k > 0) constants[k].bottomRows(n_k) = t.representatives[k] * l;
+    constants[k].resize(n_k + 1, 3 * rows);
+    constants[k].row(0) = times_light(t.means.row(k).data());
+    for (int i = 0; i < n_k; ++i)
+      constants[k].row(i + 1) = times_light(t.representatives[k].row(i).data());
   }
-  Eigen::MatrixX3f out(t.vertices(), 3);
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, t.vertices(), 4096), [&](const auto& r) {
     for (Eigen::Index p = r.begin(); p < r.end(); ++p) {
       const auto& c = constants[t.cluster_of_vertex[p]];
       const Eigen::Index n_k = c.rows() - 1;
-      Eigen::RowVector3f e = c.row(0);
-      if (n_k > 0) e += t.weights.row(p).head(n_k) * c.bottomRows(n_k);
-      out.row(p) = e;
+      if (n_k > 0)
+        out.row(p) = c.row(0) + t.weights.row(p).head(n_k) * c.bottomRows(n_k);
+      else
+        out.row(p) = c.row(0);
     }
   });
   return out;
+}
+
+Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& light) {
+  return exit_coefficients(t, light, 1);
 }
 
 double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation) {

@@ -63,6 +63,35 @@ RayCaster::RayCaster(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
 
 RayCaster::~RayCaster() = default;
 
+bool front_face(const Mesh& mesh, std::uint32_t t, float u, float v,
+                const Eigen::Vector3f& direction) {
+  const auto& tri = mesh.triangles[t];
+  const Eigen::Vector3f n = (1.f - u - v) * mesh.normals[tri[0]] + u * mesh.normals[tri[1]] +
+                            v * mesh.normals[tri[2]];
+  return n.dot(direction) < 0.f;
+}
+
+namespace {
+
+void fill_ray(RTCRay& r, const float* o, const float* d) {
+  r.org_x = o[0], r.org_y = o[1], r.org_z = o[2];
+  r.dir_x = d[0], r.dir_y = d[1], r.dir_z = d[2];
+  r.tnear = 0.f, r.tfar = INFINITY, r.time = 0.f;
+  r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
+}
+
+void fill_ray_hit(RTCRayHit& rh, const float* o, const float* d) {
+  fill_ray(rh.ray, o, d);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+Eigen::Vector3f direction_of_ray(const RTCRay& r) {
+  return {r.dir_x, r.dir_y, r.dir_z};
+}
+
+}  // namespace
+
 void RayCaster::occluded(const float* origins, const float* directions, std::size_t count,
                          std::uint8_t* escaped) const {
   constexpr std::size_t kChunk = 256;
@@ -72,40 +101,70 @@ void RayCaster::occluded(const float* origins, const float* directions, std::siz
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
   for (std::size_t begin = 0; begin < count; begin += kChunk) {
     const std::size_t n = std::min(kChunk, count - begin);
-    for (std::size_t i = 0; i < n; ++i) {
-      RTCRay& r = rays[i];
-      const float* o = origins + 3 * (begin + i);
-      const float* d = directions + 3 * (begin + i);
-      r.org_x = o[0], r.org_y = o[1], r.org_z = o[2];
-      r.dir_x = d[0], r.dir_y = d[1], r.dir_z = d[2];
-      r.tnear = 0.f, r.tfar = INFINITY, r.time = 0.f;
-      r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      fill_ray(rays[i], origins + 3 * (begin + i), directions + 3 * (begin + i));
     rtcOccluded1M(impl_->scene, &context, rays, static_cast<unsigned>(n), sizeof(RTCRay));
     for (std::size_t i = 0; i < n; ++i) escaped[begin + i] = rays[i].tfar >= 0.f;
   }
 }
 
+void RayCaster::intersect(const Mesh& mesh, const float* origins, const float* directions,
+                          std::size_t count, std::int64_t* triangle, float* u, float* v) const {
+  constexpr std::size_t kChunk = 256;
+  RTCRayHit rays[kChunk];
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  for (std::size_t begin = 0; begin < count; begin += kChunk) {
+    const std::size_t n = std::min(kChunk, count - begin);
+    for (std::size_t i = 0; i < n; ++i)
+      fill_ray_hit(rays[i], origins + 3 * (begin + i), directions + 3 * (begin + i));
+    rtcIntersect1M(impl_->scene, &context, rays, static_cast<unsigned>(n), sizeof(RTCRayHit));
+    for (std::size_t i = 0; i < n; ++i) {
+      const RTCHit& h = rays[i].hit;
+      const bool hit = h.geomID != RTC_INVALID_GEOMETRY_ID &&
+                       front_face(mesh, h.primID, h.u, h.v, direction_of_ray(rays[i].ray));
+      triangle[begin + i] = hit ? std::int64_t(h.primID) : -1;
+      u[begin + i] = h.u, v[begin + i] = h.v;
+    }
+  }
+}
+
 std::uint64_t RayCaster::trace_visibility(const Mesh& mesh, const std::uint32_t* vertices,
                                           std::size_t count, const float* directions, std::size_t s,
-                                          std::uint64_t* bits) const {
+                                          std::uint64_t* bits,
+                                          std::vector<SurfaceHit>* hits) const {
   constexpr unsigned kChunk = 1024;
   const std::size_t words = VisibilityBits::words_for(s);
   std::fill(bits, bits + count * words, 0);
-  RTCRay rays[kChunk];
+  // Shadow rays need only occlusion; inter-reflection needs the hit points.
+  std::vector<RTCRay> rays(hits ? 0 : kChunk);
+  std::vector<RTCRayHit> ray_hits(hits ? kChunk : 0);
   std::uint32_t slot_of[kChunk], direction_of[kChunk];
   unsigned filled = 0;
   std::uint64_t cast = 0;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  auto mark_visible = [&](unsigned i) {
+    bits[slot_of[i] * words + direction_of[i] / 64] |= std::uint64_t(1) << (direction_of[i] % 64);
+  };
   auto flush = [&] {
     cast += filled;
-    rtcOccluded1M(impl_->scene, &context, rays, filled, sizeof(RTCRay));
-    for (unsigned i = 0; i < filled; ++i)
-      if (rays[i].tfar >= 0.f)
-        bits[slot_of[i] * words + direction_of[i] / 64] |= std::uint64_t(1)
-                                                           << (direction_of[i] % 64);
+    if (!hits) {
+      rtcOccluded1M(impl_->scene, &context, rays.data(), filled, sizeof(RTCRay));
+      for (unsigned i = 0; i < filled; ++i)
+        if (rays[i].tfar >= 0.f) mark_visible(i);
+    } else {
+      rtcIntersect1M(impl_->scene, &context, ray_hits.data(), filled, sizeof(RTCRayHit));
+      for (unsigned i = 0; i < filled; ++i) {
+        const RTCHit& h = ray_hits[i].hit;
+        if (h.geomID == RTC_INVALID_GEOMETRY_ID)
+          mark_visible(i);
+        else if (front_face(mesh, h.primID, h.u, h.v, direction_of_ray(ray_hits[i].ray)))
+          hits[slot_of[i]].push_back({direction_of[i], h.primID, h.u, h.v});
+      }
+    }
     filled = 0;
   };
   for (std::size_t slot = 0; slot < count; ++slot) {
@@ -114,11 +173,10 @@ std::uint64_t RayCaster::trace_visibility(const Mesh& mesh, const std::uint32_t*
     for (std::size_t k = 0; k < s; ++k) {
       const float* d = directions + 3 * k;
       if (n.x() * d[0] + n.y() * d[1] + n.z() * d[2] <= 0.f) continue;
-      RTCRay& r = rays[filled];
-      r.org_x = o.x(), r.org_y = o.y(), r.org_z = o.z();
-      r.dir_x = d[0], r.dir_y = d[1], r.dir_z = d[2];
-      r.tnear = 0.f, r.tfar = INFINITY, r.time = 0.f;
-      r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
+      if (hits)
+        fill_ray_hit(ray_hits[filled], o.data(), d);
+      else
+        fill_ray(rays[filled], o.data(), d);
       slot_of[filled] = static_cast<std::uint32_t>(slot);
       direction_of[filled] = static_cast<std::uint32_t>(k);
       if (++filled == kChunk) flush();
@@ -192,6 +250,7 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
   TransportResult result;
   result.transfer.coefficients.resize(static_cast<Eigen::Index>(v_count), n);
   if (options.keep_visibility) result.visibility = VisibilityBits(v_count, s);
+  if (options.keep_hits) result.hits.resize(v_count);
   Stopwatch clock;
   std::optional<RayCaster> caster;
   if (options.shadowed) caster.emplace(mesh);
@@ -203,9 +262,10 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
     const std::uint32_t* vertices = &order[range.begin()];
     const std::size_t count = range.size();
     std::vector<std::uint64_t> bits(count * words);
+    std::vector<std::vector<SurfaceHit>> hits(options.keep_hits ? count : 0);
     if (caster) {
-      const std::uint64_t cast =
-          caster->trace_visibility(mesh, vertices, count, dirs_f.data(), s, bits.data());
+      const std::uint64_t cast = caster->trace_visibility(
+          mesh, vertices, count, dirs_f.data(), s, bits.data(), hits.empty() ? nullptr : hits.data());
       rays += cast;
       if (progress) progress->add(double(count), double(cast));
     } else {
@@ -217,6 +277,7 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
       result.transfer.coefficients.row(vertices[slot]) = block.row(slot);
       if (options.keep_visibility)
         std::copy_n(&bits[slot * words], words, result.visibility.words(vertices[slot]));
+      if (!hits.empty()) result.hits[vertices[slot]] = std::move(hits[slot]);
     }
   });
   result.trace_seconds = clock.seconds();
@@ -333,7 +394,8 @@ std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& set, Progress* pr
 }
 
 Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
-                                       int samples, std::uint64_t seed, Progress* progress) {
+                                       int samples, std::uint64_t seed, Progress* progress,
+                                       const Reflectance& reflectance) {
   RayCaster caster(mesh);
   const std::size_t v_count = mesh.vertex_count();
   // A constant map is sampled best by the cosine alone (zero variance); a real
@@ -383,7 +445,8 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
         const Eigen::Vector3d d(directions[3 * k], directions[3 * k + 1], directions[3 * k + 2]);
         // f = L V cos / pi = L cosine_pdf (albedo 1); balance heuristic:
         // f / (N (p_cosine + p_map)).
-        const double weight = cosine_pdf[k] / (per_strategy * (cosine_pdf[k] + map_pdf[k]));
+        double weight = cosine_pdf[k] / (per_strategy * (cosine_pdf[k] + map_pdf[k]));
+        if (reflectance) weight *= reflectance(v, d);  // pi rho replaces albedo 1
         sum += weight * environment.texel_radiance(d).cast<double>();
       }
       radiance.row(static_cast<Eigen::Index>(v)) = sum.cast<float>().transpose();

@@ -13,7 +13,8 @@
 
 namespace prt {
 
-constexpr int kBakeFormatVersion = 1;
+// 2: glossy matrices, material, bounces and subsurface recorded.
+constexpr int kBakeFormatVersion = 2;
 
 struct PluginRecord {
   std::string name, version, parameters;
@@ -25,6 +26,9 @@ struct BakeData {
   std::string transport;  // e.g. "fibonacci 1024 shadowed seed=1"
   Mesh mesh;
   Eigen::Vector3f albedo{1, 1, 1};
+  std::string material = "lambert kd=1";  // the BRDF the transfer was baked for
+  int bounces = 0;                        // inter-reflection bounces included
+  bool subsurface = false;                // subsurface term included
   TransferSignal transfer;
   CompressedTransfer compressed;
   BasisState basis_state;

@@ -4,6 +4,7 @@
 
 #include "prt/camera.hpp"
 #include "prt/environment.hpp"
+#include "prt/glossy.hpp"
 #include "prt/image.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
@@ -18,6 +19,12 @@ struct RenderInput {
   Eigen::MatrixX3d light;
   // ...or exit radiance given directly per vertex (v x 3), e.g. ground truth.
   const Eigen::MatrixX3f* vertex_radiance = nullptr;
+  // Glossy transfer: exit coefficients per vertex (v x 3 N_r, as
+  // exit_coefficients returns), their basis and the vertices' local frames;
+  // the renderer evaluates y(v_p) . e_p per pixel with the local view vector.
+  const MatrixXfRow* exit_coefficients = nullptr;
+  const ExitBasis* exit_basis = nullptr;
+  const std::vector<Frame>* frames = nullptr;
   Eigen::Vector3f albedo{1, 1, 1};
   Camera camera;
   const Environment* background = nullptr;  // drawn behind the mesh when set

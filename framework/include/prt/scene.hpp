@@ -4,9 +4,12 @@
 #include <filesystem>
 #include <string>
 
+#include "prt/brdf.hpp"
 #include "prt/camera.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/params.hpp"
+#include "prt/subsurface.hpp"
+#include "prt/transfer.hpp"
 
 namespace prt {
 
@@ -43,7 +46,15 @@ struct SceneSpec {
   DirectionSet directions() const;  // [transport] directions, rays, seed
   Environment load_environment() const;
   Camera make_camera(const Mesh& mesh) const;
+  // RGB factor applied to the transfer's radiance: albedo (x diffuse for lambert).
   Eigen::Vector3f albedo() const;
+  Brdf brdf() const;
+  bool glossy() const;           // a glossy BRDF: bake matrices, not vectors
+  ExitBasis exit_basis() const;  // empty for diffuse
+  // The scalar reflectance of inter-reflected light: diffuse x mean albedo
+  // (transfer is monochrome; the RGB albedo tints the final radiance).
+  double bounce_albedo() const;
+  SubsurfaceMaterial subsurface() const;
 };
 
 }  // namespace prt

@@ -11,12 +11,34 @@ namespace prt {
 
 using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+// The basis of exit radiance for glossy transfer (Sloan 2003 §3.2, §6.1): SH
+// of `order` over the upper hemisphere of each vertex's local frame, restricted
+// to the SH indices `kept` (all order^2, or one fewer when the nearly
+// redundant l = 1, m = 0 is dropped). Diffuse transfer has no exit basis and
+// one row.
+constexpr int kMaxExitOrder = 12;
+constexpr int kMaxExitCoefficients = kMaxExitOrder * kMaxExitOrder;
+
+struct ExitBasis {
+  int order = 0;
+  std::vector<int> kept;
+
+  static ExitBasis hemisphere(int order, bool reduced);
+  bool glossy() const { return !kept.empty(); }
+  int rows() const { return kept.empty() ? 1 : static_cast<int>(kept.size()); }
+  // rows() values at a unit direction of the local frame (z = normal).
+  void evaluate(const Eigen::Vector3d& local, double* out) const;
+};
+
 // v x n transfer, one row per vertex. For diffuse transfer n is the basis size
-// and the exit radiance is row . light (per colour channel of the light); the
-// material's RGB albedo multiplies the result.
+// and the exit radiance is row . light (per colour channel of the light). For
+// glossy transfer each row is the N_r x N_i matrix M_p, row-major, mapping the
+// light vector to exit-radiance coefficients in `exit`. The material's RGB
+// albedo multiplies the result.
 struct TransferSignal {
   MatrixXfRow coefficients;
-  std::string kind = "diffuse";  // "diffuse" (vectors); glossy matrices later
+  std::string kind = "diffuse";  // "diffuse" (vectors) or "glossy" (matrices)
+  ExitBasis exit;
 
   Eigen::Index vertices() const { return coefficients.rows(); }
   Eigen::Index dimension() const { return coefficients.cols(); }
@@ -69,6 +91,13 @@ CompressedTransfer keep_largest(const TransferSignal& signal, int terms);
 // Per-vertex exit radiance (v x 3, linear RGB) for a light vector (n x 3):
 // per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki.
 Eigen::MatrixX3f relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light);
+
+// Exit-radiance coefficients per vertex for a light vector (N_i x 3), with
+// each stored vector read as a `rows` x N_i matrix: per-cluster constants
+// C_ki = M_ki l (rows x 3), then e_p = C_k0 + sum_i w_pi C_ki. Returns
+// v x 3 rows, RGB interleaved per coefficient (e_p(i, c) at 3 i + c).
+MatrixXfRow exit_coefficients(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                              int rows);
 
 // Squared error sum over vertices of |t_p - reconstruction_p|^2.
 double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation);

@@ -43,6 +43,15 @@ class VisibilityBits {
   std::vector<std::uint64_t> bits_;
 };
 
+// A ray that hit the front of a triangle (the side its vertex normals face):
+// the direction's index in the set, the triangle and Embree's barycentrics,
+// point = (1 - u - v) a + u b + v c. Back-face hits carry no light.
+struct SurfaceHit {
+  std::uint32_t direction = 0, triangle = 0;
+  float u = 0, v = 0;
+};
+using HitLists = std::vector<std::vector<SurfaceHit>>;  // per vertex
+
 // Embree device + scene over a mesh; shared by bake, ground truth and benchmarks.
 class RayCaster {
  public:
@@ -58,12 +67,20 @@ class RayCaster {
   void occluded(const float* origins, const float* directions, std::size_t count,
                 std::uint8_t* escaped) const;
 
+  // First hits: `triangle` gets the hit triangle or -1 where the ray escapes
+  // or hits a back face; u, v the barycentrics.
+  void intersect(const Mesh& mesh, const float* origins, const float* directions, std::size_t count,
+                 std::int64_t* triangle, float* u, float* v) const;
+
   // Visibility of `count` vertices over `s` directions (xyz floats): for each
   // vertex, bits of (s + 63) / 64 words; a bit is set where the direction lies
   // above the tangent plane and its ray escapes. Rays go straight into
-  // Embree's stream, with no intermediate arrays. Returns the rays cast.
+  // Embree's stream, with no intermediate arrays. With `hits` (one list per
+  // vertex slot), blocked rays are intersected instead and their front-face
+  // hits recorded, for inter-reflection. Returns the rays cast.
   std::uint64_t trace_visibility(const Mesh& mesh, const std::uint32_t* vertices, std::size_t count,
-                                 const float* directions, std::size_t s, std::uint64_t* bits) const;
+                                 const float* directions, std::size_t s, std::uint64_t* bits,
+                                 std::vector<SurfaceHit>* hits = nullptr) const;
 
  private:
   struct Impl;
@@ -74,11 +91,13 @@ class RayCaster {
 struct TransportOptions {
   bool shadowed = true;  // false: unshadowed transfer (no rays cast)
   bool keep_visibility = false;
+  bool keep_hits = false;  // record front-face hits of blocked rays (inter-reflection)
 };
 
 struct TransportResult {
   TransferSignal transfer;    // v x n, (1/pi) int V max(n.s, 0) y(s) ds
   VisibilityBits visibility;  // when keep_visibility
+  HitLists hits;              // when keep_hits
   std::uint64_t rays_cast = 0;
   double trace_seconds = 0;  // wall time of the fused trace + project pass
 };
@@ -120,8 +139,17 @@ std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& directions, Progr
 // Ground truth: per-vertex exit radiance (v x 3) for albedo 1, by Monte Carlo
 // over the environment with cosine-weighted stratified samples and ray-cast
 // visibility; no basis involved.
+// For glossy materials `reflectance` (optional) gives pi * rho(in, out) at a
+// vertex for a world light direction, which replaces albedo 1.
 class Environment;
+using Reflectance = std::function<double(std::size_t vertex, const Eigen::Vector3d& light)>;
 Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
-                                       int samples, std::uint64_t seed, Progress* progress);
+                                       int samples, std::uint64_t seed, Progress* progress,
+                                       const Reflectance& reflectance = nullptr);
+
+// True where a ray along `direction` meets the side of triangle `t` that its
+// vertex normals face (interpolated at u, v).
+bool front_face(const Mesh& mesh, std::uint32_t t, float u, float v,
+                const Eigen::Vector3f& direction);
 
 }  // namespace prt

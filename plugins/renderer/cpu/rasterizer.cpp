@@ -38,6 +38,14 @@ Eigen::Matrix4f view_projection(const Camera& camera, const Mesh& mesh) {
 
 std::vector<std::uint8_t> rasterize(const Mesh& mesh, const Eigen::MatrixX3f& colours,
                                     const Camera& camera, Image& image) {
+  const MatrixXfRow attributes = colours;
+  return rasterize(mesh, attributes, camera, image, [](const float* colour, float* rgb) {
+    for (int c = 0; c < 3; ++c) rgb[c] = colour[c];
+  });
+}
+
+std::vector<std::uint8_t> rasterize(const Mesh& mesh, const MatrixXfRow& attributes,
+                                    const Camera& camera, Image& image, const PixelShader& shade) {
   const int W = image.width, H = image.height;
   const Eigen::Matrix4f vp = view_projection(camera, mesh);
   // Screen position (x, y in pixels, z in [0,1]) and 1/w per vertex.
@@ -51,7 +59,9 @@ std::vector<std::uint8_t> rasterize(const Mesh& mesh, const Eigen::MatrixX3f& co
   std::vector<float> depth(static_cast<std::size_t>(W) * H, std::numeric_limits<float>::max());
   std::vector<std::uint8_t> covered(static_cast<std::size_t>(W) * H, 0);
   constexpr int kBand = 16;  // rows per task; each task owns its rows, so no locking
+  const Eigen::Index k = attributes.cols();
   tbb::parallel_for(0, (H + kBand - 1) / kBand, [&](int band) {
+    Eigen::RowVectorXf interpolated(k);
     const int row_begin = band * kBand, row_end = std::min(H, row_begin + kBand);
     for (const auto& t : mesh.triangles) {
       const Eigen::Vector4f& a = screen[t[0]];
@@ -80,10 +90,10 @@ std::vector<std::uint8_t> rasterize(const Mesh& mesh, const Eigen::MatrixX3f& co
           // Perspective-correct weights.
           const float p0 = l0 * a.w(), p1 = l1 * b.w(), p2 = l2 * c.w();
           const float sum = p0 + p1 + p2;
-          const Eigen::RowVector3f colour =
-              (p0 * colours.row(t[0]) + p1 * colours.row(t[1]) + p2 * colours.row(t[2])) / sum;
-          float* out = image.at(x, y);
-          for (int ch = 0; ch < 3; ++ch) out[ch] = colour[ch];
+          interpolated = (p0 * attributes.row(t[0]) + p1 * attributes.row(t[1]) +
+                          p2 * attributes.row(t[2])) /
+                         sum;
+          shade(interpolated.data(), image.at(x, y));
         }
       }
     }

@@ -1,0 +1,41 @@
+// Reflectance models for glossy transfer (Sloan 2003 §3.1, Chen 2005 §3.1):
+// Lambert, normalised Phong, anisotropic Ward and Cook-Torrance, each a
+// diffuse part kd / pi plus a specular lobe scaled by ks. Directions are unit
+// vectors in the local frame (z = normal, x = tangent); both point away from
+// the surface.
+#pragma once
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+class Params;
+
+struct Brdf {
+  std::string model = "lambert";  // lambert | phong | ward | cook-torrance
+  double kd = 1.0;                // diffuse weight
+  double ks = 0.0;                // specular weight
+  double exponent = 32;           // Phong
+  double alpha_x = 0.2, alpha_y = 0.2;  // Ward roughness along tangent / bitangent
+  double roughness = 0.3;               // Cook-Torrance Beckmann slope
+  double f0 = 0.04;                     // Cook-Torrance Schlick reflectance at normal incidence
+
+  // The material section's BRDF (kd = diffuse, ks = specular, ...).
+  static Brdf from_material(const Params& material);
+  bool glossy() const { return model != "lambert"; }
+
+  // rho(in, out); zero when either direction is below the horizon.
+  double evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) const;
+  std::string describe() const;
+};
+
+// The BRDF matrix of Sloan 2003 §3.1 in SH over the local hemisphere:
+//   B_ij = int_H int_H y_i(v) y_j(s) rho(v, s) s_z ds dv
+// rows: SH of `exit_order` restricted to the indices `exit_kept`; columns: all
+// order^2 SH of `light_order`. Integrated by a Gauss product rule with
+// `resolution` nodes in cos(theta) (and 2x that in phi) per hemisphere.
+Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int exit_order, const std::vector<int>& exit_kept,
+                            int light_order, int resolution = 48);
+
+}  // namespace prt

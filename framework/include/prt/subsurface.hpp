@@ -1,0 +1,41 @@
+// View-independent multiple scattering (Sloan 2003 §3.1 after Jensen & Buhler
+// 2002): the dipole diffusion profile R_d (Jensen et al. 2001) summed over
+// the surface with a point hierarchy, parameterised by the light basis:
+//   s_p = (1 - F_dr)^2 sum_q R_d(|x_p - x_q|) A_q t_q
+// where t_q = int V cos y / pi is the shadowed diffuse transfer (irradiance
+// / pi per light coefficient) and A_q the vertex's area. Distant groups of
+// points whose radius is below `error` x their distance enter as one point
+// (area-weighted centroid and transfer sum), as in Jensen & Buhler's octree.
+// Coefficients are monochrome: one sigma_a, sigma_s', eta; the material's RGB
+// albedo tints the result like the rest of the transfer.
+#pragma once
+#include <Eigen/Core>
+
+#include "prt/mesh.hpp"
+#include "prt/transfer.hpp"
+
+namespace prt {
+
+struct SubsurfaceMaterial {
+  double sigma_a = 0.0041;   // absorption, 1/mm (marble, Jensen et al. 2001)
+  double sigma_s = 2.62;     // reduced scattering sigma_s', 1/mm
+  double eta = 1.5;          // relative index of refraction
+  double mm_per_unit = 100;  // millimetres per mesh unit
+  double error = 0.3;        // hierarchy: radius / distance below which a group is one point
+};
+
+// Diffuse Fresnel reflectance F_dr(eta) (polynomial fit of Jensen et al. 2001).
+double diffuse_fresnel_reflectance(double eta);
+// The dipole profile R_d(r), r in mm, in 1/mm^2.
+double dipole_profile(const SubsurfaceMaterial& m, double r_mm);
+// int R_d dA over a plane: the total diffuse reflectance of a half space.
+double dipole_total_reflectance(const SubsurfaceMaterial& m);
+
+// s_p per vertex for the diffuse transfer `irradiance_transfer` (v x n).
+MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& irradiance_transfer,
+                                const SubsurfaceMaterial& material);
+
+// A third of the area of each triangle around each vertex (mesh units^2).
+std::vector<double> vertex_areas(const Mesh& mesh);
+
+}  // namespace prt

@@ -1,0 +1,90 @@
+#include "prt/brdf.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "prt/hemisphere.hpp"
+#include "prt/params.hpp"
+#include "prt/sh.hpp"
+
+namespace prt {
+
+Brdf Brdf::from_material(const Params& material) {
+  Brdf b;
+  b.model = material.get_string("brdf");
+  b.kd = material.get_real("diffuse");
+  b.ks = b.glossy() ? material.get_real("specular") : 0.0;
+  b.exponent = material.get_real("exponent");
+  const auto ward = material.get_reals("anisotropic_roughness");
+  b.alpha_x = ward[0];
+  b.alpha_y = ward[1];
+  b.roughness = material.get_real("roughness");
+  b.f0 = material.get_real("fresnel");
+  return b;
+}
+
+double Brdf::evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) const {
+  const double cos_in = in.z(), cos_out = out.z();
+  if (cos_in <= 0 || cos_out <= 0) return 0.0;
+  double value = kd / M_PI;
+  if (ks == 0) return value;
+  if (model == "phong") {
+    const Eigen::Vector3d mirror(-in.x(), -in.y(), in.z());
+    const double c = mirror.dot(out);
+    if (c > 0) value += ks * (exponent + 2) / (2 * M_PI) * std::pow(c, exponent);
+    return value;
+  }
+  const Eigen::Vector3d h = (in + out).normalized();
+  if (model == "ward") {
+    const double e = (h.x() * h.x() / (alpha_x * alpha_x) + h.y() * h.y() / (alpha_y * alpha_y)) /
+                     (h.z() * h.z());
+    return value + ks * std::exp(-e) /
+                       (4 * M_PI * alpha_x * alpha_y * std::sqrt(cos_in * cos_out));
+  }
+  // Cook-Torrance: Beckmann D, Schlick F, Torrance-Sparrow G.
+  const double nh = h.z(), vh = std::max(1e-12, out.dot(h)), m2 = roughness * roughness;
+  const double tan2 = (1 - nh * nh) / (nh * nh);
+  const double d = std::exp(-tan2 / m2) / (M_PI * m2 * nh * nh * nh * nh);
+  const double f = f0 + (1 - f0) * std::pow(1 - vh, 5);
+  const double g = std::min({1.0, 2 * nh * cos_out / vh, 2 * nh * cos_in / vh});
+  return value + ks * d * f * g / (4 * cos_in * cos_out);
+}
+
+std::string Brdf::describe() const {
+  char text[256];
+  if (model == "phong")
+    std::snprintf(text, sizeof text, "phong kd=%g ks=%g exponent=%g", kd, ks, exponent);
+  else if (model == "ward")
+    std::snprintf(text, sizeof text, "ward kd=%g ks=%g alpha=(%g, %g)", kd, ks, alpha_x, alpha_y);
+  else if (model == "cook-torrance")
+    std::snprintf(text, sizeof text, "cook-torrance kd=%g ks=%g m=%g f0=%g", kd, ks, roughness,
+                  f0);
+  else
+    std::snprintf(text, sizeof text, "lambert kd=%g", kd);
+  return text;
+}
+
+Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int exit_order, const std::vector<int>& exit_kept,
+                            int light_order, int resolution) {
+  const DirectionSet h = hemisphere::upper_quadrature(resolution);
+  const Eigen::Index q = h.size();
+  const Eigen::MatrixXd exit_all = sh::evaluate(exit_order, h.directions);
+  Eigen::MatrixXd exit(q, static_cast<Eigen::Index>(exit_kept.size()));
+  for (std::size_t i = 0; i < exit_kept.size(); ++i) exit.col(i) = exit_all.col(exit_kept[i]);
+  // Light side: y_j(s) s_z w_s, so that F = rho * light is int rho y_j s_z ds.
+  Eigen::MatrixXd light = sh::evaluate(light_order, h.directions);
+  for (Eigen::Index k = 0; k < q; ++k) light.row(k) *= h.weights[k] * h.directions(k, 2);
+  // F(v, j) = int rho(v, s) y_j(s) s_z ds, one row of rho at a time.
+  Eigen::MatrixXd f(q, light.cols());
+  tbb::parallel_for(Eigen::Index(0), q, [&](Eigen::Index v) {
+    const Eigen::Vector3d out = h.directions.row(v).transpose();
+    Eigen::RowVectorXd rho(q);
+    for (Eigen::Index s = 0; s < q; ++s) rho[s] = brdf.evaluate(h.directions.row(s).transpose(), out);
+    f.row(v) = rho * light;
+  });
+  return exit.transpose() * h.weights.asDiagonal() * f;
+}
+
+}  // namespace prt

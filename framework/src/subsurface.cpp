@@ -1,0 +1,169 @@
+#include "prt/subsurface.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numeric>
+
+#include "prt/error.hpp"
+
+namespace prt {
+
+double diffuse_fresnel_reflectance(double eta) {
+  return -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
+}
+
+namespace {
+
+struct Dipole {
+  double sigma_tr, alpha, z_r, z_v;
+  explicit Dipole(const SubsurfaceMaterial& m) {
+    const double sigma_t = m.sigma_a + m.sigma_s;
+    alpha = m.sigma_s / sigma_t;
+    sigma_tr = std::sqrt(3.0 * m.sigma_a * sigma_t);
+    const double f_dr = diffuse_fresnel_reflectance(m.eta);
+    const double a = (1.0 + f_dr) / (1.0 - f_dr);
+    z_r = 1.0 / sigma_t;
+    z_v = z_r * (1.0 + 4.0 / 3.0 * a);
+  }
+  double operator()(double r) const {
+    const double d_r = std::sqrt(r * r + z_r * z_r), d_v = std::sqrt(r * r + z_v * z_v);
+    return alpha / (4 * M_PI) *
+           (z_r * (sigma_tr * d_r + 1) * std::exp(-sigma_tr * d_r) / (d_r * d_r * d_r) +
+            z_v * (sigma_tr * d_v + 1) * std::exp(-sigma_tr * d_v) / (d_v * d_v * d_v));
+  }
+};
+
+void check(const SubsurfaceMaterial& m) {
+  if (!(m.sigma_a > 0) || !(m.sigma_s > 0) || !(m.eta > 0) || !(m.mm_per_unit > 0) ||
+      !(m.error >= 0))
+    throw Error("subsurface: sigma_a, sigma_s, eta and mm_per_unit must be positive");
+}
+
+// A binary hierarchy over the vertices (median split on the longest axis);
+// each node aggregates area, area-weighted centroid and sum of A_q t_q.
+struct Node {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double radius = 0, area = 0;
+  int begin = 0, end = 0, left = -1, right = -1;
+};
+
+constexpr int kLeaf = 8;
+
+}  // namespace
+
+double dipole_profile(const SubsurfaceMaterial& m, double r_mm) {
+  check(m);
+  return Dipole(m)(r_mm);
+}
+
+double dipole_total_reflectance(const SubsurfaceMaterial& m) {
+  check(m);
+  const double f_dr = diffuse_fresnel_reflectance(m.eta);
+  const double a = (1.0 + f_dr) / (1.0 - f_dr);
+  const double alpha = m.sigma_s / (m.sigma_a + m.sigma_s), root = std::sqrt(3.0 * (1.0 - alpha));
+  return 0.5 * alpha * (1.0 + std::exp(-4.0 / 3.0 * a * root)) * std::exp(-root);
+}
+
+std::vector<double> vertex_areas(const Mesh& mesh) {
+  std::vector<double> area(mesh.vertex_count(), 0.0);
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>();
+    const double third = 0.5 / 3.0 *
+                         (mesh.positions[t[1]].cast<double>() - a)
+                             .cross(mesh.positions[t[2]].cast<double>() - a)
+                             .norm();
+    for (auto v : t) area[v] += third;
+  }
+  return area;
+}
+
+MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
+                                const SubsurfaceMaterial& m) {
+  check(m);
+  const auto v_count = static_cast<int>(mesh.vertex_count());
+  if (transfer.rows() != v_count) throw Error("subsurface: transfer rows do not match the mesh");
+  const Dipole profile(m);
+  const double scale = m.mm_per_unit, f_dt = 1.0 - diffuse_fresnel_reflectance(m.eta);
+  std::vector<double> area = vertex_areas(mesh);
+  for (double& a : area) a *= scale * scale;  // mm^2
+  std::vector<Eigen::Vector3d> position(v_count);
+  for (int v = 0; v < v_count; ++v) position[v] = mesh.positions[v].cast<double>() * scale;
+
+  // Build the hierarchy over a permutation of the vertices.
+  std::vector<int> order(v_count);
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<Node> nodes;
+  nodes.reserve(2 * v_count / kLeaf + 2);
+  std::function<int(int, int)> build = [&](int begin, int end) {
+    const int id = static_cast<int>(nodes.size());
+    nodes.push_back({});
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo, sum = lo * 0;
+    double area_sum = 0;
+    for (int i = begin; i < end; ++i) {
+      lo = lo.cwiseMin(position[order[i]]);
+      hi = hi.cwiseMax(position[order[i]]);
+      sum += area[order[i]] * position[order[i]];
+      area_sum += area[order[i]];
+    }
+    Node node;
+    node.begin = begin, node.end = end, node.area = area_sum;
+    node.centroid = area_sum > 0 ? Eigen::Vector3d(sum / area_sum) : 0.5 * (lo + hi);
+    for (int i = begin; i < end; ++i)
+      node.radius = std::max(node.radius, (position[order[i]] - node.centroid).norm());
+    if (end - begin > kLeaf) {
+      int axis;
+      (hi - lo).maxCoeff(&axis);
+      const int mid = (begin + end) / 2;
+      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                       [&](int a, int b) { return position[a][axis] < position[b][axis]; });
+      node.left = build(begin, mid);
+      node.right = build(mid, end);
+    }
+    nodes[id] = node;
+    return id;
+  };
+  build(0, v_count);
+  // Aggregated A_q t_q per node, children before parents (they have larger ids).
+  const Eigen::Index n = transfer.cols();
+  Eigen::MatrixXd aggregate = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nodes.size()), n);
+  for (int id = static_cast<int>(nodes.size()) - 1; id >= 0; --id) {
+    const Node& node = nodes[id];
+    if (node.left < 0)
+      for (int i = node.begin; i < node.end; ++i)
+        aggregate.row(id) += area[order[i]] * transfer.row(order[i]).cast<double>();
+    else
+      aggregate.row(id) = aggregate.row(node.left) + aggregate.row(node.right);
+  }
+
+  MatrixXfRow out(transfer.rows(), n);
+  tbb::parallel_for(0, v_count, [&](int p) {
+    Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(n);
+    std::vector<int> stack{0};
+    while (!stack.empty()) {
+      const Node& node = nodes[stack.back()];
+      const int id = stack.back();
+      stack.pop_back();
+      const double distance = (position[p] - node.centroid).norm();
+      if (node.left >= 0 && node.radius > m.error * distance) {
+        stack.push_back(node.left);
+        stack.push_back(node.right);
+      } else if (node.left >= 0) {
+        sum += profile(distance) * aggregate.row(id);
+      } else {
+        for (int i = node.begin; i < node.end; ++i) {
+          const int q = order[i];
+          sum += profile((position[p] - position[q]).norm()) * area[q] *
+                 transfer.row(q).cast<double>();
+        }
+      }
+    }
+    out.row(p) = (f_dt * f_dt * sum).cast<float>();
+  });
+  return out;
+}
+
+}  // namespace prt
