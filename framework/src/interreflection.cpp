@@ -47,8 +47,8 @@ MatrixXfRow gather_bounce(const Mesh& mesh, const DirectionSet& set, const HitLi
 Interreflection interreflect(const Mesh& mesh, const DirectionSet& set, const HitLists& hits,
                              const MatrixXfRow& direct, int bounces, double albedo,
                              Progress* progress) {
-  if (albedo < 0 || albedo >= 1)
-    throw Error("inter-reflection needs an albedo in [0, 1); got " + std::to_string(albedo));
+  if (!(albedo >= 0 && albedo <= 1))
+    throw Error("inter-reflection needs an albedo in [0, 1]; got " + std::to_string(albedo));
   Interreflection out{direct, {}};
   MatrixXfRow previous = direct;
   for (int b = 0; b < bounces; ++b) {

@@ -262,11 +262,40 @@ Mesh make_box(float size) {
   return m;
 }
 
+Mesh make_open_box(int cells, float size) {
+  // Five gridded faces (no top), each with its own vertices and inward normals.
+  Mesh m;
+  const float h = size / 2;
+  const int n = std::max(cells, 1);
+  const Eigen::Vector3f axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {1.f, -1.f}) {
+      if (axis == 1 && sign > 0) continue;  // the open top
+      const Eigen::Vector3f out = sign * axes[axis];
+      const Eigen::Vector3f u = axes[(axis + 1) % 3], v = sign * axes[(axis + 2) % 3];
+      const auto base = static_cast<std::uint32_t>(m.positions.size());
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j) {
+          const float a = 2.f * i / n - 1.f, b = 2.f * j / n - 1.f;
+          m.positions.push_back(h * (out + a * u + b * v));
+          m.normals.push_back(-out);
+        }
+      auto at = [&](int i, int j) { return base + static_cast<std::uint32_t>(i * (n + 1) + j); };
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i + 1, j)});
+          m.triangles.push_back({at(i, j), at(i, j + 1), at(i + 1, j + 1)});
+        }
+    }
+  return m;
+}
+
 Mesh make_generated(const std::string& name, int detail) {
   if (name == "sphere") return make_sphere(detail);
   if (name == "plane") return make_plane(std::max(detail, 1));
   if (name == "box") return make_box();
-  throw Error("unknown generated mesh \"" + name + "\"; valid: sphere, plane, box");
+  if (name == "open-box") return make_open_box(4 << std::min(detail, 4));
+  throw Error("unknown generated mesh \"" + name + "\"; valid: sphere, plane, box, open-box");
 }
 
 }  // namespace prt

@@ -24,7 +24,7 @@ const ParamSchema& mesh_schema() {
   static const ParamSchema s{
       "section [mesh]",
       {path("file", false, "mesh file (OFF, OBJ, PLY, STL), relative to the scene"),
-       choice("generate", "", "sphere|plane|box", "a generated mesh instead of a file"),
+       choice("generate", "", "sphere|plane|box|open-box", "a generated mesh instead of a file"),
        integer("detail", "3", 0, 8, "subdivision level of a generated mesh")}};
   return s;
 }
@@ -258,10 +258,6 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     throw Error(scene.transport.location("bounces"),
                 "section [transport]: bounces gather light from the shadow rays' hits; they need "
                 "shadowed = true");
-  if (bounces > 0 && scene.bounce_albedo() >= 1.0)
-    throw Error(scene.material.location("albedo"),
-                "section [material]: inter-reflection needs an albedo below 1 (diffuse x mean "
-                "albedo is " + std::to_string(scene.bounce_albedo()) + ")");
 
   scene.basis = read_plugin(root, "basis", "sh", PluginKind::basis, registry, scene);
   scene.compressor =

@@ -101,7 +101,8 @@ MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
   std::function<int(int, int)> build = [&](int begin, int end) {
     const int id = static_cast<int>(nodes.size());
     nodes.push_back({});
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo, sum = lo * 0;
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     double area_sum = 0;
     for (int i = begin; i < end; ++i) {
       lo = lo.cwiseMin(position[order[i]]);

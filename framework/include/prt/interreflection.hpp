@@ -4,7 +4,8 @@
 // (barycentric interpolation of the hit triangle's vertices):
 //   t_p^b = rho * sum_{blocked s_k} w_k max(n_p . s_k, 0) / pi * t_q(s_k)^{b-1}
 // The transfer is linear in the light, so this works on the coefficients of
-// any basis. rho < 1 makes every bounce smaller than the one before.
+// any basis. rho < 1 makes every bounce smaller than the one before; each
+// bounce is at most rho times the previous one.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>

@@ -35,8 +35,11 @@ Mesh load_mesh(const std::filesystem::path& file);
 Mesh make_sphere(int subdivisions, float radius = 1.0f);  // icosphere, exact normals
 Mesh make_plane(int cells, float size = 2.0f);            // in y = 0, normal +y
 Mesh make_box(float size = 2.0f);                         // closed cube, outward normals
+// A box without its top (+y) face, seen from inside: inward normals, each
+// face a grid of cells x cells squares. The concave test scene of inter-reflection.
+Mesh make_open_box(int cells, float size = 2.0f);
 
-// Builds one of the generated meshes by name ("sphere", "plane", "box").
+// Builds one of the generated meshes by name ("sphere", "plane", "box", "open-box").
 Mesh make_generated(const std::string& name, int detail);
 
 }  // namespace prt

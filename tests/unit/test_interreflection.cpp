@@ -1,0 +1,132 @@
+#include <catch2/catch.hpp>
+
+#include "prt/environment.hpp"
+#include "prt/interreflection.hpp"
+#include "prt/sh.hpp"
+#include "prt/subsurface.hpp"
+#include "prt/transport.hpp"
+
+using namespace prt;
+
+namespace {
+
+// Order-4 SH transfer of a scene plus the hits of its shadow rays.
+TransportResult traced(const Mesh& mesh, int rays) {
+  const DirectionSet set = DirectionSet::make("fibonacci", rays, 1);
+  TransportOptions options;
+  options.keep_hits = true;
+  return diffuse_transfer(mesh, set, set.weights.asDiagonal() * sh::evaluate(4, set.directions),
+                          options, nullptr);
+}
+
+// Exit radiance (albedo excluded) under constant light 1.
+Eigen::VectorXd under_constant_light(const MatrixXfRow& transfer) {
+  Eigen::VectorXd l = Eigen::VectorXd::Zero(transfer.cols());
+  l[0] = 2 * std::sqrt(M_PI);
+  return transfer.cast<double>() * l;
+}
+
+bool near_corner(const Eigen::Vector3f& p) {
+  int at_wall = 0;
+  for (int c : {0, 2}) at_wall += std::abs(p[c]) > 0.8f;
+  return at_wall == 2 && p.y() < -0.8f;  // floor corners: three walls meet
+}
+
+}  // namespace
+
+TEST_CASE("white furnace: a convex sphere returns the light, with or without bounces",
+          "[interreflection]") {
+  const Mesh sphere = make_sphere(2);
+  const TransportResult t = traced(sphere, 2048);
+  const DirectionSet set = DirectionSet::make("fibonacci", 2048, 1);
+  for (const auto& hits : t.hits) CHECK(hits.empty());  // nothing to hit on a convex object
+  for (int bounces : {0, 3}) {
+    const Interreflection r = interreflect(sphere, set, t.hits, t.transfer.coefficients, bounces,
+                                           1.0, nullptr);
+    const Eigen::VectorXd radiance = under_constant_light(r.total);
+    CHECK((radiance.array() - 1.0).abs().maxCoeff() < 0.01);
+  }
+}
+
+TEST_CASE("inter-reflection brightens an open box's corners, converges and adds no energy",
+          "[interreflection]") {
+  const Mesh box = make_open_box(12);
+  const int rays = 2048;
+  const TransportResult t = traced(box, rays);
+  const DirectionSet set = DirectionSet::make("fibonacci", rays, 1);
+  const double albedo = 0.8;
+  const Interreflection r = interreflect(box, set, t.hits, t.transfer.coefficients, 4, albedo,
+                                         nullptr);
+  REQUIRE(r.bounce_norms.size() == 4);
+  for (std::size_t b = 1; b < r.bounce_norms.size(); ++b) {
+    CHECK(r.bounce_norms[b] < r.bounce_norms[b - 1]);  // converges
+    CHECK(r.bounce_norms[b] <= albedo * r.bounce_norms[b - 1] * 1.02);
+  }
+  const Eigen::VectorXd direct = under_constant_light(t.transfer.coefficients);
+  const Eigen::VectorXd total = under_constant_light(r.total);
+  // A white furnace with albedo < 1 never reflects more than it receives.
+  CHECK((albedo * total).maxCoeff() <= 1.0 + 1e-3);
+  CHECK((total - direct).minCoeff() > -1e-4);
+  double corner_gain = 0, corner_direct = 0;
+  for (std::size_t v = 0; v < box.vertex_count(); ++v)
+    if (near_corner(box.positions[v])) {
+      corner_gain += total[v] - direct[v];
+      corner_direct += direct[v];
+    }
+  REQUIRE(corner_direct > 0);
+  CHECK(corner_gain / corner_direct > 0.3);  // corners see mostly walls
+}
+
+TEST_CASE("two bounces match the ground truth's independent bounces", "[interreflection]") {
+  const Mesh box = make_open_box(8);
+  const int rays = 4096;
+  const TransportResult t = traced(box, rays);
+  const DirectionSet set = DirectionSet::make("fibonacci", rays, 1);
+  const Interreflection r =
+      interreflect(box, set, t.hits, t.transfer.coefficients, 2, 0.7, nullptr);
+  const Eigen::VectorXd prt_radiance = under_constant_light(r.total);
+  const Environment light = Environment::constant(Eigen::Vector3f::Ones());
+  const Eigen::MatrixX3f direct = ground_truth_radiance(box, light, 1024, 3, nullptr);
+  const Eigen::MatrixX3f truth = ground_truth_bounces(box, direct, 2, 0.7, 1024, 3, nullptr);
+  const Eigen::VectorXd reference = truth.col(0).cast<double>();
+  const double relative = (prt_radiance - reference).norm() / reference.norm();
+  INFO("relative RMS " << relative);
+  CHECK(relative < 0.03);
+  // Without the bounces the transfer is measurably darker than the truth.
+  CHECK((under_constant_light(t.transfer.coefficients) - reference).norm() / reference.norm() >
+        5 * relative);
+}
+
+TEST_CASE("subsurface: a lit plane reflects the dipole's total diffuse reflectance",
+          "[subsurface]") {
+  SubsurfaceMaterial m;
+  m.sigma_a = 0.01, m.sigma_s = 0.1, m.eta = 1.3;
+  m.mm_per_unit = 250;  // a 2-unit plane is 500 mm wide; mean free path ~9 mm
+  const Mesh plane = make_plane(160);
+  MatrixXfRow irradiance = MatrixXfRow::Ones(plane.vertex_count(), 2);
+  irradiance.col(1) *= 3;
+  const MatrixXfRow s = subsurface_transfer(plane, irradiance, m);
+  // The centre vertex sees the whole (effectively infinite) plane.
+  std::size_t centre = 0;
+  for (std::size_t v = 0; v < plane.vertex_count(); ++v)
+    if (plane.positions[v].norm() < plane.positions[centre].norm()) centre = v;
+  const double f_dt = 1 - diffuse_fresnel_reflectance(m.eta);
+  const double expected = f_dt * f_dt * dipole_total_reflectance(m);
+  INFO("expected " << expected << ", got " << s(centre, 0));
+  CHECK(s(centre, 0) == Approx(expected).epsilon(0.05));
+  CHECK(s(centre, 1) == Approx(3 * s(centre, 0)).epsilon(1e-5));  // linear in the transfer
+  CHECK(expected < 1.0);
+  // The hierarchy agrees with the direct sum (error 0 opens every group).
+  SubsurfaceMaterial exact = m;
+  exact.error = 0;
+  const Mesh small = make_plane(24);
+  const MatrixXfRow ones = MatrixXfRow::Ones(small.vertex_count(), 1);
+  const MatrixXfRow fast = subsurface_transfer(small, ones, m);
+  const MatrixXfRow direct = subsurface_transfer(small, ones, exact);
+  CHECK((fast - direct).norm() / direct.norm() < 0.02);
+  // More absorption, less light.
+  SubsurfaceMaterial absorbing = m;
+  absorbing.sigma_a = 0.05;
+  CHECK(dipole_total_reflectance(absorbing) < dipole_total_reflectance(m));
+  CHECK(std::isfinite(dipole_profile(m, 0.0)));
+}
