@@ -1,5 +1,8 @@
 #include "prt/environment.hpp"
 
+#include "prt/camera.hpp"
+#include "prt/image.hpp"
+
 #include <ImfArray.h>
 #include <ImfRgbaFile.h>
 #include <stb/stb_image.h>
@@ -161,6 +164,16 @@ Eigen::MatrixX3d Environment::project(const Basis& basis) const {
   for (const auto& p : partial) light += p;  // fixed order: deterministic
   if (rotate_coefficients) light = basis.rotation_matrix(rotation_) * light;
   return light;
+}
+
+void draw_environment(const Environment& environment, const Camera& camera, Image& image) {
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const Eigen::Vector3f l =
+          environment.radiance(camera.ray(x + 0.5f, y + 0.5f).cast<double>());
+      float* out = image.at(x, y);
+      for (int c = 0; c < 3; ++c) out[c] = l[c];
+    }
 }
 
 }  // namespace prt

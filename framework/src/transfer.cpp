@@ -108,23 +108,49 @@ void ExitBasis::evaluate(const Eigen::Vector3d& local, double* out) const {
   for (std::size_t i = 0; i < kept.size(); ++i) out[i] = all[kept[i]];
 }
 
-MatrixXfRow exit_coefficients(const CompressedTransfer& t, const Eigen::MatrixX3d& light,
-                              int rows) {
+namespace {
+
+void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int rows) {
   const Eigen::Index n_i = light.rows();
   if (rows < 1 || n_i * rows != t.dimension)
     throw Error("light vector has " + std::to_string(n_i) + " coefficients, but the transfer's " +
                 std::to_string(t.dimension) + " do not form " + std::to_string(rows) + " rows of " +
                 std::to_string(n_i));
-  const Eigen::MatrixX3f l = light.cast<float>();
+}
+
+// One stored vector (rows x N_i, row-major) times the light, flattened.
+Eigen::RowVectorXf times_light(const float* vector, int rows, const Eigen::MatrixX3f& l) {
   using Rows3 = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
-  // One stored vector (rows x N_i, row-major) times the light, flattened.
-  auto times_light = [&](const float* vector) -> Eigen::RowVectorXf {
-    const Rows3 e = Eigen::Map<const MatrixXfRow>(vector, rows, n_i) * l;
-    return Eigen::Map<const Eigen::RowVectorXf>(e.data(), 3 * rows);
-  };
+  const Rows3 e = Eigen::Map<const MatrixXfRow>(vector, rows, l.rows()) * l;
+  return Eigen::Map<const Eigen::RowVectorXf>(e.data(), 3 * rows);
+}
+
+}  // namespace
+
+std::vector<MatrixXfRow> cluster_constants(const CompressedTransfer& t,
+                                           const Eigen::MatrixX3d& light, int rows) {
+  check_light(t, light, rows);
+  if (t.sparse()) throw Error("cluster_constants: a sparse transfer has no clusters");
+  const Eigen::MatrixX3f l = light.cast<float>();
+  std::vector<MatrixXfRow> constants(t.clusters());
+  for (Eigen::Index k = 0; k < t.clusters(); ++k) {
+    const int n_k = t.components_of(k);
+    constants[k].resize(n_k + 1, 3 * rows);
+    constants[k].row(0) = times_light(t.means.row(k).data(), rows, l);
+    for (int i = 0; i < n_k; ++i)
+      constants[k].row(i + 1) = times_light(t.representatives[k].row(i).data(), rows, l);
+  }
+  return constants;
+}
+
+MatrixXfRow exit_coefficients(const CompressedTransfer& t, const Eigen::MatrixX3d& light,
+                              int rows) {
+  check_light(t, light, rows);
+  const Eigen::Index n_i = light.rows();
+  const Eigen::MatrixX3f l = light.cast<float>();
   MatrixXfRow out(t.vertices(), 3 * rows);
   if (t.sparse()) {  // sparse products with the full light vector
-    const Eigen::RowVectorXf base = times_light(t.means.row(0).data());
+    const Eigen::RowVectorXf base = times_light(t.means.row(0).data(), rows, l);
     tbb::parallel_for(Eigen::Index(0), t.vertices(), [&](Eigen::Index p) {
       Eigen::RowVectorXf e = base;
       for (int j = 0; j < t.components; ++j) {
@@ -136,15 +162,7 @@ MatrixXfRow exit_coefficients(const CompressedTransfer& t, const Eigen::MatrixX3
     });
     return out;
   }
-  // Per-cluster constants: row 0 = M_k0 l, rows 1..n' = M_ki l.
-  std::vector<MatrixXfRow> constants(t.clusters());
-  for (Eigen::Index k = 0; k < t.clusters(); ++k) {
-    const int n_k = t.components_of(k);
-    constants[k].resize(n_k + 1, 3 * rows);
-    constants[k].row(0) = times_light(t.means.row(k).data());
-    for (int i = 0; i < n_k; ++i)
-      constants[k].row(i + 1) = times_light(t.representatives[k].row(i).data());
-  }
+  const std::vector<MatrixXfRow> constants = cluster_constants(t, light, rows);
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, t.vertices(), 4096), [&](const auto& r) {
     for (Eigen::Index p = r.begin(); p < r.end(); ++p) {
       const auto& c = constants[t.cluster_of_vertex[p]];

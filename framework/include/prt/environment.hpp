@@ -49,6 +49,12 @@ class Environment {
   Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();
 };
 
+// Fills `image` with the environment seen through the camera (bilinear): the
+// background renderers draw behind the mesh.
+struct Camera;
+struct Image;
+void draw_environment(const Environment& environment, const Camera& camera, Image& image);
+
 // Rotation by `degrees` about the +y (up) axis.
 Eigen::Matrix3d rotation_about_up(double degrees);
 

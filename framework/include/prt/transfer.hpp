@@ -92,6 +92,12 @@ CompressedTransfer keep_largest(const TransferSignal& signal, int terms);
 // per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki.
 Eigen::MatrixX3f relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light);
 
+// The per-cluster constants of Sloan 2003 §6 (CPU side of rendering): for
+// each cluster k a (n'_k + 1) x 3 rows matrix, row 0 = M_k0 l, row i = M_ki l,
+// each stored vector read as a `rows` x N_i matrix (RGB interleaved).
+std::vector<MatrixXfRow> cluster_constants(const CompressedTransfer& transfer,
+                                           const Eigen::MatrixX3d& light, int rows);
+
 // Exit-radiance coefficients per vertex for a light vector (N_i x 3), with
 // each stored vector read as a `rows` x N_i matrix: per-cluster constants
 // C_ki = M_ki l (rows x 3), then e_p = C_k0 + sum_i w_pi C_ki. Returns

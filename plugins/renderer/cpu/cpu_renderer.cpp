@@ -24,7 +24,7 @@ class CpuRenderer final : public Renderer {
     if (!in.mesh) throw Error("cpu renderer: no mesh");
     const Camera& camera = in.camera;
     Image image(camera.width, camera.height);
-    if (background_ && in.background) draw_background(*in.background, camera, image);
+    if (background_ && in.background) draw_environment(*in.background, camera, image);
     if (in.exit_coefficients) {
       draw_glossy(in, image);
       return image;
@@ -74,23 +74,6 @@ class CpuRenderer final : public Renderer {
         rgb[c] = std::max(0.f, albedo[c] * static_cast<float>(sum));
       }
     });
-  }
-
-  static void draw_background(const Environment& env, const Camera& camera, Image& image) {
-    const Eigen::Vector3f f = (camera.target - camera.position).normalized();
-    const Eigen::Vector3f s = f.cross(camera.up).normalized();
-    const Eigen::Vector3f u = s.cross(f);
-    const float t = std::tan(0.5f * camera.fov_degrees * float(M_PI) / 180.f);
-    const float aspect = float(camera.width) / float(camera.height);
-    for (int y = 0; y < image.height; ++y)
-      for (int x = 0; x < image.width; ++x) {
-        const float sx = (2.f * (x + 0.5f) / image.width - 1.f) * t * aspect;
-        const float sy = (1.f - 2.f * (y + 0.5f) / image.height) * t;
-        const Eigen::Vector3f d = (f + sx * s + sy * u).normalized();
-        const Eigen::Vector3f l = env.radiance(d.cast<double>());
-        float* out = image.at(x, y);
-        for (int c = 0; c < 3; ++c) out[c] = l[c];
-      }
   }
 
   bool background_;

@@ -8,34 +8,6 @@
 
 namespace prt {
 
-Eigen::Matrix4f view_projection(const Camera& camera, const Mesh& mesh) {
-  const Eigen::Vector3f f = (camera.target - camera.position).normalized();
-  const Eigen::Vector3f s = f.cross(camera.up).normalized();
-  const Eigen::Vector3f u = s.cross(f);
-  Eigen::Matrix4f view = Eigen::Matrix4f::Identity();
-  view.block<1, 3>(0, 0) = s.transpose();
-  view.block<1, 3>(1, 0) = u.transpose();
-  view.block<1, 3>(2, 0) = -f.transpose();
-  view(0, 3) = -s.dot(camera.position);
-  view(1, 3) = -u.dot(camera.position);
-  view(2, 3) = f.dot(camera.position);
-  // Near and far planes enclose the mesh's bounding sphere.
-  const Eigen::Vector3f centre = 0.5f * (mesh.bounds_min() + mesh.bounds_max());
-  const float radius = 0.5f * (mesh.bounds_max() - mesh.bounds_min()).norm();
-  const float distance = (centre - camera.position).dot(f);
-  const float far_plane = std::max(distance + 1.5f * radius, 1e-3f);
-  const float near_plane = std::max(distance - 1.5f * radius, far_plane * 1e-4f);
-  const float aspect = float(camera.width) / float(camera.height);
-  const float t = 1.0f / std::tan(0.5f * camera.fov_degrees * float(M_PI) / 180.f);
-  Eigen::Matrix4f projection = Eigen::Matrix4f::Zero();
-  projection(0, 0) = t / aspect;
-  projection(1, 1) = t;
-  projection(2, 2) = -(far_plane + near_plane) / (far_plane - near_plane);
-  projection(2, 3) = -2.f * far_plane * near_plane / (far_plane - near_plane);
-  projection(3, 2) = -1.f;
-  return projection * view;
-}
-
 std::vector<std::uint8_t> rasterize(const Mesh& mesh, const Eigen::MatrixX3f& colours,
                                     const Camera& camera, Image& image) {
   const MatrixXfRow attributes = colours;

@@ -12,10 +12,6 @@
 
 namespace prt {
 
-// 4x4 view-projection matrix of the camera (OpenGL conventions, near/far
-// chosen from the mesh bounds).
-Eigen::Matrix4f view_projection(const Camera& camera, const Mesh& mesh);
-
 // Turns perspective-correct interpolated vertex attributes into an RGB pixel.
 using PixelShader = std::function<void(const float* attributes, float* rgb)>;
 
