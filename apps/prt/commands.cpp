@@ -46,9 +46,19 @@ int bake(Context& context, const BakeArgs& args) {
   return 0;
 }
 
+void parse_parameter(const std::string& text, std::size_t index, Params& params);
+
 int render(Context& context, const RenderArgs& args) {
   Stopwatch clock;
-  const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  if (!args.renderer.empty()) {
+    PluginChoice choice{args.renderer, SourceLocation{"--renderer"}, Params({"--renderer"})};
+    for (std::size_t i = 0; i < args.renderer_parameters.size(); ++i)
+      parse_parameter(args.renderer_parameters[i], i, choice.params);
+    choice.params.validate(
+        context.registry.find(PluginKind::renderer, choice.name, choice.where).schema());
+    scene.renderer = std::move(choice);
+  }
   StageTimes times;
   times.add("parse + validate scene", clock.seconds());
   const fs::path output = args.output.empty() ? scene.image_path() : fs::path(args.output);

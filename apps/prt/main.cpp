@@ -24,6 +24,10 @@ int main(int argc, char** argv) {
   render_cmd->add_option("-o,--output", render.output, "PNG image (default: from the scene)");
   render_cmd->add_flag("--ground-truth", render.ground_truth,
                        "render the Monte Carlo ground truth instead of the bake");
+  render_cmd->add_option("-r,--renderer", render.renderer,
+                         "renderer plug-in instead of the scene's (e.g. opengl)");
+  render_cmd->add_option("--renderer-param", render.renderer_parameters,
+                         "key=value parameter of that renderer (repeatable)");
   render_cmd->add_flag("--compare", render.compare,
                        "also compute the ground truth and print per-vertex RMS error");
   render_cmd

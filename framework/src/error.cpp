@@ -14,6 +14,8 @@ std::string SourceLocation::str() const {
   return s.str();
 }
 
+Error::~Error() = default;
+
 std::string Error::format(const SourceLocation& where, const std::string& message) {
   const std::string place = where.str();
   return place.empty() ? message : place + ": error: " + message;

@@ -17,11 +17,17 @@ struct SourceLocation {
 
 // An error with an optional source location, printed in compiler style:
 // "scene.toml:14:9: error: basis "sh": unknown parameter ...".
-class Error : public std::runtime_error {
+//
+// The destructor is the key function, defined in libprt: the vtable and
+// type_info then live in the framework, not in each plug-in, so an Error
+// thrown by a plug-in stays valid after the plug-in is unloaded during
+// unwinding, and catch (const prt::Error&) matches across modules.
+class __attribute__((visibility("default"))) Error : public std::runtime_error {
  public:
   explicit Error(const std::string& message) : std::runtime_error(message) {}
   Error(const SourceLocation& where, const std::string& message)
       : std::runtime_error(format(where, message)) {}
+  ~Error() override;
 
  private:
   static std::string format(const SourceLocation& where, const std::string& message);

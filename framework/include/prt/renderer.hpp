@@ -1,6 +1,8 @@
 // The renderer interface: compressed transfer + light vector + camera -> image.
 #pragma once
 #include <Eigen/Core>
+#include <map>
+#include <string>
 
 #include "prt/camera.hpp"
 #include "prt/environment.hpp"
@@ -34,6 +36,9 @@ class Renderer : public PluginObject {
  public:
   static constexpr PluginKind plugin_kind = PluginKind::renderer;
   virtual Image render(const RenderInput& input) = 0;
+  // Figures of the last render, e.g. relight_seconds (per-cluster constants),
+  // draw_seconds, overdraw (triangles drawn / triangles in the mesh).
+  virtual std::map<std::string, double> statistics() const { return {}; }
 };
 
 }  // namespace prt

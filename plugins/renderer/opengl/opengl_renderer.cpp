@@ -1,0 +1,378 @@
+// The OpenGL renderer (Sloan 2003 §6): per-cluster constants M_ki l on the
+// CPU, per-vertex weighted sums in the vertex shader, glossy y(v_p) . e_p per
+// fragment (one pass per colour channel). Two methods: one indexed pass with
+// the cluster index as a vertex attribute ("single-pass"), or the paper's
+// per-cluster draws with additive blending and a partition of unity
+// ("per-cluster"; superclusters when the compressor made them), whose
+// overdraw is counted.
+#include <array>
+#include <chrono>
+
+#include "gl_context.hpp"
+#include "prt/plugin.hpp"
+#include "prt/renderer.hpp"
+#include "shaders.hpp"
+
+namespace prt {
+
+namespace {
+
+// A texture buffer: the data lives in a buffer object, read with texelFetch.
+struct TextureBuffer {
+  GLuint buffer = 0, texture = 0;
+  void upload(GLenum format, const void* data, std::size_t bytes) {
+    if (!buffer) glGenBuffers(1, &buffer), glGenTextures(1, &texture);
+    glBindBuffer(GL_TEXTURE_BUFFER, buffer);
+    // An empty buffer object cannot back a texture: keep at least one texel.
+    static const float zero[4] = {0, 0, 0, 0};
+    glBufferData(GL_TEXTURE_BUFFER, bytes ? bytes : sizeof zero, bytes ? data : zero,
+                 GL_DYNAMIC_DRAW);
+    glBindTexture(GL_TEXTURE_BUFFER, texture);
+    glTexBuffer(GL_TEXTURE_BUFFER, format, buffer);
+  }
+  void bind(GLuint program, const char* name, int unit) const {
+    glActiveTexture(GL_TEXTURE0 + unit);
+    glBindTexture(GL_TEXTURE_BUFFER, texture);
+    glUniform1i(glGetUniformLocation(program, name), unit);
+  }
+  void release() {
+    if (buffer) glDeleteBuffers(1, &buffer), glDeleteTextures(1, &texture);
+    buffer = texture = 0;
+  }
+};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+class OpenGLRenderer final : public Renderer {
+ public:
+  static constexpr const char* plugin_version = "1.0.0";
+  static constexpr const char* plugin_description =
+      "OpenGL 3.3: per-cluster constants on the CPU, weighted sums and glossy evaluation on the GPU";
+  static constexpr auto parameters() {
+    return std::array{
+        schema::choice("method", "single-pass", "single-pass|per-cluster",
+                       "one indexed draw, or the paper's per-cluster draws with blending"),
+        schema::boolean("background", "true", "draw the environment behind the mesh")};
+  }
+
+  explicit OpenGLRenderer(const Params& params)
+      : per_cluster_(params.get_string("method") == "per-cluster"),
+        background_(params.get_bool("background")) {}
+
+  ~OpenGLRenderer() override {
+    if (!context_) return;
+    context_->make_current();
+    release();
+  }
+
+  Image render(const RenderInput& in) override {
+    if (!in.mesh) throw Error("opengl renderer: no mesh");
+    if (!context_) context_ = std::make_unique<OffscreenContext>();
+    context_->make_current();
+    const Camera& camera = in.camera;
+    prepare_framebuffer(camera.width, camera.height);
+    upload_scene(in);
+    const auto start = std::chrono::steady_clock::now();
+    upload_constants(in);
+    stats_["relight_seconds"] = seconds_since(start);
+    const auto draw_start = std::chrono::steady_clock::now();
+    draw(in);
+    glFinish();
+    stats_["draw_seconds"] = seconds_since(draw_start);
+    return read_image(in);
+  }
+
+  std::map<std::string, double> statistics() const override { return stats_; }
+
+ private:
+  // ---- resources ---------------------------------------------------------
+  void prepare_framebuffer(int width, int height) {
+    if (framebuffer_ && width == width_ && height == height_) return;
+    if (framebuffer_) {
+      glDeleteFramebuffers(1, &framebuffer_);
+      glDeleteRenderbuffers(2, renderbuffers_);
+    }
+    width_ = width, height_ = height;
+    glGenFramebuffers(1, &framebuffer_);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+    glGenRenderbuffers(2, renderbuffers_);
+    glBindRenderbuffer(GL_RENDERBUFFER, renderbuffers_[0]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, width, height);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                              renderbuffers_[0]);
+    glBindRenderbuffer(GL_RENDERBUFFER, renderbuffers_[1]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, width, height);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                              renderbuffers_[1]);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw Error("opengl renderer: cannot make a " + std::to_string(width) + "x" +
+                  std::to_string(height) + " float framebuffer");
+  }
+
+  // Geometry, weights and cluster indices: uploaded when the mesh or the
+  // transfer changes (the viewer switches encodings), not per frame.
+  void upload_scene(const RenderInput& in) {
+    const Mesh& mesh = *in.mesh;
+    const bool glossy = in.exit_coefficients != nullptr;
+    if (glossy && !(in.exit_basis && in.frames && in.transfer))
+      throw Error("opengl renderer: glossy input needs the compressed transfer, exit basis and frames");
+    if (!in.transfer && !in.vertex_radiance)
+      throw Error("opengl renderer: neither transfer nor vertex radiance given");
+    const CompressedTransfer* t = in.vertex_radiance ? nullptr : in.transfer;
+    const int rows = glossy ? in.exit_basis->rows() : 1;
+    const Key key{&mesh, mesh.vertex_count(), t, t ? t->dimension : 0, rows, per_cluster_};
+    if (program_ && key == key_) return;
+    release();
+    key_ = key;
+    glGenVertexArrays(1, &vao_);
+    glBindVertexArray(vao_);
+    const std::size_t v = mesh.vertex_count();
+    std::array<std::vector<float>, 4> attributes;
+    for (auto& a : attributes) a.resize(3 * v);
+    for (std::size_t p = 0; p < v; ++p) {
+      Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();
+      if (glossy) frame = (*in.frames)[p];
+      for (int c = 0; c < 3; ++c) {
+        attributes[0][3 * p + c] = mesh.positions[p][c];
+        for (int r = 0; r < 3; ++r) attributes[1 + r][3 * p + c] = float(frame(r, c));
+      }
+    }
+    glGenBuffers(4, vertex_buffers_);
+    for (int a = 0; a < 4; ++a) {
+      glBindBuffer(GL_ARRAY_BUFFER, vertex_buffers_[a]);
+      glBufferData(GL_ARRAY_BUFFER, attributes[a].size() * sizeof(float), attributes[a].data(),
+                   GL_STATIC_DRAW);
+      glVertexAttribPointer(a, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+      glEnableVertexAttribArray(a);
+    }
+    build_index_buffer(mesh, t);
+
+    std::string defines = "#define ROWS " + std::to_string(rows) + "\n#define GLOSSY " +
+                          (glossy ? "1" : "0") + "\n#define ORDER " +
+                          std::to_string(glossy ? in.exit_basis->order : 1) + "\n";
+    if (!t) {
+      defines += "#define COMPONENTS -1\n#define SPARSE 0\n";
+    } else {
+      defines += "#define COMPONENTS " + std::to_string(t->components) + "\n#define SPARSE " +
+                 (t->sparse() ? "1" : "0") + "\n";
+      if (t->sparse() && glossy) throw Error("opengl renderer: sparse glossy transfer is not supported");
+      cluster_of_vertex_.upload(GL_R32I, t->cluster_of_vertex.data(),
+                                t->cluster_of_vertex.size() * sizeof(std::int32_t));
+      weights_.upload(GL_R32F, t->weights.data(), t->weights.size() * sizeof(float));
+      weight_index_.upload(GL_R32I, t->weight_index.data(),
+                           t->weight_index.size() * sizeof(std::int32_t));
+    }
+    program_ = build_program("transfer", defines, kTransferVert, kTransferFrag);
+    if (glossy) {
+      glUseProgram(program_);
+      std::vector<GLint> kept(in.exit_basis->kept.begin(), in.exit_basis->kept.end());
+      glUniform1iv(glGetUniformLocation(program_, "kept"), rows, kept.data());
+    }
+  }
+
+  // One index buffer; per-cluster drawing orders it by group (cluster, or
+  // supercluster when present), each group's range holding every triangle
+  // with a vertex in the group, so straddling triangles are drawn once per
+  // group they touch.
+  void build_index_buffer(const Mesh& mesh, const CompressedTransfer* t) {
+    std::vector<std::uint32_t> indices;
+    groups_.clear();
+    if (per_cluster_ && t && !t->sparse()) {
+      auto group_of_vertex = [&](std::uint32_t p) {
+        const int k = t->cluster_of_vertex[p];
+        return t->supercluster_of_cluster.empty() ? k : t->supercluster_of_cluster[k];
+      };
+      int groups = 0;
+      for (std::size_t p = 0; p < mesh.vertex_count(); ++p)
+        groups = std::max(groups, group_of_vertex(std::uint32_t(p)) + 1);
+      std::vector<std::vector<std::uint32_t>> per_group(groups);
+      for (const auto& tri : mesh.triangles) {
+        std::array<int, 3> g{group_of_vertex(tri[0]), group_of_vertex(tri[1]), group_of_vertex(tri[2])};
+        for (int i = 0; i < 3; ++i)
+          if ((i == 0 || g[i] != g[0]) && (i < 2 || g[2] != g[1]))
+            per_group[g[i]].insert(per_group[g[i]].end(), tri.begin(), tri.end());
+      }
+      for (int g = 0; g < groups; ++g) {
+        groups_.push_back({g, indices.size(), per_group[g].size()});
+        indices.insert(indices.end(), per_group[g].begin(), per_group[g].end());
+      }
+    } else {
+      for (const auto& tri : mesh.triangles) indices.insert(indices.end(), tri.begin(), tri.end());
+      groups_.push_back({-1, 0, indices.size()});
+    }
+    glGenBuffers(1, &index_buffer_);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, indices.size() * sizeof(std::uint32_t), indices.data(),
+                 GL_STATIC_DRAW);
+    // Group membership by cluster, for the shader's partition of unity.
+    std::vector<std::int32_t> group_of_cluster;
+    if (t && !t->supercluster_of_cluster.empty()) {
+      group_of_cluster = t->supercluster_of_cluster;
+    } else if (t) {
+      group_of_cluster.resize(static_cast<std::size_t>(t->clusters()));
+      for (std::size_t k = 0; k < group_of_cluster.size(); ++k) group_of_cluster[k] = int(k);
+    }
+    group_of_cluster_.upload(GL_R32I, group_of_cluster.data(),
+                             group_of_cluster.size() * sizeof(std::int32_t));
+    const double drawn = static_cast<double>(indices.size() / 3);
+    stats_["triangles_drawn"] = drawn;
+    stats_["overdraw"] = mesh.triangles.empty() ? 0.0 : drawn / double(mesh.triangles.size());
+  }
+
+  // Per-cluster constants (the CPU side of relighting), every frame.
+  void upload_constants(const RenderInput& in) {
+    std::vector<float> texels;
+    if (in.vertex_radiance) {
+      const Eigen::MatrixX3f& r = *in.vertex_radiance;
+      texels.resize(4 * r.rows());
+      for (Eigen::Index p = 0; p < r.rows(); ++p)
+        for (int c = 0; c < 3; ++c) texels[4 * p + c] = std::max(0.f, r(p, c) * in.albedo[c]);
+      vertex_colour_.upload(GL_RGBA32F, texels.data(), texels.size() * sizeof(float));
+      return;
+    }
+    const CompressedTransfer& t = *in.transfer;
+    const int rows = in.exit_coefficients ? in.exit_basis->rows() : 1;
+    if (t.sparse()) {
+      // [mean . l, l_0, l_1, ...]
+      const Eigen::RowVector3f base = t.means.row(0) * in.light.cast<float>();
+      texels.assign(4 * (in.light.rows() + 1), 0.f);
+      for (int c = 0; c < 3; ++c) texels[c] = base[c];
+      for (Eigen::Index j = 0; j < in.light.rows(); ++j)
+        for (int c = 0; c < 3; ++c) texels[4 * (j + 1) + c] = float(in.light(j, c));
+    } else {
+      // Per cluster (n' + 1) x rows RGB texels, padded with zeros past n'_k.
+      const std::vector<MatrixXfRow> constants = cluster_constants(t, in.light, rows);
+      const std::size_t per_cluster = std::size_t(t.components + 1) * rows;
+      texels.assign(4 * per_cluster * constants.size(), 0.f);
+      for (std::size_t k = 0; k < constants.size(); ++k)
+        for (Eigen::Index i = 0; i < constants[k].rows(); ++i)
+          for (int r = 0; r < rows; ++r)
+            for (int c = 0; c < 3; ++c)
+              texels[4 * (k * per_cluster + i * rows + r) + c] = constants[k](i, 3 * r + c);
+    }
+    constants_.upload(GL_RGBA32F, texels.data(), texels.size() * sizeof(float));
+  }
+
+  void draw(const RenderInput& in) {
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+    glViewport(0, 0, width_, height_);
+    glClearColor(0, 0, 0, 0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glEnable(GL_DEPTH_TEST);
+    glUseProgram(program_);
+    glBindVertexArray(vao_);
+    const Eigen::Matrix4f vp = view_projection(in.camera, *in.mesh);
+    glUniformMatrix4fv(glGetUniformLocation(program_, "view_projection"), 1, GL_FALSE, vp.data());
+    glUniform3fv(glGetUniformLocation(program_, "eye"), 1, in.camera.position.data());
+    glUniform3fv(glGetUniformLocation(program_, "albedo"), 1, in.albedo.data());
+    glUniform1i(glGetUniformLocation(program_, "only_cluster"), -1);
+    glUniform1i(glGetUniformLocation(program_, "clamp_negative"), per_cluster_ ? 0 : 1);
+    constants_.bind(program_, "constants", 0);
+    cluster_of_vertex_.bind(program_, "cluster_of_vertex", 1);
+    weights_.bind(program_, "weights", 2);
+    weight_index_.bind(program_, "weight_index", 3);
+    vertex_colour_.bind(program_, "vertex_colour", 4);
+    group_of_cluster_.bind(program_, "group_of_cluster", 5);
+    const bool glossy = in.exit_coefficients != nullptr;
+    const bool layered = glossy || groups_.size() > 1;
+    if (layered) {
+      // Depth first, so the colour passes shade only the visible surface.
+      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+      glDepthFunc(GL_LESS);
+      draw_range(groups_.front().first, total_indices());
+      glDepthFunc(GL_LEQUAL);
+      glDepthMask(GL_FALSE);
+    }
+    if (groups_.size() > 1) {
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_ONE, GL_ONE);
+    }
+    const GLint only_cluster = glGetUniformLocation(program_, "only_cluster");
+    const GLint channel = glGetUniformLocation(program_, "channel");
+    for (const Group& g : groups_) {
+      glUniform1i(only_cluster, g.id);
+      for (int c = 0; c < (glossy ? 3 : 1); ++c) {
+        glUniform1i(channel, c);
+        if (glossy)
+          glColorMask(c == 0, c == 1, c == 2, GL_TRUE);
+        else
+          glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        draw_range(g.first, g.count);
+      }
+    }
+    glDisable(GL_BLEND);
+    glDepthMask(GL_TRUE);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  }
+
+  std::size_t total_indices() const {
+    std::size_t n = 0;
+    for (const Group& g : groups_) n += g.count;
+    return n;
+  }
+  void draw_range(std::size_t first, std::size_t count) {
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(first * sizeof(std::uint32_t)));
+  }
+
+  Image read_image(const RenderInput& in) {
+    std::vector<float> pixels(std::size_t(4) * width_ * height_);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+    glReadPixels(0, 0, width_, height_, GL_RGBA, GL_FLOAT, pixels.data());
+    Image image(width_, height_);
+    if (background_ && in.background) draw_environment(*in.background, in.camera, image);
+    for (int y = 0; y < height_; ++y)
+      for (int x = 0; x < width_; ++x) {
+        const float* p = &pixels[4 * (std::size_t(height_ - 1 - y) * width_ + x)];  // GL rows bottom-up
+        if (p[3] <= 0.f) continue;  // no triangle here: keep the background
+        float* out = image.at(x, y);
+        for (int c = 0; c < 3; ++c) out[c] = p[c];
+      }
+    return image;
+  }
+
+  void release() {
+    if (vao_) glDeleteVertexArrays(1, &vao_);
+    if (vertex_buffers_[0]) glDeleteBuffers(4, vertex_buffers_);
+    if (index_buffer_) glDeleteBuffers(1, &index_buffer_);
+    if (program_) glDeleteProgram(program_);
+    for (TextureBuffer* b : {&constants_, &cluster_of_vertex_, &group_of_cluster_, &weights_,
+                             &weight_index_, &vertex_colour_})
+      b->release();
+    vao_ = index_buffer_ = program_ = 0;
+    vertex_buffers_[0] = 0;
+  }
+
+  struct Key {
+    const Mesh* mesh = nullptr;
+    std::size_t vertices = 0;
+    const CompressedTransfer* transfer = nullptr;
+    Eigen::Index dimension = 0;
+    int rows = 0;
+    bool per_cluster = false;
+    bool operator==(const Key&) const = default;
+  };
+  struct Group {
+    int id;  // cluster or supercluster; -1: everything at once
+    std::size_t first, count;
+  };
+
+  bool per_cluster_, background_;
+  std::unique_ptr<OffscreenContext> context_;
+  int width_ = 0, height_ = 0;
+  GLuint framebuffer_ = 0, renderbuffers_[2] = {0, 0};
+  GLuint vao_ = 0, vertex_buffers_[4] = {0, 0, 0, 0}, index_buffer_ = 0, program_ = 0;
+  TextureBuffer constants_, cluster_of_vertex_, group_of_cluster_, weights_, weight_index_,
+      vertex_colour_;
+  std::vector<Group> groups_;
+  Key key_;
+  std::map<std::string, double> stats_;
+};
+
+}  // namespace prt
+
+PRT_EXPORT_PLUGIN(prt::OpenGLRenderer, "opengl")

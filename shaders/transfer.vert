@@ -1,0 +1,73 @@
+// Per-vertex weighted sums of per-cluster constants (Sloan 2003 §6):
+//   e_p = C[k][0] + sum_i w_pi C[k][i]
+// C (computed on the CPU when the light changes) holds, per cluster, (n' + 1)
+// groups of ROWS RGB texels; the weights come from a buffer indexed by the
+// vertex. Diffuse transfer (ROWS == 1) shades here; glossy transfer passes
+// one colour channel of e_p and the local view vector to the fragment stage.
+// The host prepends: #version, ROWS, COMPONENTS, SPARSE, GLOSSY.
+
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 tangent;
+layout(location = 2) in vec3 bitangent;
+layout(location = 3) in vec3 normal;
+
+uniform mat4 view_projection;
+uniform vec3 eye;
+uniform vec3 albedo;
+uniform int channel;       // glossy: the colour channel of this pass
+uniform int only_cluster;  // per-cluster drawing: the group drawn in this pass, or -1
+
+uniform samplerBuffer constants;          // RGBA32F, rgb used
+uniform isamplerBuffer cluster_of_vertex;  // R32I
+uniform isamplerBuffer group_of_cluster;   // R32I: cluster, or its supercluster
+uniform samplerBuffer weights;            // R32F, COMPONENTS per vertex
+uniform isamplerBuffer weight_index;       // R32I, sparse transfer only
+uniform samplerBuffer vertex_colour;      // RGBA32F, plain colour draws (COMPONENTS < 0)
+
+invariant gl_Position;
+
+#if GLOSSY
+out float exit_radiance[ROWS];
+out vec3 local_view;
+#else
+out vec3 colour;
+#endif
+
+void main() {
+  gl_Position = view_projection * vec4(position, 1.0);
+  int v = gl_VertexID;
+#if COMPONENTS < 0
+  colour = texelFetch(vertex_colour, v).rgb;
+#else
+  int k = texelFetch(cluster_of_vertex, v).r;
+  // Partition of unity for per-cluster drawing: other clusters' vertices add 0.
+  float member =
+      (only_cluster < 0 || texelFetch(group_of_cluster, k).r == only_cluster) ? 1.0 : 0.0;
+#if SPARSE
+  // Non-linear approximation: constants = [mean . l, l_0, l_1, ...].
+  vec3 e = texelFetch(constants, 0).rgb;
+  for (int j = 0; j < COMPONENTS; ++j)
+    e += texelFetch(weights, v * COMPONENTS + j).r *
+         texelFetch(constants, 1 + texelFetch(weight_index, v * COMPONENTS + j).r).rgb;
+  colour = member * max(albedo * e, vec3(0.0));
+#else
+  int base = k * (COMPONENTS + 1) * ROWS;
+  float w[COMPONENTS + 1];
+  w[0] = 1.0;
+  for (int i = 0; i < COMPONENTS; ++i) w[i + 1] = texelFetch(weights, v * COMPONENTS + i).r;
+#if GLOSSY
+  for (int r = 0; r < ROWS; ++r) {
+    float sum = 0.0;
+    for (int i = 0; i <= COMPONENTS; ++i) sum += w[i] * texelFetch(constants, base + i * ROWS + r)[channel];
+    exit_radiance[r] = member * sum;
+  }
+  mat3 to_local = transpose(mat3(tangent, bitangent, normal));
+  local_view = to_local * normalize(eye - position);
+#else
+  vec3 e = vec3(0.0);
+  for (int i = 0; i <= COMPONENTS; ++i) e += w[i] * texelFetch(constants, base + i).rgb;
+  colour = member * max(albedo * e, vec3(0.0));  // negative SH ringing is not light
+#endif
+#endif
+#endif
+}
