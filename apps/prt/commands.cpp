@@ -91,6 +91,8 @@ int render(Context& context, const RenderArgs& args) {
   times.add("write PNG", clock.seconds());
   std::cout << "rendered " << result.image.width << " x " << result.image.height << " -> "
             << output.string() << "\n";
+  for (const auto& [name, value] : result.statistics)
+    std::cout << "renderer " << name << ": " << value << "\n";
   print_times(times);
   return 0;
 }

@@ -240,37 +240,56 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   times.add("load lighting + plug-ins", clock.seconds());
 
   clock = Stopwatch();
-  RenderInput input;
-  input.mesh = &data.mesh;
-  input.transfer = &data.compressed;
-  input.light = environment.project(*basis);
-  input.albedo = data.albedo;
-  input.camera = scene.make_camera(data.mesh);
-  input.background = &environment;
+  const Eigen::MatrixX3d light = environment.project(*basis);
+  const Camera camera = scene.make_camera(data.mesh);
   times.add("project light", clock.seconds());
 
   clock = Stopwatch();
   Rendered out;
-  const ExitBasis& exit = data.transfer.exit;
-  const MatrixXfRow exit_radiance = exit_coefficients(data.compressed, input.light, exit.rows());
-  std::vector<Frame> frames;
-  if (exit.glossy()) {
-    frames = tangent_frames(data.mesh);
-    out.vertex_radiance = evaluate_exit(
-        exit_radiance, exit, local_view_directions(data.mesh, frames, input.camera.position));
-    input.exit_coefficients = &exit_radiance;
-    input.exit_basis = &exit;
-    input.frames = &frames;
-  } else {
-    out.vertex_radiance = exit_radiance;
-  }
-  for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data.albedo[c];
+  const Relit relit = relight_view(data, data.compressed, light, camera);
+  out.vertex_radiance = relit.vertex_radiance;
   times.add("relight vertices", clock.seconds());
 
   clock = Stopwatch();
+  RenderInput input = render_input(data, data.compressed, relit, light, camera);
+  input.background = &environment;
   out.image = renderer->render(input);
+  out.statistics = renderer->statistics();
   times.add("rasterise (" + renderer_choice.name + ")", clock.seconds());
   return out;
+}
+
+Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,
+                   const Eigen::MatrixX3d& light, const Camera& camera) {
+  Relit out;
+  const ExitBasis& exit = data.transfer.exit;
+  out.exit_coefficients = exit_coefficients(transfer, light, exit.rows());
+  if (exit.glossy()) {
+    out.frames = tangent_frames(data.mesh);
+    out.vertex_radiance =
+        evaluate_exit(out.exit_coefficients, exit,
+                      local_view_directions(data.mesh, out.frames, camera.position));
+  } else {
+    out.vertex_radiance = out.exit_coefficients;
+  }
+  for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data.albedo[c];
+  return out;
+}
+
+RenderInput render_input(const BakeData& data, const CompressedTransfer& transfer,
+                         const Relit& relit, const Eigen::MatrixX3d& light, const Camera& camera) {
+  RenderInput input;
+  input.mesh = &data.mesh;
+  input.transfer = &transfer;
+  input.light = light;
+  input.albedo = data.albedo;
+  input.camera = camera;
+  if (data.transfer.exit.glossy()) {
+    input.exit_coefficients = &relit.exit_coefficients;
+    input.exit_basis = &data.transfer.exit;
+    input.frames = &relit.frames;
+  }
+  return input;
 }
 
 Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,

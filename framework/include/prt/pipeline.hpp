@@ -10,6 +10,7 @@
 #include "prt/compressor.hpp"
 #include "prt/image.hpp"
 #include "prt/registry.hpp"
+#include "prt/renderer.hpp"
 #include "prt/scene.hpp"
 
 namespace prt {
@@ -37,8 +38,23 @@ void check_bake_matches(const BakeData& data, const SceneSpec& scene);
 
 struct Rendered {
   Image image;
-  Eigen::MatrixX3f vertex_radiance;  // v x 3 including albedo
+  Eigen::MatrixX3f vertex_radiance;          // v x 3 including albedo
+  std::map<std::string, double> statistics;  // the renderer's (overdraw, draw time, ...)
 };
+
+// One relighting of a bake's transfer (its compressed form or another encoding
+// of it) for a light vector and camera: per-vertex exit coefficients, glossy
+// frames and the radiance each vertex sends to the camera (albedo included).
+struct Relit {
+  MatrixXfRow exit_coefficients;   // v x 3 N_r
+  std::vector<Frame> frames;       // glossy only
+  Eigen::MatrixX3f vertex_radiance;
+};
+Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,
+                   const Eigen::MatrixX3d& light, const Camera& camera);
+// The renderer's input for it; points into `data`, `transfer` and `relit`.
+RenderInput render_input(const BakeData& data, const CompressedTransfer& transfer,
+                         const Relit& relit, const Eigen::MatrixX3d& light, const Camera& camera);
 
 // Light projection -> per-cluster constants -> per-vertex sums -> image.
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,

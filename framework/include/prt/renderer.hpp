@@ -21,9 +21,11 @@ struct RenderInput {
   Eigen::MatrixX3d light;
   // ...or exit radiance given directly per vertex (v x 3), e.g. ground truth.
   const Eigen::MatrixX3f* vertex_radiance = nullptr;
-  // Glossy transfer: exit coefficients per vertex (v x 3 N_r, as
-  // exit_coefficients returns), their basis and the vertices' local frames;
-  // the renderer evaluates y(v_p) . e_p per pixel with the local view vector.
+  // Glossy transfer (when exit_basis is set): the exit basis, the vertices'
+  // local frames and optionally the exit coefficients per vertex (v x 3 N_r,
+  // as exit_coefficients returns; renderers that compute them from transfer
+  // and light ignore them). The renderer evaluates y(v_p) . e_p per pixel
+  // with the local view vector.
   const MatrixXfRow* exit_coefficients = nullptr;
   const ExitBasis* exit_basis = nullptr;
   const std::vector<Frame>* frames = nullptr;

@@ -25,7 +25,7 @@ class CpuRenderer final : public Renderer {
     const Camera& camera = in.camera;
     Image image(camera.width, camera.height);
     if (background_ && in.background) draw_environment(*in.background, camera, image);
-    if (in.exit_coefficients) {
+    if (in.exit_basis && !in.vertex_radiance) {
       draw_glossy(in, image);
       return image;
     }
@@ -52,7 +52,9 @@ class CpuRenderer final : public Renderer {
     if (!in.exit_basis || !in.frames) throw Error("cpu renderer: glossy input lacks its basis");
     const ExitBasis& exit = *in.exit_basis;
     const int rows = exit.rows();
-    const MatrixXfRow& e = *in.exit_coefficients;
+    if (!in.exit_coefficients && !in.transfer) throw Error("cpu renderer: no glossy transfer");
+    const MatrixXfRow e = in.exit_coefficients ? *in.exit_coefficients
+                                               : exit_coefficients(*in.transfer, in.light, rows);
     if (e.rows() != Eigen::Index(mesh.vertex_count()) ||
         e.cols() != 3 * rows || in.frames->size() != mesh.vertex_count())
       throw Error("cpu renderer: glossy input does not match the mesh");

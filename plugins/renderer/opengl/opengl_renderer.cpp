@@ -117,9 +117,9 @@ class OpenGLRenderer final : public Renderer {
   // transfer changes (the viewer switches encodings), not per frame.
   void upload_scene(const RenderInput& in) {
     const Mesh& mesh = *in.mesh;
-    const bool glossy = in.exit_coefficients != nullptr;
-    if (glossy && !(in.exit_basis && in.frames && in.transfer))
-      throw Error("opengl renderer: glossy input needs the compressed transfer, exit basis and frames");
+    const bool glossy = in.exit_basis != nullptr && !in.vertex_radiance;
+    if (glossy && !(in.frames && in.transfer))
+      throw Error("opengl renderer: glossy input needs the compressed transfer and the frames");
     if (!in.transfer && !in.vertex_radiance)
       throw Error("opengl renderer: neither transfer nor vertex radiance given");
     const CompressedTransfer* t = in.vertex_radiance ? nullptr : in.transfer;
@@ -235,7 +235,7 @@ class OpenGLRenderer final : public Renderer {
       return;
     }
     const CompressedTransfer& t = *in.transfer;
-    const int rows = in.exit_coefficients ? in.exit_basis->rows() : 1;
+    const int rows = in.exit_basis ? in.exit_basis->rows() : 1;
     if (t.sparse()) {
       // [mean . l, l_0, l_1, ...]
       const Eigen::RowVector3f base = t.means.row(0) * in.light.cast<float>();
@@ -277,7 +277,7 @@ class OpenGLRenderer final : public Renderer {
     weight_index_.bind(program_, "weight_index", 3);
     vertex_colour_.bind(program_, "vertex_colour", 4);
     group_of_cluster_.bind(program_, "group_of_cluster", 5);
-    const bool glossy = in.exit_coefficients != nullptr;
+    const bool glossy = in.exit_basis != nullptr && !in.vertex_radiance;
     const bool layered = glossy || groups_.size() > 1;
     if (layered) {
       // Depth first, so the colour passes shade only the visible surface.

@@ -1,0 +1,99 @@
+// prt-view: loads a scene's bake (baking it when missing) and renders the
+// compressed transfer with the OpenGL renderer plug-in, interactively or for a
+// scripted number of frames.
+//
+//   left drag: orbit     right drag or shift + left drag: rotate the light
+//   scroll: zoom         Left/Right: rotate the light by 15 degrees
+//   E: next encoding (compressed, exact)   H: error heat-map   M: method
+//   P: screenshot        Esc or Q: quit
+#include <epoxy/gl.h>
+// epoxy before GLFW: it provides the GL declarations.
+#include <GLFW/glfw3.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+
+#include "prt/error.hpp"
+#include "prt/image.hpp"
+#include "prt/progress.hpp"
+#include "prt/registry.hpp"
+#include "viewer.hpp"
+#include "window.hpp"
+
+namespace {
+
+void apply(prt::view::Viewer& viewer, const prt::view::Input& input, bool& quit,
+           bool& screenshot) {
+  viewer.orbit(-0.3 * input.orbit_x, -0.3 * input.orbit_y);
+  if (input.light_drag != 0) viewer.rotate_light(0.5 * input.light_drag);
+  if (input.zoom != 0) viewer.zoom(input.zoom);
+  for (int key : input.keys) {
+    switch (key) {
+      case GLFW_KEY_LEFT: viewer.rotate_light(-15); break;
+      case GLFW_KEY_RIGHT: viewer.rotate_light(15); break;
+      case GLFW_KEY_E: viewer.next_encoding(); break;
+      case GLFW_KEY_H: viewer.toggle_heatmap(); break;
+      case GLFW_KEY_M: viewer.toggle_method(); break;
+      case GLFW_KEY_P: screenshot = true; break;
+      case GLFW_KEY_ESCAPE:
+      case GLFW_KEY_Q: quit = true; break;
+      default: break;
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"prt-view: interactive viewer of compressed radiance transfer"};
+  prt::view::Options options;
+  int frames = 0;
+  double light_step = -1, orbit_step = 0;
+  std::string screenshot_file = "prt-view.png";
+  app.add_option("scene", options.scene, "scene description (.toml)")->required();
+  app.add_option("--frames", frames,
+                 "render this many frames with a scripted light rotation, then exit (0: interactive)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--light-step", light_step,
+                 "scripted light rotation per frame, degrees (default 360 / frames)");
+  app.add_option("--orbit-step", orbit_step, "scripted camera orbit per frame, degrees");
+  app.add_option("--screenshot", screenshot_file, "PNG written after the scripted frames (or P)");
+  app.add_option("--method", options.method, "single-pass or per-cluster")
+      ->check(CLI::IsMember({"single-pass", "per-cluster"}));
+  app.add_flag("--heatmap", options.heatmap, "start in the error heat-map view");
+  app.add_flag("--exact", options.exact, "start with the uncompressed transfer");
+  app.add_flag("-q,--quiet", options.quiet, "no progress bars");
+  CLI11_PARSE(app, argc, argv);
+  prt::Progress::set_enabled(!options.quiet);
+  try {
+    prt::PluginRegistry registry(prt::PluginRegistry::default_directories());
+    // The window first: the renderer's own context must go before GLFW does.
+    const auto camera = prt::SceneSpec::load(options.scene, registry).camera;
+    prt::view::Window window(static_cast<int>(camera.get_int("width")),
+                             static_cast<int>(camera.get_int("height")), "prt-view");
+    prt::view::Viewer viewer(registry, options);
+    if (frames > 0 && light_step < 0) light_step = 360.0 / frames;
+    bool quit = false, screenshot = false;
+    for (int frame = 0; window.open() && !quit; ++frame) {
+      if (frames > 0) {
+        if (frame == frames) break;
+        if (frame > 0) viewer.rotate_light(light_step), viewer.orbit(orbit_step, 0);
+      }
+      const prt::Image image = viewer.render();
+      window.show(image, viewer.exposure());
+      window.set_title(viewer.status());
+      apply(viewer, window.poll(), quit, screenshot);
+      if (frames > 0 && !options.quiet) std::cout << viewer.status() << "\n";
+      if (screenshot || (frames > 0 && frame == frames - 1)) {
+        prt::write_png(image, screenshot_file, viewer.exposure());
+        std::cout << "screenshot -> " << screenshot_file << "\n";
+        screenshot = false;
+      }
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "prt-view: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,180 @@
+#include "viewer.hpp"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "prt/bake_file.hpp"
+#include "prt/glossy.hpp"
+#include "prt/progress.hpp"
+
+namespace prt::view {
+
+namespace {
+
+// The uncompressed transfer in the one compressed form: one cluster, zero
+// mean, identity representatives, the transfer as weights.
+CompressedTransfer exact_form(const TransferSignal& t) {
+  CompressedTransfer c;
+  c.compressor = "exact";
+  c.dimension = t.dimension();
+  c.components = static_cast<int>(t.dimension());
+  c.cluster_of_vertex.assign(static_cast<std::size_t>(t.vertices()), 0);
+  c.means = MatrixXfRow::Zero(1, t.dimension());
+  c.representatives = {MatrixXfRow::Identity(t.dimension(), t.dimension())};
+  c.weights = t.coefficients;
+  return c;
+}
+
+// Blue (no error) -> cyan -> green -> yellow -> red (the largest error).
+Eigen::Vector3f heat(float t) {
+  t = std::clamp(t, 0.f, 1.f);
+  auto ramp = [t](float centre) { return std::clamp(1.5f - std::abs(4.f * t - centre), 0.f, 1.f); };
+  return {ramp(3.f), ramp(2.f), ramp(1.f)};
+}
+
+}  // namespace
+
+Viewer::Viewer(PluginRegistry& registry, const Options& options)
+    : registry_(registry), scene_(SceneSpec::load(options.scene, registry)),
+      heatmap_(options.heatmap) {
+  const auto bake_file = scene_.bake_path();
+  if (std::filesystem::exists(bake_file)) {
+    data_ = read_bake(bake_file);
+  } else {
+    std::cerr << "prt-view: " << bake_file.string() << " does not exist; baking it\n";
+    StageTimes times;
+    data_ = bake(scene_, registry_, {options.quiet}, times);
+    write_bake(bake_file, data_);
+  }
+  check_bake_matches(data_, scene_);
+  basis_ = registry_.create<Basis>(scene_.basis.name, scene_.basis.params, scene_.basis.where);
+  basis_->load(data_.basis_state);
+  environment_ = scene_.load_environment();
+  scene_rotation_ = environment_.rotation();
+  base_light_ = environment_.project(*basis_);
+  encodings_.push_back({data_.compressor.name, data_.compressed});
+  encodings_.push_back({"exact", exact_form(data_.transfer)});
+  current_ = options.exact ? 1 : 0;
+  if (data_.transfer.exit.glossy()) frames_ = tangent_frames(data_.mesh);
+  home_ = scene_.make_camera(data_.mesh);
+  exposure_ = static_cast<float>(scene_.camera.get_real("exposure"));
+  std::string method = options.method;
+  if (method.empty())
+    method = scene_.renderer.name == "opengl" ? scene_.renderer.params.get_string("method")
+                                              : "single-pass";
+  make_renderer(method);
+}
+
+void Viewer::make_renderer(const std::string& method) {
+  Params params(SourceLocation{"prt-view"});
+  params.set("method", method);
+  renderer_ = registry_.create<Renderer>("opengl", params);
+  method_ = method;
+}
+
+void Viewer::toggle_method() {
+  make_renderer(method_ == "single-pass" ? "per-cluster" : "single-pass");
+}
+
+void Viewer::next_encoding() {
+  current_ = (current_ + 1) % encodings_.size();
+}
+
+void Viewer::rotate_light(double degrees) {
+  light_degrees_ = std::fmod(light_degrees_ + degrees, 360.0);
+  light_dirty_ = true;
+}
+
+void Viewer::orbit(double yaw, double pitch) {
+  yaw_ += yaw;
+  pitch_ = std::clamp(pitch_ + pitch, -85.0, 85.0);
+}
+
+void Viewer::zoom(double steps) {
+  distance_scale_ = std::clamp(distance_scale_ * std::pow(0.9, steps), 0.05, 20.0);
+}
+
+Camera Viewer::camera() const {
+  Camera c = home_;
+  const Eigen::Vector3f offset = c.position - c.target;
+  const Eigen::Vector3f side = offset.cross(c.up).normalized();
+  const Eigen::Matrix3f turn =
+      (Eigen::AngleAxisf(float(yaw_ * M_PI / 180), c.up.normalized()) *
+       Eigen::AngleAxisf(float(pitch_ * M_PI / 180), side))
+          .toRotationMatrix();
+  c.position = c.target + float(distance_scale_) * (turn * offset);
+  return c;
+}
+
+// Light rotation through the basis's rotation capability when it has one,
+// otherwise by projecting the rotated map again.
+void Viewer::update_light() {
+  if (!light_dirty_) return;
+  Stopwatch clock;
+  const Eigen::Matrix3d turn = rotation_about_up(light_degrees_);
+  environment_.set_rotation(turn * scene_rotation_);
+  light_ = basis_->can_rotate() ? Eigen::MatrixX3d(basis_->rotation_matrix(turn) * base_light_)
+                                : environment_.project(*basis_);
+  light_ms_ = 1000 * clock.seconds();
+  light_dirty_ = false;
+}
+
+Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camera& cam) const {
+  const Eigen::MatrixX3f shown =
+      relight_view(data_, encodings_[current_].transfer, light, cam).vertex_radiance;
+  const Eigen::MatrixX3f exact =
+      relight_view(data_, encodings_[1].transfer, light, cam).vertex_radiance;
+  const float scale = std::max(1e-12f, exact.rowwise().norm().maxCoeff());
+  Eigen::MatrixX3f colours(shown.rows(), 3);
+  for (Eigen::Index p = 0; p < shown.rows(); ++p)
+    colours.row(p) = heat(10.f * (shown.row(p) - exact.row(p)).norm() / scale).transpose();
+  return colours;  // 10% of the brightest vertex saturates to red
+}
+
+Image Viewer::render() {
+  Stopwatch clock;
+  update_light();
+  const Camera cam = camera();
+  RenderInput input;
+  input.mesh = &data_.mesh;
+  input.transfer = &encodings_[current_].transfer;
+  input.light = light_;
+  input.albedo = data_.albedo;
+  input.camera = cam;
+  input.background = &environment_;
+  Eigen::MatrixX3f colours;
+  if (heatmap_) {
+    colours = heat_colours(light_, cam);
+    input.vertex_radiance = &colours;
+    input.albedo = Eigen::Vector3f::Ones();
+    input.background = nullptr;
+  } else if (data_.transfer.exit.glossy()) {
+    input.exit_basis = &data_.transfer.exit;
+    input.frames = &frames_;
+  }
+  Image image = renderer_->render(input);
+  const auto stats = renderer_->statistics();
+  auto stat = [&](const char* key) {
+    const auto it = stats.find(key);
+    return it == stats.end() ? 0.0 : it->second;
+  };
+  relight_ms_ = 1000 * stat("relight_seconds");
+  overdraw_ = stat("overdraw");
+  frame_ms_ = 1000 * clock.seconds();
+  return image;
+}
+
+std::string Viewer::status() const {
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "prt-view  %s | %s%s | %s | frame %.1f ms | relight %.2f ms (light %.2f ms) | "
+                "overdraw %.3f | light %.0f deg",
+                scene_.file.filename().string().c_str(), encodings_[current_].name.c_str(),
+                heatmap_ ? " error heat-map" : "", method_.c_str(), frame_ms_, relight_ms_,
+                light_ms_, overdraw_, light_degrees_);
+  return text;
+}
+
+}  // namespace prt::view

@@ -1,0 +1,138 @@
+#include "window.hpp"
+// epoxy before GLFW: it provides the GL declarations.
+#include <GLFW/glfw3.h>
+
+#include "display_shaders.hpp"
+#include "prt/error.hpp"
+
+namespace prt::view {
+
+namespace {
+
+GLuint compile(GLenum type, const char* body) {
+  const std::string source = std::string("#version 330 core\n") + body;
+  const char* text = source.c_str();
+  const GLuint shader = glCreateShader(type);
+  glShaderSource(shader, 1, &text, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+    throw Error(std::string("prt-view: display shader does not compile: ") + log);
+  }
+  return shader;
+}
+
+}  // namespace
+
+Window::Window(int width, int height, const std::string& title) {
+  if (!glfwInit())
+    throw Error("prt-view: cannot initialise GLFW (no display?); run under `xvfb-run -a`");
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+  if (!window_) {
+    glfwTerminate();
+    throw Error("prt-view: cannot open a window with an OpenGL 3.3 core context");
+  }
+  glfwSetWindowUserPointer(window_, this);
+  glfwSetCursorPosCallback(window_, on_cursor);
+  glfwSetScrollCallback(window_, on_scroll);
+  glfwSetKeyCallback(window_, on_key);
+  make_current();
+  glfwSwapInterval(0);  // measure frames, not the display's refresh
+  program_ = glCreateProgram();
+  const GLuint vs = compile(GL_VERTEX_SHADER, kDisplayVert);
+  const GLuint fs = compile(GL_FRAGMENT_SHADER, kDisplayFrag);
+  glAttachShader(program_, vs);
+  glAttachShader(program_, fs);
+  glLinkProgram(program_);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  glGenVertexArrays(1, &vao_);
+  glGenTextures(1, &texture_);
+  glBindTexture(GL_TEXTURE_2D, texture_);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+}
+
+Window::~Window() {
+  if (window_) {
+    make_current();
+    glDeleteTextures(1, &texture_);
+    glDeleteVertexArrays(1, &vao_);
+    glDeleteProgram(program_);
+    glfwDestroyWindow(window_);
+  }
+  glfwTerminate();
+}
+
+bool Window::open() const {
+  return !glfwWindowShouldClose(window_);
+}
+
+void Window::make_current() {
+  glfwMakeContextCurrent(window_);
+}
+
+void Window::show(const Image& image, float exposure) {
+  make_current();
+  int width = 0, height = 0;
+  glfwGetFramebufferSize(window_, &width, &height);
+  glViewport(0, 0, width, height);
+  glBindTexture(GL_TEXTURE_2D, texture_);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, image.width, image.height, 0, GL_RGB, GL_FLOAT,
+               image.rgb.data());
+  glUseProgram(program_);
+  glUniform1i(glGetUniformLocation(program_, "image"), 0);
+  glUniform1f(glGetUniformLocation(program_, "exposure"), exposure);
+  glBindVertexArray(vao_);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glfwSwapBuffers(window_);
+}
+
+void Window::set_title(const std::string& title) {
+  glfwSetWindowTitle(window_, title.c_str());
+}
+
+Input Window::poll() {
+  glfwPollEvents();
+  Input out = std::move(pending_);
+  pending_ = Input();
+  return out;
+}
+
+void Window::on_cursor(GLFWwindow* w, double x, double y) {
+  auto* self = static_cast<Window*>(glfwGetWindowUserPointer(w));
+  const double dx = x - self->last_x_, dy = y - self->last_y_;
+  self->last_x_ = x, self->last_y_ = y;
+  if (!self->have_cursor_) {
+    self->have_cursor_ = true;
+    return;
+  }
+  const bool left = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+  const bool right = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
+  const bool shift = glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
+                     glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+  if (right || (left && shift)) {
+    self->pending_.light_drag += dx;
+  } else if (left) {
+    self->pending_.orbit_x += dx;
+    self->pending_.orbit_y += dy;
+  }
+}
+
+void Window::on_scroll(GLFWwindow* w, double, double dy) {
+  static_cast<Window*>(glfwGetWindowUserPointer(w))->pending_.zoom += dy;
+}
+
+void Window::on_key(GLFWwindow* w, int key, int, int action, int) {
+  if (action == GLFW_PRESS || action == GLFW_REPEAT)
+    static_cast<Window*>(glfwGetWindowUserPointer(w))->pending_.keys.push_back(key);
+}
+
+}  // namespace prt::view
