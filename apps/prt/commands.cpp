@@ -199,4 +199,27 @@ int demo(Context& context, const DemoArgs& args) {
   return render(context, {scene, "", "", false, false, 0.0f});
 }
 
+int image_diff(const std::string& a_file, const std::string& b_file) {
+  const Image8 a = read_png(a_file), b = read_png(b_file);
+  if (a.width != b.width || a.height != b.height)
+    throw Error(b_file + ": " + std::to_string(b.width) + "x" + std::to_string(b.height) +
+                ", but " + a_file + " is " + std::to_string(a.width) + "x" +
+                std::to_string(a.height));
+  double sum = 0;
+  std::size_t differing = 0;
+  for (std::size_t p = 0; p < a.rgb.size(); p += 3) {
+    int worst = 0;
+    for (int c = 0; c < 3; ++c) {
+      const int d = std::abs(int(a.rgb[p + c]) - int(b.rgb[p + c]));
+      sum += d;
+      worst = std::max(worst, d);
+    }
+    differing += worst > 8;
+  }
+  const double pixels = double(a.rgb.size() / 3);
+  std::printf("mean absolute difference %.4f (of 255), pixels differing by > 8: %.4f%%\n",
+              sum / a.rgb.size(), 100.0 * differing / pixels);
+  return 0;
+}
+
 }  // namespace prt::cli

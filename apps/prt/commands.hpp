@@ -48,6 +48,10 @@ struct CompareArgs {
 };
 int compare_bases(Context& context, const CompareArgs& args);
 
+// Prints the mean absolute difference of two PNGs and the share of pixels
+// differing by more than 8 levels in some channel.
+int image_diff(const std::string& a, const std::string& b);
+
 // "key=value" typed as TOML would type it, located at command-line item `index`.
 void parse_parameter(const std::string& text, std::size_t index, Params& params);
 

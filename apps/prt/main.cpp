@@ -64,6 +64,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   hemisphere_cmd->add_flag("--json", analyze.json, "print JSON");
 
+  std::vector<std::string> diff_images;
+  auto* diff_cmd = app.add_subcommand(
+      "image-diff", "mean absolute difference of two PNG images (0..255 per channel)");
+  diff_cmd->add_option("images", diff_images, "two PNG files")->required()->expected(2);
+
   prt::cli::CompareArgs compare;
   auto* compare_cmd = app.add_subcommand(
       "compare-bases", "trace once, then compare bases by transport and shading error");
@@ -97,6 +102,7 @@ int main(int argc, char** argv) {
     if (*info_cmd) return prt::cli::info(info_file);
     if (*hemisphere_cmd) return prt::cli::analyze_hemisphere(analyze);
     if (*compare_cmd) return prt::cli::compare_bases(context, compare);
+    if (*diff_cmd) return prt::cli::image_diff(diff_images[0], diff_images[1]);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);
   } catch (const std::exception& e) {

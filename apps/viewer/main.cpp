@@ -64,7 +64,10 @@ int main(int argc, char** argv) {
   app.add_flag("--heatmap", options.heatmap, "start in the error heat-map view");
   app.add_flag("--exact", options.exact, "start with the uncompressed transfer");
   app.add_flag("-q,--quiet", options.quiet, "no progress bars");
+  bool no_background = false;
+  app.add_flag("--no-background", no_background, "black behind the mesh instead of the map");
   CLI11_PARSE(app, argc, argv);
+  options.background = !no_background;
   prt::Progress::set_enabled(!options.quiet);
   try {
     prt::PluginRegistry registry(prt::PluginRegistry::default_directories());

@@ -38,7 +38,7 @@ Eigen::Vector3f heat(float t) {
 
 Viewer::Viewer(PluginRegistry& registry, const Options& options)
     : registry_(registry), scene_(SceneSpec::load(options.scene, registry)),
-      heatmap_(options.heatmap) {
+      heatmap_(options.heatmap), background_(options.background) {
   const auto bake_file = scene_.bake_path();
   if (std::filesystem::exists(bake_file)) {
     data_ = read_bake(bake_file);
@@ -143,7 +143,7 @@ Image Viewer::render() {
   input.light = light_;
   input.albedo = data_.albedo;
   input.camera = cam;
-  input.background = &environment_;
+  input.background = background_ ? &environment_ : nullptr;
   Eigen::MatrixX3f colours;
   if (heatmap_) {
     colours = heat_colours(light_, cam);

@@ -19,6 +19,7 @@ struct Options {
   bool heatmap = false;
   bool exact = false;  // start with the uncompressed transfer
   bool quiet = false;
+  bool background = true;  // the environment behind the mesh
 };
 
 class Viewer {
@@ -57,7 +58,7 @@ class Viewer {
   Eigen::Matrix3d scene_rotation_;
   Eigen::MatrixX3d base_light_, light_;
   double light_degrees_ = 0;
-  bool light_dirty_ = true, heatmap_ = false;
+  bool light_dirty_ = true, heatmap_ = false, background_ = true;
   std::vector<Encoding> encodings_;
   std::size_t current_ = 0;
   std::vector<Frame> frames_;

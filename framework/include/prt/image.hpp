@@ -1,5 +1,6 @@
 // Linear RGB images and PNG output.
 #pragma once
+#include <cstdint>
 #include <filesystem>
 #include <vector>
 
@@ -19,6 +20,14 @@ struct Image {
 
 // Writes exposure-scaled, sRGB-encoded 8-bit PNG atomically (temp + rename).
 void write_png(const Image& image, const std::filesystem::path& file, float exposure = 1.0f);
+
+// An 8-bit image file as written (RGB, 0..255, top row first), for comparing
+// renderings; throws prt::Error naming the file when it cannot be read.
+struct Image8 {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+};
+Image8 read_png(const std::filesystem::path& file);
 
 // Mean absolute difference of two images of the same size (linear values).
 double mean_absolute_difference(const Image& a, const Image& b);
