@@ -12,19 +12,20 @@ hdri="$(realpath "${2:-$root/data/hdri/courtyard.exr}")"
 work="$root/out/transfer_table"
 mkdir -p "$work"
 
+glossy='diffuse = 0.4\nspecular = 0.6\nexponent = 12'
 # name | material lines | bounces | compressor lines
 configs=(
   "diffuse 25|brdf = \"lambert\"|0|plugin = \"none\""
   "diffuse 25|brdf = \"lambert\"|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
   "diffuse 25, 2 bounces|brdf = \"lambert\"|2|plugin = \"none\""
   "diffuse 25, 2 bounces|brdf = \"lambert\"|2|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 16x25 LS|brdf = \"phong\"\nexit_order = 4|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 24x25 LS|brdf = \"phong\"\nexit_reduced = true|0|plugin = \"none\""
-  "phong 24x25 LS|brdf = \"phong\"\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 25x25 zero|brdf = \"phong\"\nprojection = \"zero\"|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 25x25 LS|brdf = \"phong\"|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "cook-torrance 24x25 LS|brdf = \"cook-torrance\"\nroughness = 0.35\nfresnel = 0.5\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "ward 24x25 LS|brdf = \"ward\"\nanisotropic_roughness = [0.15, 0.45]\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
+  "phong 16x25 LS|brdf = \"phong\"\\n$glossy\nexit_order = 4|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
+  "phong 24x25 LS|brdf = \"phong\"\\n$glossy\nexit_reduced = true|0|plugin = \"none\""
+  "phong 24x25 LS|brdf = \"phong\"\\n$glossy\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
+  "phong 25x25 zero|brdf = \"phong\"\\n$glossy\nprojection = \"zero\"|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
+  "phong 25x25 LS|brdf = \"phong\"\\n$glossy|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
+  "cook-torrance 24x25 LS|brdf = \"cook-torrance\"\\n$glossy\nroughness = 0.35\nfresnel = 0.5\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
+  "ward 24x25 LS|brdf = \"ward\"\\n$glossy\nanisotropic_roughness = [0.15, 0.45]\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
 )
 echo "| transfer | compression | bake s | encode s | file MB | relight ms/frame | RMS vs ground truth | relative |"
 echo "|---|---|---|---|---|---|---|---|"
@@ -37,9 +38,6 @@ for config in "${configs[@]}"; do
 file = \"$mesh\"
 [material]
 albedo = [0.9, 0.75, 0.6]
-diffuse = 0.4
-specular = 0.6
-exponent = 12
 $material
 [transport]
 rays = 1024

@@ -56,6 +56,18 @@ double read_number(const H5::H5Object& object, const std::string& name) {
   return value;
 }
 
+// A group without modification timestamps, so the same bake gives the same bytes.
+H5::Group create_group(H5::H5File& file, const char* name) {
+  const hid_t properties = H5Pcreate(H5P_GROUP_CREATE);
+  H5Pset_obj_track_times(properties, false);
+  const hid_t id = H5Gcreate2(file.getId(), name, H5P_DEFAULT, properties, H5P_DEFAULT);
+  H5Pclose(properties);
+  if (id < 0) throw Error(std::string("cannot create group ") + name);
+  H5::Group group(id);
+  H5Gclose(id);  // the C++ object took its own reference
+  return group;
+}
+
 template <class T>
 const H5::PredType& h5_type() {
   if constexpr (std::is_same_v<T, float>)
@@ -74,6 +86,7 @@ void write_array(H5::Group& group, const std::string& name, const T* data, hsize
                  hsize_t cols) {
   const hsize_t dims[2] = {rows, cols};
   H5::DSetCreatPropList properties;
+  H5Pset_obj_track_times(properties.getId(), false);  // no timestamps: reproducible files
   if (rows > 0 && cols > 0) {
     const hsize_t chunk[2] = {std::min<hsize_t>(rows, 4096), cols};
     properties.setChunk(2, chunk);
@@ -160,13 +173,13 @@ void write_bake(const fs::path& file, const BakeData& data) {
       for (int c = 0; c < 3; ++c)
         write_number(root, "albedo_" + std::string(1, "rgb"[c]), data.albedo[c]);
 
-      H5::Group mesh = h5.createGroup("mesh");
+      H5::Group mesh = create_group(h5, "mesh");
       write_vectors<Eigen::Vector3f, float>(mesh, "positions", data.mesh.positions);
       write_vectors<Eigen::Vector3f, float>(mesh, "normals", data.mesh.normals);
       write_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles",
                                                                  data.mesh.triangles);
 
-      H5::Group transfer = h5.createGroup("transfer");
+      H5::Group transfer = create_group(h5, "transfer");
       write_text(transfer, "kind", data.transfer.kind);
       write_text(transfer, "material", data.material);
       write_number(transfer, "bounces", data.bounces);
@@ -177,7 +190,7 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_matrix(transfer, "coefficients", data.transfer.coefficients);
 
       const CompressedTransfer& c = data.compressed;
-      H5::Group compressed = h5.createGroup("compressed");
+      H5::Group compressed = create_group(h5, "compressed");
       write_text(compressed, "compressor", c.compressor);
       write_number(compressed, "components", c.components);
       write_number(compressed, "dimension", static_cast<double>(c.dimension));
@@ -198,12 +211,12 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_array(compressed, "weight_index", c.weight_index.data(), c.sparse() ? c.vertices() : 0,
                   c.sparse() ? c.components : 0);
 
-      H5::Group state = h5.createGroup("basis_state");
+      H5::Group state = create_group(h5, "basis_state");
       for (const auto& [name, m] : data.basis_state.matrices) {
         const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> row_major = m;
         write_array(state, name, row_major.data(), m.rows(), m.cols());
       }
-      H5::Group metrics = h5.createGroup("metrics");
+      H5::Group metrics = create_group(h5, "metrics");
       for (const auto& [name, value] : data.metrics) write_number(metrics, name, value);
     } catch (const H5::Exception& e) {
       throw Error(file.string() + ": cannot write bake file: " + e.getDetailMsg());

@@ -6,6 +6,9 @@
 
 #include "prt/bake_file.hpp"
 #include "prt/error.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/progress.hpp"
+#include "prt/registry.hpp"
 
 using namespace prt;
 namespace fs = std::filesystem;
@@ -117,4 +120,52 @@ TEST_CASE("damaged and foreign files are refused with a clear message", "[bake]"
   }
   CHECK_THROWS_WITH(read_bake(dir / "future.h5"),
                     Catch::Contains("format version 99") && Catch::Contains("reads version " + std::to_string(kBakeFormatVersion)));
+}
+
+TEST_CASE("the same scene and seed bake to bit-identical files", "[bake_file][reproducibility]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  const std::string text = R"(
+[mesh]
+generate = "open-box"
+detail = 1
+[material]
+albedo = [0.7, 0.7, 0.7]
+[transport]
+directions = "stratified"
+rays = 512
+seed = 3
+bounces = 1
+[basis]
+plugin = "sh"
+order = 4
+[compressor]
+plugin = "cpca"
+method = "iterative"
+clusters = 8
+components = 3
+reclassify = true
+supercluster = "greedy"
+[lighting]
+constant = [1, 1, 1]
+)";
+  const SceneSpec scene = SceneSpec::parse(text, "repro.toml", registry);
+  const fs::path dir = fs::temp_directory_path() / "prt_reproducibility";
+  fs::create_directories(dir);
+  auto bytes_of = [](const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  std::string first;
+  for (int run = 0; run < 2; ++run) {
+    StageTimes times;
+    const fs::path file = dir / ("bake" + std::to_string(run) + ".h5");
+    write_bake(file, bake(scene, registry, {true}, times));
+    if (run == 0)
+      first = bytes_of(file);
+    else
+      CHECK(bytes_of(file) == first);
+  }
+  Progress::set_enabled(true);
+  fs::remove_all(dir);
 }
