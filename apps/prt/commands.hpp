@@ -43,6 +43,14 @@ struct AnalyzeArgs {
 };
 int analyze_hemisphere(const AnalyzeArgs& args);
 
+struct StabilityArgs {
+  std::vector<int> orders{2, 5, 10, 15, 20, 30, 40, 50, 60, 70, 80, 90, 101, 120, 150};
+  int max_rotation_order = 101;
+  int hemisphere_order = 12;
+  std::string json, figure_data;
+};
+int stability(Context& context, const StabilityArgs& args);
+
 struct CompareArgs {
   std::string scene, bases, csv, json;
 };

@@ -64,6 +64,18 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   hemisphere_cmd->add_flag("--json", analyze.json, "print JSON");
 
+  prt::cli::StabilityArgs stability;
+  auto* stability_cmd =
+      app.add_subcommand("stability", "report where the numerics break (SH, rotation, ...)");
+  stability_cmd->add_option("--orders", stability.orders, "SH orders (bands) to measure");
+  stability_cmd->add_option("--max-rotation-order", stability.max_rotation_order,
+                            "largest order whose rotation is measured");
+  stability_cmd->add_option("--hemisphere-order", stability.hemisphere_order,
+                            "largest order of the hemispherical Gram matrix");
+  stability_cmd->add_option("--json", stability.json, "write the figures as JSON");
+  stability_cmd->add_option("--figure-data", stability.figure_data,
+                            "write the sun-ringing curves as CSV (for scripts/stability_plot.py)");
+
   std::vector<std::string> diff_images;
   auto* diff_cmd = app.add_subcommand(
       "image-diff", "mean absolute difference of two PNG images (0..255 per channel)");
@@ -102,6 +114,7 @@ int main(int argc, char** argv) {
     if (*info_cmd) return prt::cli::info(info_file);
     if (*hemisphere_cmd) return prt::cli::analyze_hemisphere(analyze);
     if (*compare_cmd) return prt::cli::compare_bases(context, compare);
+    if (*stability_cmd) return prt::cli::stability(context, stability);
     if (*diff_cmd) return prt::cli::image_diff(diff_images[0], diff_images[1]);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);

@@ -53,7 +53,7 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
   basis_->load(data_.basis_state);
   environment_ = scene_.load_environment();
   scene_rotation_ = environment_.rotation();
-  base_light_ = environment_.project(*basis_);
+  base_light_ = scene_.project_light(environment_, *basis_);
   encodings_.push_back({data_.compressor.name, data_.compressed});
   encodings_.push_back({"exact", exact_form(data_.transfer)});
   current_ = options.exact ? 1 : 0;
@@ -116,7 +116,7 @@ void Viewer::update_light() {
   const Eigen::Matrix3d turn = rotation_about_up(light_degrees_);
   environment_.set_rotation(turn * scene_rotation_);
   light_ = basis_->can_rotate() ? Eigen::MatrixX3d(basis_->rotation_matrix(turn) * base_light_)
-                                : environment_.project(*basis_);
+                                : scene_.project_light(environment_, *basis_);
   light_ms_ = 1000 * clock.seconds();
   light_dirty_ = false;
 }

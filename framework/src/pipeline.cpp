@@ -253,7 +253,7 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   times.add("load lighting + plug-ins", clock.seconds());
 
   clock = Stopwatch();
-  const Eigen::MatrixX3d light = environment.project(*basis);
+  const Eigen::MatrixX3d light = scene.project_light(environment, *basis);
   const Camera camera = scene.make_camera(data.mesh);
   times.add("project light", clock.seconds());
 

@@ -8,6 +8,7 @@
 
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
+#include "prt/sh.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
@@ -75,7 +76,9 @@ const ParamSchema& lighting_schema() {
       {path("environment", false, "equirectangular environment map (.exr or .hdr)"),
        reals("constant", "", 3, 0, kBig, "constant radiance instead of a map"),
        real("intensity", "1", 0, kBig, "radiance scale"),
-       real("rotation", "0", -3600, 3600, "rotation of the environment about +y, degrees")}};
+       real("rotation", "0", -3600, 3600, "rotation of the environment about +y, degrees"),
+       choice("window", "none", "none|hanning|lanczos",
+              "SH bases: sigma factors on the light's bands against ringing (negative light)")}};
   return s;
 }
 const ParamSchema& camera_schema() {
@@ -260,6 +263,10 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                 "shadowed = true");
 
   scene.basis = read_plugin(root, "basis", "sh", PluginKind::basis, registry, scene);
+  if (scene.lighting.get_string("window") != "none" && scene.basis.name != "sh")
+    throw Error(scene.lighting.location("window"),
+                "section [lighting]: window damps SH bands; basis \"" + scene.basis.name +
+                    "\" has none (use window = \"none\")");
   scene.compressor =
       read_plugin(root, "compressor", "none", PluginKind::compressor, registry, scene);
   scene.renderer = read_plugin(root, "renderer", "cpu", PluginKind::renderer, registry, scene);
@@ -302,6 +309,17 @@ Environment SceneSpec::load_environment() const {
   environment.set_intensity(static_cast<float>(lighting.get_real("intensity")));
   environment.set_rotation(rotation_about_up(lighting.get_real("rotation")));
   return environment;
+}
+
+Eigen::MatrixX3d SceneSpec::project_light(const Environment& environment,
+                                          const Basis& basis) const {
+  Eigen::MatrixX3d light = environment.project(basis);
+  const std::string kind = lighting.get_string("window");
+  if (kind != "none") {
+    const int order = static_cast<int>(std::lround(std::sqrt(double(basis.size()))));
+    light = sh::window(order, kind).asDiagonal() * light;
+  }
+  return light;
 }
 
 Camera SceneSpec::make_camera(const Mesh& m) const {

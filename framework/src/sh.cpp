@@ -167,4 +167,18 @@ Eigen::VectorXd clamped_cosine(int order, const Eigen::Vector3d& normal) {
   return y;
 }
 
+Eigen::VectorXd window(int order, const std::string& kind) {
+  if (kind != "none" && kind != "hanning" && kind != "lanczos")
+    throw Error("unknown SH window \"" + kind + "\"; valid: none, hanning, lanczos");
+  Eigen::VectorXd factors(coefficient_count(order));
+  for (int l = 0; l < order; ++l) {
+    const double x = double(l) / order;
+    double sigma = 1.0;
+    if (kind == "hanning") sigma = 0.5 * (1.0 + std::cos(M_PI * x));
+    if (kind == "lanczos" && l > 0) sigma = std::sin(M_PI * x) / (M_PI * x);
+    for (int m = -l; m <= l; ++m) factors[index(l, m)] = sigma;
+  }
+  return factors;
+}
+
 }  // namespace prt::sh

@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
     const BakeData data = read_bake(scene.bake_path());
     auto basis = registry.create<Basis>(scene.basis.name, scene.basis.params, scene.basis.where);
     basis->load(data.basis_state);
-    const Eigen::MatrixX3d light = scene.load_environment().project(*basis);
+    const Eigen::MatrixX3d light = scene.project_light(scene.load_environment(), *basis);
     Params gl_params;
     gl_params.set("background", false);
     auto renderer = registry.create<Renderer>("opengl", gl_params);

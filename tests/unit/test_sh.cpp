@@ -110,3 +110,36 @@ TEST_CASE("clamped cosine zonal coefficients match closed forms", "[sh]") {
   CHECK(std::abs(z[5]) < 1e-15);
   CHECK(sh::clamped_cosine_zonal(0).size() == 0);
 }
+
+TEST_CASE("SH windows damp high bands and the ringing of a bright spot", "[sh][window]") {
+  for (const char* kind : {"none", "hanning", "lanczos"}) {
+    const Eigen::VectorXd w = sh::window(12, kind);
+    CHECK(w[0] == 1.0);
+    for (int l = 1; l < 12; ++l) {
+      CHECK(w[sh::index(l, 0)] <= w[sh::index(l - 1, 0)] + 1e-15);
+      CHECK(w[sh::index(l, 0)] > 0.0);
+      CHECK(w[sh::index(l, -l)] == w[sh::index(l, l)]);
+    }
+  }
+  CHECK_THROWS_WITH(sh::window(5, "hamming"), Catch::Contains("hanning"));
+  // A narrow bright lobe (the clamped cosine to a high power, projected):
+  // windowing shrinks the negative area of its order-15 reconstruction.
+  const DirectionSet q = gauss_product_sphere(40);
+  const Eigen::Vector3d sun(0, 0.6, 0.8);
+  Eigen::VectorXd samples(q.size());
+  for (Eigen::Index k = 0; k < q.size(); ++k)
+    samples[k] = 1.0 + 1e5 * std::pow(std::max(0.0, q.directions.row(k).dot(sun)), 400.0);
+  const Eigen::MatrixXd y = sh::evaluate(15, q.directions);
+  const Eigen::VectorXd c = y.transpose() * q.weights.asDiagonal() * samples;
+  auto negative_area = [&](const Eigen::VectorXd& coefficients) {
+    const Eigen::VectorXd f = y * coefficients;
+    double area = 0;
+    for (Eigen::Index k = 0; k < f.size(); ++k) area += f[k] < 0 ? q.weights[k] : 0.0;
+    return area;
+  };
+  const double plain = negative_area(c);
+  const Eigen::VectorXd windowed = sh::window(15, "hanning").cwiseProduct(c);
+  CHECK(plain > 0.5);
+  CHECK(negative_area(windowed) < 0.9 * plain);
+  CHECK((y * windowed).minCoeff() > 0.2 * (y * c).minCoeff());  // 5x shallower troughs
+}

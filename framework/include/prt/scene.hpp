@@ -16,6 +16,7 @@ namespace prt {
 class PluginRegistry;
 struct Mesh;
 class Environment;
+class Basis;
 
 struct PluginChoice {
   std::string name;
@@ -45,6 +46,8 @@ struct SceneSpec {
   Mesh load_mesh() const;
   DirectionSet directions() const;  // [transport] directions, rays, seed
   Environment load_environment() const;
+  // The environment projected into the basis, with [lighting] window applied.
+  Eigen::MatrixX3d project_light(const Environment& environment, const Basis& basis) const;
   Camera make_camera(const Mesh& mesh) const;
   // RGB factor applied to the transfer's radiance: albedo (x diffuse for lambert).
   Eigen::Vector3f albedo() const;

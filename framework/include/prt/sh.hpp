@@ -14,6 +14,7 @@
 // and nothing overflows (tested to l = 100 and beyond).
 #pragma once
 #include <Eigen/Core>
+#include <string>
 
 #include "prt/direction_set.hpp"
 
@@ -35,6 +36,12 @@ Eigen::MatrixXd evaluate(int order, const Directions& directions);
 // Block-diagonal order^2 x order^2 matrix mapping the coefficients of f to
 // those of g(d) = f(R^T d), by the Ivanic-Ruedenberg recurrence.
 Eigen::MatrixXd rotation(int order, const Eigen::Matrix3d& rotation);
+
+// Per-band sigma factors that damp Gibbs ringing of truncated SH (e.g. the
+// negative lobes around a bright sun): "none" (1), "hanning"
+// (0.5 (1 + cos(pi l / order))) or "lanczos" (sinc(l / order)); order^2 values,
+// one per coefficient. Throws prt::Error for another name.
+Eigen::VectorXd window(int order, const std::string& kind);
 
 // Zonal coefficients z_l of the clamped cosine max(cos theta, 0) about +z.
 Eigen::VectorXd clamped_cosine_zonal(int order);
