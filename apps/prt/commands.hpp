@@ -43,6 +43,14 @@ struct AnalyzeArgs {
 };
 int analyze_hemisphere(const AnalyzeArgs& args);
 
+struct BenchArgs {
+  std::string scene, out;
+  std::vector<std::string> sweeps;  // section.key=v1,v2,...
+  int lights = 2;                   // the scene's light plus rotated copies
+  bool gpu = false, no_report = false;
+};
+int bench(Context& context, const BenchArgs& args);
+
 struct StabilityArgs {
   std::vector<int> orders{2, 5, 10, 15, 20, 30, 40, 50, 60, 70, 80, 90, 101, 120, 150};
   int max_rotation_order = 101;

@@ -64,6 +64,17 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   hemisphere_cmd->add_flag("--json", analyze.json, "print JSON");
 
+  prt::cli::BenchArgs bench;
+  auto* bench_cmd = app.add_subcommand(
+      "bench", "sweep parameters; measure bake/encode/relight time, size and error");
+  bench_cmd->add_option("scene", bench.scene, "scene description (.toml)")->required();
+  bench_cmd->add_option("--sweep", bench.sweeps, "section.key=v1,v2,... (repeatable)");
+  bench_cmd->add_option("--out", bench.out, "output folder (default: bench_<scene>)");
+  bench_cmd->add_option("--lights", bench.lights, "lights: the scene's and rotated copies")
+      ->check(CLI::Range(1, 64));
+  bench_cmd->add_flag("--gpu", bench.gpu, "also time the OpenGL renderer (needs a display)");
+  bench_cmd->add_flag("--no-report", bench.no_report, "skip the plots and the Markdown report");
+
   prt::cli::StabilityArgs stability;
   auto* stability_cmd =
       app.add_subcommand("stability", "report where the numerics break (SH, rotation, ...)");
@@ -114,6 +125,7 @@ int main(int argc, char** argv) {
     if (*info_cmd) return prt::cli::info(info_file);
     if (*hemisphere_cmd) return prt::cli::analyze_hemisphere(analyze);
     if (*compare_cmd) return prt::cli::compare_bases(context, compare);
+    if (*bench_cmd) return prt::cli::bench(context, bench);
     if (*stability_cmd) return prt::cli::stability(context, stability);
     if (*diff_cmd) return prt::cli::image_diff(diff_images[0], diff_images[1]);
     if (*plugins_cmd) return prt::cli::plugins(context);

@@ -117,7 +117,15 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   // everything else projects while tracing.
   transport.keep_visibility = basis->can_fit() || glossy;
   TransportResult result;
-  {
+  if (options.traced) {  // a sweep traced these rays once for many configurations
+    transport.keep_visibility = true;
+    result.visibility = options.traced->visibility;
+    result.hits = options.traced->hits;
+    if (result.visibility.vertices() != data.mesh.vertex_count() ||
+        result.visibility.directions() != static_cast<std::size_t>(set.size()) ||
+        (transport.keep_hits && result.hits.size() != data.mesh.vertex_count()))
+      throw Error("bake: the traced visibility does not match the scene's mesh and directions");
+  } else {
     Progress progress("bake transfer", double(data.mesh.vertex_count()),
                       transport.shadowed ? "rays" : "", options.quiet);
     result = transport.keep_visibility
@@ -217,6 +225,18 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
       squared_error(data.transfer.coefficients, data.compressed.decode());
   data.metrics["stored_floats"] = data.compressed.stored_floats();
   return data;
+}
+
+TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options) {
+  const Mesh mesh = scene.load_mesh();
+  const DirectionSet set = scene.directions();
+  TransportOptions transport;
+  transport.shadowed = scene.transport.get_bool("shadowed");
+  transport.keep_visibility = true;
+  transport.keep_hits = scene.transport.get_int("bounces") > 0;
+  Progress progress("trace", double(mesh.vertex_count()), transport.shadowed ? "rays" : "",
+                    options.quiet);
+  return diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
 }
 
 void check_bake_matches(const BakeData& data, const SceneSpec& scene) {

@@ -22,9 +22,18 @@ struct StageTimes {
   std::string table() const;
 };
 
+struct TransportResult;
+
 struct RunOptions {
   bool quiet = false;  // no progress bars
+  // Visibility bits (and hits, for bounces) traced before for the same mesh
+  // and transport (trace_scene): bake() then casts no rays. Used by sweeps.
+  const TransportResult* traced = nullptr;
 };
+
+// Traces the scene's mesh over its direction set, keeping the visibility
+// bits, and the hits when the scene asks for bounces.
+TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options);
 
 // Mesh -> rays -> projection -> compression. Fills times per stage.
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,

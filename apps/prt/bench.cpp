@@ -1,0 +1,364 @@
+// prt bench: the speed/accuracy trade of a scene over a cartesian product of
+// parameter values. Work that does not depend on a swept key is reused: rays
+// are traced once per mesh/transport setting, transfer projected once per
+// basis/material setting, the ground truth computed once per light. Results
+// are appended to <out>/results.jsonl as each configuration finishes, so an
+// interrupted sweep resumes where it stopped; CSV, JSON and the report
+// (scripts/bench_report.py: plots, Pareto fronts, image strip) follow.
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "commands.hpp"
+#include "prt/basis.hpp"
+#include "prt/bake_file.hpp"
+#include "prt/compressor.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/scene.hpp"
+#include "prt/environment.hpp"
+#include "prt/progress.hpp"
+#include "prt/transport.hpp"
+
+namespace prt::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Override {
+  std::string section, key, value;
+};
+
+// "section.key=v1,v2,..." -> one list of overrides per swept key, or
+// "section=plugin k=v k=v|plugin k=v" to swap a whole plug-in table (its
+// parameters differ from plug-in to plug-in).
+std::vector<Override> parse_sweep(const std::string& text) {
+  const auto equals = text.find('='), dot = text.find('.');
+  if (equals != std::string::npos && (dot == std::string::npos || dot > equals)) {
+    std::vector<Override> values;
+    std::stringstream list(text.substr(equals + 1));
+    for (std::string v; std::getline(list, v, '|');)
+      values.push_back({text.substr(0, equals), "", v});
+    return values;
+  }
+  if (equals == std::string::npos || dot == std::string::npos || dot > equals)
+    throw Error("--sweep \"" + text + "\": expected section.key=v1,v2,...");
+  std::vector<Override> values;
+  std::stringstream list(text.substr(equals + 1));
+  for (std::string v; std::getline(list, v, ',');)
+    values.push_back({text.substr(0, dot), text.substr(dot + 1, equals - dot - 1), v});
+  if (values.empty()) throw Error("--sweep \"" + text + "\": no values");
+  return values;
+}
+
+// A value typed as TOML would type it.
+void assign(toml::table& table, const std::string& key, const std::string& value) {
+  char* end = nullptr;
+  if (value == "true" || value == "false") {
+    table.insert_or_assign(key, value == "true");
+    return;
+  }
+  const long long integer = std::strtoll(value.c_str(), &end, 10);
+  if (!value.empty() && *end == '\0') {
+    table.insert_or_assign(key, static_cast<std::int64_t>(integer));
+    return;
+  }
+  const double real = std::strtod(value.c_str(), &end);
+  if (!value.empty() && *end == '\0') {
+    table.insert_or_assign(key, real);
+    return;
+  }
+  table.insert_or_assign(key, value);
+}
+
+std::string scene_with(const std::string& text, const std::string& file,
+                       const std::vector<Override>& overrides) {
+  toml::table root = toml::parse(text, file);
+  for (const Override& o : overrides) {
+    if (o.key.empty()) {  // a whole plug-in table: "plugin k=v k=v"
+      toml::table table;
+      std::stringstream words(o.value);
+      std::string word;
+      words >> word;
+      table.insert("plugin", word);
+      while (words >> word) {
+        const auto eq = word.find('=');
+        if (eq == std::string::npos) throw Error("--sweep " + o.section + ": expected k=v, got " + word);
+        assign(table, word.substr(0, eq), word.substr(eq + 1));
+      }
+      root.insert_or_assign(o.section, std::move(table));
+      continue;
+    }
+    if (!root.contains(o.section)) root.insert(o.section, toml::table{});
+    assign(*root[o.section].as_table(), o.key, o.value);
+  }
+  std::ostringstream out;
+  out << root;
+  return out.str();
+}
+
+// The overrides of the listed sections, as a cache key.
+std::string key_of(const std::vector<Override>& overrides, const std::set<std::string>& sections,
+                   bool exclude = false) {
+  std::string key;
+  for (const Override& o : overrides)
+    if (sections.count(o.section) != exclude)
+      key += o.section + "." + o.key + "=" + o.value + ";";
+  return key;
+}
+
+std::string label_of(const std::vector<Override>& overrides) {
+  std::string label;
+  for (const Override& o : overrides)
+    label += (label.empty() ? "" : " ") + (o.key.empty() ? o.value : o.key + "=" + o.value);
+  return label.empty() ? "scene" : label;
+}
+
+std::string json_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) out += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+  return out;
+}
+
+double median_seconds(int runs, const std::function<void()>& work) {
+  std::vector<double> t;
+  for (int r = 0; r < runs; ++r) {
+    Stopwatch clock;
+    work();
+    t.push_back(clock.seconds());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+// The JSON lines as CSV: the keys of the first line are the columns.
+void write_csv(const std::vector<std::string>& lines, const fs::path& file) {
+  std::ofstream csv(file);
+  bool header = false;
+  for (const std::string& line : lines) {
+    std::vector<std::pair<std::string, std::string>> fields;
+    for (std::size_t at = line.find('"'); at != std::string::npos;) {
+      const auto key_end = line.find('"', at + 1);
+      const std::string key = line.substr(at + 1, key_end - at - 1);
+      auto value_begin = line.find_first_not_of(": ", key_end + 1);
+      std::size_t value_end;
+      if (line[value_begin] == '"') {
+        value_end = line.find('"', value_begin + 1) + 1;
+      } else {
+        value_end = line.find_first_of(",}", value_begin);
+      }
+      fields.emplace_back(key, line.substr(value_begin, value_end - value_begin));
+      at = line.find('"', value_end);
+    }
+    if (!header) {
+      for (std::size_t k = 0; k < fields.size(); ++k) csv << (k ? "," : "") << fields[k].first;
+      csv << "\n";
+      header = true;
+    }
+    for (std::size_t k = 0; k < fields.size(); ++k) csv << (k ? "," : "") << fields[k].second;
+    csv << "\n";
+  }
+}
+
+}  // namespace
+
+int bench(Context& context, const BenchArgs& args) {
+  Progress::set_enabled(!context.quiet);
+  const SceneSpec base = SceneSpec::load(args.scene, context.registry);
+  const fs::path out = args.out.empty() ? fs::path("bench_" + base.file.stem().string()) : fs::path(args.out);
+  fs::create_directories(out / "images");
+
+  // The cartesian product of the swept values.
+  std::vector<std::vector<Override>> configs{{}};
+  for (const std::string& sweep : args.sweeps) {
+    std::vector<std::vector<Override>> next;
+    for (const auto& config : configs)
+      for (const Override& value : parse_sweep(sweep)) {
+        next.push_back(config);
+        next.back().push_back(value);
+      }
+    configs = std::move(next);
+  }
+  // Validate every configuration before any work.
+  std::vector<SceneSpec> scenes;
+  for (const auto& config : configs) {
+    scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config),
+                                      base.file, context.registry));
+    const SceneSpec& s = scenes.back();
+    const auto basis = context.registry.create<Basis>(s.basis.name, s.basis.params, s.basis.where);
+    if (basis->approximation_terms() > 0 && s.compressor.name != "none")
+      throw Error("configuration \"" + label_of(config) + "\": basis \"" + s.basis.name +
+                  "\" keeps its largest coefficients and takes compressor \"none\" only");
+  }
+
+  // Resume: configurations already in results.jsonl are skipped.
+  const fs::path results = out / "results.jsonl";
+  std::set<std::string> done;
+  if (std::ifstream in(results); in)
+    for (std::string line; std::getline(in, line);) {
+      const auto at = line.find("\"label\": \"");
+      if (at != std::string::npos)
+        done.insert(line.substr(at + 10, line.find('"', at + 10) - at - 10));
+    }
+  std::ofstream log(results, std::ios::app);
+
+  const std::set<std::string> trace_sections{"mesh", "transport"};
+  const std::set<std::string> shading_sections{"compressor", "camera", "renderer", "output"};
+  std::map<std::string, TransportResult> traces;
+  std::map<std::string, std::pair<BakeData, double>> projections;  // transfer, seconds
+  std::map<std::string, std::vector<Rendered>> truths;
+  std::shared_ptr<Renderer> gpu;
+  if (args.gpu) {
+    Params params;
+    params.set("background", false);
+    gpu = context.registry.create<Renderer>("opengl", params);
+  }
+
+  Progress progress("bench", double(configs.size()), "", context.quiet);
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    const std::string label = label_of(configs[i]);
+    if (done.count(label)) {
+      progress.add(1);
+      continue;
+    }
+    SceneSpec& scene = scenes[i];
+    RunOptions quiet{true};
+    // 1. Rays, once per mesh and transport setting.
+    const std::string trace_key = key_of(configs[i], trace_sections);
+    Stopwatch clock;
+    if (!traces.count(trace_key)) traces.emplace(trace_key, trace_scene(scene, quiet));
+    const TransportResult& traced = traces.at(trace_key);
+    const double trace_seconds = traced.trace_seconds;
+    // 2. Projection (basis, material, bounces), once per such setting: a bake
+    //    with the exact compressor over the stored visibility.
+    const std::string projection_key = key_of(configs[i], shading_sections, true);
+    if (!projections.count(projection_key)) {
+      SceneSpec exact = scene;
+      exact.compressor = {"none", {}, Params()};
+      exact.compressor.params.validate(
+          context.registry.find(PluginKind::compressor, "none").schema());
+      RunOptions reuse{true, &traced};
+      StageTimes times;
+      clock = Stopwatch();
+      BakeData data = bake(exact, context.registry, reuse, times);
+      projections.emplace(projection_key, std::pair{std::move(data), clock.seconds()});
+    }
+    auto& [exact_data, project_seconds] = projections.at(projection_key);
+    // 3. Compression.
+    BakeData data = exact_data;
+    auto compressor = context.registry.create<Compressor>(
+        scene.compressor.name, scene.compressor.params, scene.compressor.where);
+    clock = Stopwatch();
+    if (scene.compressor.name != "none")  // "none" keeps the bake's form (sparse for Haar)
+      data.compressed = compressor->encode(data.transfer, &data.mesh);
+    const double encode_seconds = clock.seconds();
+    data.compressor = {scene.compressor.name, "", scene.compressor.params.describe()};
+    const double se = squared_error(data.transfer.coefficients, data.compressed.decode());
+    const fs::path bake_file = out / "bake.h5";
+    write_bake(bake_file, data);
+    const double bytes = double(fs::file_size(bake_file));
+    fs::remove(bake_file);
+
+    // 4. Lights: the scene's and rotated copies; relight time, errors, images.
+    auto basis = context.registry.create<Basis>(scene.basis.name, scene.basis.params,
+                                                scene.basis.where);
+    basis->load(data.basis_state);
+    Environment environment = scene.load_environment();
+    const Eigen::Matrix3d scene_rotation = environment.rotation();
+    const Camera camera = scene.make_camera(data.mesh);
+    const std::string truth_key = key_of(configs[i], {"mesh", "material", "lighting", "camera",
+                                                      "ground_truth", "transport"});
+    double relight_seconds = 0, gpu_seconds = 0;
+    double rms = 0, p99 = 0, max_error = 0, image_error = 0;
+    for (int light = 0; light < args.lights; ++light) {
+      environment.set_rotation(rotation_about_up(360.0 * light / args.lights) * scene_rotation);
+      const Eigen::MatrixX3d l = scene.project_light(environment, *basis);
+      Relit relit;
+      relight_seconds += median_seconds(3, [&] { relit = relight_view(data, data.compressed, l, camera); });
+      auto& truth_list = truths[truth_key];
+      if (static_cast<int>(truth_list.size()) <= light) {
+        SceneSpec rotated = scene;
+        rotated.lighting.set("rotation", scene.lighting.get_real("rotation") + 360.0 * light / args.lights);
+        StageTimes times;
+        truth_list.push_back(render_ground_truth(rotated, data.mesh, context.registry, quiet, times));
+      }
+      const Rendered& truth = truth_list[light];
+      const ErrorStats e = vertex_error(relit.vertex_radiance, truth.vertex_radiance);
+      rms += e.rms / args.lights, p99 += e.p99 / args.lights;
+      max_error = std::max(max_error, e.max);
+      RenderInput input = render_input(data, data.compressed, relit, l, camera);
+      input.background = nullptr;
+      auto cpu = context.registry.create<Renderer>(scene.renderer.name, scene.renderer.params,
+                                                   scene.renderer.where);
+      const Image image = cpu->render(input);
+      RenderInput truth_input;
+      truth_input.mesh = &data.mesh;
+      truth_input.vertex_radiance = &truth.vertex_radiance;
+      truth_input.camera = camera;
+      const Image truth_image = cpu->render(truth_input);
+      image_error += mean_absolute_difference(image, truth_image) / args.lights;
+      if (light == 0) {
+        const float exposure = static_cast<float>(scene.camera.get_real("exposure"));
+        write_png(image, out / "images" / ("config" + std::to_string(i) + ".png"), exposure);
+        write_png(truth_image, out / "images" / "ground_truth.png", exposure);
+        Image difference = image;
+        for (std::size_t k = 0; k < difference.rgb.size(); ++k)
+          difference.rgb[k] = 4.f * std::abs(image.rgb[k] - truth_image.rgb[k]);
+        write_png(difference, out / "images" / ("error" + std::to_string(i) + ".png"), exposure);
+        if (gpu) {
+          gpu->render(input);
+          gpu_seconds = gpu->statistics().at("draw_seconds");
+        }
+      }
+    }
+    relight_seconds /= args.lights;
+    char line[2048];
+    std::snprintf(
+        line, sizeof line,
+        "{\"label\": \"%s\", \"index\": %zu, \"trace_seconds\": %.6g, \"project_seconds\": %.6g, "
+        "\"encode_seconds\": %.6g, \"bake_seconds\": %.6g, \"bytes\": %.0f, "
+        "\"bytes_per_vertex\": %.4g, \"relight_seconds\": %.6g, \"gpu_frame_seconds\": %.6g, "
+        "\"transfer_se\": %.6g, \"rms\": %.6g, \"p99\": %.6g, \"max\": %.6g, "
+        "\"image_error\": %.6g, \"lights\": %d}",
+        json_escape(label).c_str(), i, trace_seconds, project_seconds, encode_seconds,
+        trace_seconds + project_seconds + encode_seconds, bytes,
+        bytes / double(data.mesh.vertex_count()), relight_seconds, gpu_seconds, se, rms, p99,
+        max_error, image_error, args.lights);
+    log << line << "\n" << std::flush;
+    progress.add(1);
+  }
+  log.close();
+
+  // CSV and JSON of every configuration, in sweep order.
+  std::vector<std::string> lines;
+  if (std::ifstream in(results); in)
+    for (std::string line; std::getline(in, line);)
+      if (!line.empty()) lines.push_back(line);
+  {
+    std::ofstream json(out / "results.json");
+    json << "[\n";
+    for (std::size_t k = 0; k < lines.size(); ++k)
+      json << "  " << lines[k] << (k + 1 < lines.size() ? ",\n" : "\n");
+    json << "]\n";
+  }
+  write_csv(lines, out / "results.csv");
+  std::cout << "results: " << (out / "results.json").string() << " (" << lines.size()
+            << " configurations)\n";
+  if (!args.no_report) {
+    const std::string command = "/usr/bin/python3 " +
+                                (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
+                                " " + out.string() + " \"" + base.file.filename().string() + "\"";
+    if (std::system(command.c_str()) != 0)
+      throw Error("the report script failed: " + command);
+    std::cout << "report: " << (out / "report.md").string() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace prt::cli

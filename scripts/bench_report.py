@@ -1,0 +1,115 @@
+#!/usr/bin/env python3
+"""Plots and a Markdown report for `prt bench` results.
+
+  scripts/bench_report.py <bench folder> [title]
+
+Reads <folder>/results.json and <folder>/images/, writes error_vs_bytes.png,
+error_vs_relight.png, error_vs_bake.png (Pareto front marked, each point
+labelled), strip.png (ground truth | configuration | error x4, one row per
+configuration) and report.md embedding them with the table.
+"""
+import json
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from PIL import Image, ImageDraw  # noqa: E402
+
+
+def pareto(points):
+    """Indices of points not dominated in (cost, error), sorted by cost."""
+    order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front, best = [], float("inf")
+    for i in order:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def plot(results, cost_key, cost_label, path, scale=1.0):
+    costs = [r[cost_key] * scale for r in results]
+    errors = [r["rms"] for r in results]
+    front = pareto(list(zip(costs, errors)))
+    fig, ax = plt.subplots(figsize=(9, 6))
+    ax.scatter(costs, errors, color="tab:blue", zorder=2)
+    ax.plot([costs[i] for i in front], [errors[i] for i in front], color="tab:red",
+            marker="o", zorder=3, label="Pareto front")
+    for r, x, y in zip(results, costs, errors):
+        ax.annotate(r["label"], (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(cost_label)
+    ax.set_ylabel("RMS error per vertex vs ground truth")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return [results[i]["label"] for i in front]
+
+
+def strip(folder, results, path, width=240):
+    images = os.path.join(folder, "images")
+    truth = Image.open(os.path.join(images, "ground_truth.png")).convert("RGB")
+    height = int(truth.height * width / truth.width)
+    rows = []
+    for r in results:
+        cells = [truth,
+                 Image.open(os.path.join(images, f"config{r['index']}.png")).convert("RGB"),
+                 Image.open(os.path.join(images, f"error{r['index']}.png")).convert("RGB")]
+        row = Image.new("RGB", (3 * width, height + 14), "white")
+        for k, cell in enumerate(cells):
+            row.paste(cell.resize((width, height)), (k * width, 14))
+        ImageDraw.Draw(row).text((2, 1), r["label"], fill="black")
+        rows.append(row)
+    sheet = Image.new("RGB", (3 * width, sum(r.height for r in rows)), "white")
+    y = 0
+    for row in rows:
+        sheet.paste(row, (0, y))
+        y += row.height
+    sheet.save(path)
+
+
+def main(folder, title):
+    with open(os.path.join(folder, "results.json")) as f:
+        results = json.load(f)
+    fronts = {
+        "bytes": plot(results, "bytes", "bytes on disk", os.path.join(folder, "error_vs_bytes.png")),
+        "relight": plot(results, "relight_seconds", "CPU relight time per frame (ms)",
+                        os.path.join(folder, "error_vs_relight.png"), 1000.0),
+        "bake": plot(results, "bake_seconds", "bake time (s): trace + project + encode",
+                     os.path.join(folder, "error_vs_bake.png")),
+    }
+    strip(folder, results, os.path.join(folder, "strip.png"))
+    lines = [f"# Speed/accuracy sweep: {title}", "",
+             f"{len(results)} configurations, errors averaged over {results[0]['lights']} "
+             "light(s) (the scene's and rotated copies).", ""]
+    for key, name, label in (("bytes", "error_vs_bytes.png", "bytes on disk"),
+                             ("relight", "error_vs_relight.png", "relight time"),
+                             ("bake", "error_vs_bake.png", "bake time")):
+        lines += [f"## Error vs {label}", "", f"![error vs {label}]({name})", "",
+                  "Pareto front: " + ", ".join(f"`{x}`" for x in fronts[key]), ""]
+    lines += ["## Table", "",
+              "| configuration | bake s | encode s | MB | bytes/vertex | relight ms | GPU frame ms "
+              "| transfer SE | RMS | p99 | max | image error |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        lines.append(
+            f"| {r['label']} | {r['bake_seconds']:.2f} | {r['encode_seconds']:.2f} | "
+            f"{r['bytes'] / 1e6:.2f} | {r['bytes_per_vertex']:.0f} | "
+            f"{1000 * r['relight_seconds']:.2f} | "
+            f"{1000 * r['gpu_frame_seconds']:.1f} | {r['transfer_se']:.4g} | {r['rms']:.4g} | "
+            f"{r['p99']:.4g} | {r['max']:.4g} | {r['image_error']:.4g} |")
+    lines += ["", "## Images", "",
+              "Ground truth | configuration | 4 x absolute error, one row per configuration:", "",
+              "![image strip](strip.png)", ""]
+    with open(os.path.join(folder, "report.md"), "w") as f:
+        f.write("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else sys.argv[1])
