@@ -190,7 +190,7 @@ int bench(Context& context, const BenchArgs& args) {
   for (const auto& config : configs) {
     scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config),
                                       base.file, context.registry));
-    const SceneSpec& s = scenes.back();
+    SceneSpec& s = scenes.back();
     const auto basis = context.registry.create<Basis>(s.basis.name, s.basis.params, s.basis.where);
     if (basis->approximation_terms() > 0 && s.compressor.name != "none")
       throw Error("configuration \"" + label_of(config) + "\": basis \"" + s.basis.name +
