@@ -34,25 +34,43 @@ def plot(results, cost_key, cost_label, path, scale=1.0):
     costs = [r[cost_key] * scale for r in results]
     errors = [r["rms"] for r in results]
     front = pareto(list(zip(costs, errors)))
-    fig, ax = plt.subplots(figsize=(9, 6))
-    ax.scatter(costs, errors, color="tab:blue", zorder=2)
+    fig, ax = plt.subplots(figsize=(10, 7))
+    # Colour by basis setting, marker by compressor, where the labels say so.
+    compressors = ("none", "vq", "pca", "cpca")
+    markers = dict(zip(compressors, "sDo^"))
+    groups = {}
+    for r, x, y in zip(results, costs, errors):
+        words = r["label"].split()
+        cut = next((k for k, w in enumerate(words) if w in compressors), len(words))
+        basis = " ".join(words[:cut]) or "scene"
+        marker = markers.get(words[cut], "o") if cut < len(words) else "o"
+        groups.setdefault((basis, marker), []).append((x, y))
+    colours = {}
+    for (basis, marker), points in groups.items():
+        colour = colours.setdefault(basis, f"C{len(colours) % 10}")
+        ax.scatter(*zip(*points), color=colour, marker=marker, zorder=2, alpha=0.8,
+                   label=basis if marker == "o" or basis not in [b for b, _ in list(groups)[:0]] else None)
     ax.plot([costs[i] for i in front], [errors[i] for i in front], color="tab:red",
             marker="o", zorder=3, label="Pareto front")
     for r, x, y in zip(results, costs, errors):
-        ax.annotate(r["label"], (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        ax.annotate(r["label"], (x, y), fontsize=5.5, xytext=(3, 2), textcoords="offset points",
+                    alpha=0.8)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(cost_label)
     ax.set_ylabel("RMS error per vertex vs ground truth")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    handles, names = ax.get_legend_handles_labels()
+    unique = dict(zip(names, handles))
+    ax.legend(unique.values(), unique.keys(), fontsize=8,
+              title="colour: basis; marker: none s, vq D, pca o, cpca ^", title_fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return [results[i]["label"] for i in front]
 
 
-def strip(folder, results, path, width=240):
+def strip(folder, results, path, width=160):
     images = os.path.join(folder, "images")
     truth = Image.open(os.path.join(images, "ground_truth.png")).convert("RGB")
     height = int(truth.height * width / truth.width)
@@ -102,7 +120,7 @@ def main(folder, title):
     for r in results:
         lines.append(
             f"| {r['label']} | {r['bake_seconds']:.2f} | {r['encode_seconds']:.2f} | "
-            f"{r['bytes'] / 1e6:.2f} | {r['file_bytes'] / 1e6:.2f} | {r['bytes_per_vertex']:.0f} | "
+            f"{r['bytes'] / 1e6:.3f} | {r['file_bytes'] / 1e6:.2f} | {r['bytes_per_vertex']:.1f} | "
             f"{1000 * r['relight_seconds']:.2f} | "
             f"{1000 * r['gpu_frame_seconds']:.1f} | {r['transfer_se']:.4g} | {r['rms']:.4g} | "
             f"{r['p99']:.4g} | {r['max']:.4g} | {r['image_error']:.4g} |")

@@ -1,6 +1,7 @@
 #include "viewer.hpp"
 
-#include <Eigen/Geometry>
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -96,15 +97,19 @@ void Viewer::zoom(double steps) {
   distance_scale_ = std::clamp(distance_scale_ * std::pow(0.9, steps), 0.05, 20.0);
 }
 
+// The orbit camera (GLM): yaw about the up axis, pitch about the camera's
+// side axis, distance scaled by the zoom.
 Camera Viewer::camera() const {
   Camera c = home_;
-  const Eigen::Vector3f offset = c.position - c.target;
-  const Eigen::Vector3f side = offset.cross(c.up).normalized();
-  const Eigen::Matrix3f turn =
-      (Eigen::AngleAxisf(float(yaw_ * M_PI / 180), c.up.normalized()) *
-       Eigen::AngleAxisf(float(pitch_ * M_PI / 180), side))
-          .toRotationMatrix();
-  c.position = c.target + float(distance_scale_) * (turn * offset);
+  const glm::vec3 target(c.target.x(), c.target.y(), c.target.z());
+  const glm::vec3 up = glm::normalize(glm::vec3(c.up.x(), c.up.y(), c.up.z()));
+  const glm::vec3 offset = glm::vec3(c.position.x(), c.position.y(), c.position.z()) - target;
+  const glm::vec3 side = glm::normalize(glm::cross(offset, up));
+  const glm::mat4 turn = glm::rotate(glm::mat4(1.f), glm::radians(float(yaw_)), up) *
+                         glm::rotate(glm::mat4(1.f), glm::radians(float(pitch_)), side);
+  const glm::vec3 position =
+      target + float(distance_scale_) * glm::vec3(turn * glm::vec4(offset, 0.f));
+  c.position = {position.x, position.y, position.z};
   return c;
 }
 
