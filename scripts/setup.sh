@@ -11,7 +11,7 @@ packages=(
   libboost-dev libboost-filesystem-dev catch2 libtbb-dev libtomlplusplus-dev
   libcli11-dev libopenexr-dev libhdf5-dev hdf5-tools libstb-dev libepoxy-dev libimgui-dev
   xvfb xauth libgl1-mesa-dri
-  python3-h5py python3-matplotlib python3-sklearn python3-numpy
+  python3-h5py python3-matplotlib python3-sklearn python3-numpy python3-pil
 )
 
 sudo_cmd=()
