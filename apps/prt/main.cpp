@@ -78,7 +78,8 @@ int main(int argc, char** argv) {
   prt::cli::StabilityArgs stability;
   auto* stability_cmd =
       app.add_subcommand("stability", "report where the numerics break (SH, rotation, ...)");
-  stability_cmd->add_option("--orders", stability.orders, "SH orders (bands) to measure");
+  stability_cmd->add_option("--orders", stability.orders, "SH orders (bands) to measure")
+      ->delimiter(',');
   stability_cmd->add_option("--max-rotation-order", stability.max_rotation_order,
                             "largest order whose rotation is measured");
   stability_cmd->add_option("--hemisphere-order", stability.hemisphere_order,

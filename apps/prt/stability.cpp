@@ -67,9 +67,15 @@ void rotation_errors(int order, double& orthogonality, double& reprojection) {
           .normalized()
           .toRotationMatrix();
   const Eigen::MatrixXd r = sh::rotation(order, rotation);
-  orthogonality = (r * r.transpose() - Eigen::MatrixXd::Identity(r.rows(), r.cols()))
-                      .cwiseAbs()
-                      .maxCoeff();
+  orthogonality = 0;  // block by block: R is block-diagonal over bands
+  for (int l = 0; l < order; ++l) {
+    const auto block = r.block(l * l, l * l, 2 * l + 1, 2 * l + 1);
+    orthogonality = std::max(
+        orthogonality,
+        (block * block.transpose() - Eigen::MatrixXd::Identity(2 * l + 1, 2 * l + 1))
+            .cwiseAbs()
+            .maxCoeff());
+  }
   Eigen::VectorXd c(r.rows());
   for (auto& x : c) x = normal(rng);
   c.normalize();

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# prt bench: a 2 x 3 sweep on a generated scene writes CSV, JSON, plots and the
+# report; rerunning with one more value resumes (only the new configurations
+# run); a bad sweep key is refused before any work.
+# prt stability: reaches l = 100 with finite values, names the highest orders
+# within 1e-10, and windowing shrinks the sun's negative area.
+set -euo pipefail
+prt="$1"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+cat >box.toml <<'EOT'
+[mesh]
+generate = "open-box"
+detail = 1
+[transport]
+rays = 256
+[basis]
+plugin = "sh"
+order = 4
+[compressor]
+plugin = "cpca"
+clusters = 4
+components = 2
+[lighting]
+constant = [1, 0.9, 0.8]
+[camera]
+width = 96
+height = 72
+position = [0.5, 2.5, 2.0]
+target = [0, -0.5, 0]
+[ground_truth]
+samples = 64
+EOT
+"$prt" -q bench box.toml --out sweep --sweep 'basis=sh order=3|sh order=5' \
+  --sweep 'compressor=none|vq clusters=8|cpca clusters=4 components=2' >/dev/null
+for f in results.csv results.json report.md error_vs_bytes.png error_vs_relight.png \
+  error_vs_bake.png strip.png; do
+  [ -s "sweep/$f" ] || { echo "FAIL: sweep/$f missing"; exit 1; }
+done
+rows=$(($(wc -l <sweep/results.csv) - 1))
+[ "$rows" = 6 ] || { echo "FAIL: $rows rows, expected 6"; exit 1; }
+# Transfer SE and RMS error are numbers (no NaN, no empty fields).
+awk -F, 'NR > 1 && ($12 != $12 + 0 || $13 != $13 + 0) { print "FAIL: non-numeric error"; exit 1 }' sweep/results.csv
+stamp=$(stat -c %Y sweep/images/config0.png)
+sleep 1
+"$prt" -q bench box.toml --out sweep --sweep 'basis=sh order=3|sh order=5|sh order=6' \
+  --sweep 'compressor=none|vq clusters=8|cpca clusters=4 components=2' >/dev/null
+rows=$(($(wc -l <sweep/results.csv) - 1))
+[ "$rows" = 9 ] || { echo "FAIL: resumed sweep has $rows rows, expected 9"; exit 1; }
+[ "$(stat -c %Y sweep/images/config0.png)" = "$stamp" ] || { echo "FAIL: done work redone"; exit 1; }
+echo "bench: 6 configurations, resumed to 9 without redoing the first 6"
+if "$prt" -q bench box.toml --sweep basis.ordr=3,5 2>err.txt; then echo "FAIL: bad key"; exit 1; fi
+grep -q 'ordr' err.txt || { echo "FAIL: unclear message: $(cat err.txt)"; exit 1; }
+echo "bad sweep: $(cat err.txt)"
+
+out=$("$prt" stability --orders 5,20,101 --hemisphere-order 6)
+grep -q '^| 101 | 100 | .* | yes |' <<<"$out" || { echo "FAIL: no finite l = 100 row"; exit 1; }
+grep -q 'Highest l within 1e-10 (of those measured): \*\*100\*\*' <<<"$out" ||
+  { echo "FAIL: evaluation not within 1e-10 at l = 100"; exit 1; }
+grep -q 'Highest l within 1e-10 for rotation' <<<"$out" || { echo "FAIL: no rotation order"; exit 1; }
+grep -E '^\| 20 \| (none|hanning) \|' <<<"$out" | awk -F'|' '
+  { area[$3] = $4 }
+  END { if (!(area[" hanning "] < area[" none "])) { print "FAIL: window did not help"; exit 1 }
+        print "stability: negative area at order 20, none" area[" none "] ", hanning" area[" hanning "] }'
+echo PASS
