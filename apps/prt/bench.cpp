@@ -16,13 +16,13 @@
 #include <sstream>
 
 #include "commands.hpp"
-#include "prt/basis.hpp"
 #include "prt/bake_file.hpp"
+#include "prt/basis.hpp"
 #include "prt/compressor.hpp"
-#include "prt/pipeline.hpp"
-#include "prt/scene.hpp"
 #include "prt/environment.hpp"
+#include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
+#include "prt/scene.hpp"
 #include "prt/transport.hpp"
 
 namespace prt::cli {
@@ -89,7 +89,8 @@ std::string scene_with(const std::string& text, const std::string& file,
       table.insert("plugin", word);
       while (words >> word) {
         const auto eq = word.find('=');
-        if (eq == std::string::npos) throw Error("--sweep " + o.section + ": expected k=v, got " + word);
+        if (eq == std::string::npos)
+          throw Error("--sweep " + o.section + ": expected k=v, got " + word);
         assign(table, word.substr(0, eq), word.substr(eq + 1));
       }
       root.insert_or_assign(o.section, std::move(table));
@@ -108,8 +109,7 @@ std::string key_of(const std::vector<Override>& overrides, const std::set<std::s
                    bool exclude = false) {
   std::string key;
   for (const Override& o : overrides)
-    if (sections.count(o.section) != exclude)
-      key += o.section + "." + o.key + "=" + o.value + ";";
+    if (sections.count(o.section) != exclude) key += o.section + "." + o.key + "=" + o.value + ";";
   return key;
 }
 
@@ -171,7 +171,8 @@ void write_csv(const std::vector<std::string>& lines, const fs::path& file) {
 int bench(Context& context, const BenchArgs& args) {
   Progress::set_enabled(!context.quiet);
   const SceneSpec base = SceneSpec::load(args.scene, context.registry);
-  const fs::path out = args.out.empty() ? fs::path("bench_" + base.file.stem().string()) : fs::path(args.out);
+  const fs::path out =
+      args.out.empty() ? fs::path("bench_" + base.file.stem().string()) : fs::path(args.out);
   fs::create_directories(out / "images");
 
   // The cartesian product of the swept values.
@@ -188,8 +189,8 @@ int bench(Context& context, const BenchArgs& args) {
   // Validate every configuration before any work.
   std::vector<SceneSpec> scenes;
   for (const auto& config : configs) {
-    scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config),
-                                      base.file, context.registry));
+    scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config), base.file,
+                                      context.registry));
     SceneSpec& s = scenes.back();
     const auto basis = context.registry.create<Basis>(s.basis.name, s.basis.params, s.basis.where);
     if (basis->approximation_terms() > 0 && s.compressor.name != "none")
@@ -268,27 +269,30 @@ int bench(Context& context, const BenchArgs& args) {
     fs::remove(bake_file);
 
     // 4. Lights: the scene's and rotated copies; relight time, errors, images.
-    auto basis = context.registry.create<Basis>(scene.basis.name, scene.basis.params,
-                                                scene.basis.where);
+    auto basis =
+        context.registry.create<Basis>(scene.basis.name, scene.basis.params, scene.basis.where);
     basis->load(data.basis_state);
     Environment environment = scene.load_environment();
     const Eigen::Matrix3d scene_rotation = environment.rotation();
     const Camera camera = scene.make_camera(data.mesh);
-    const std::string truth_key = key_of(configs[i], {"mesh", "material", "lighting", "camera",
-                                                      "ground_truth", "transport"});
+    const std::string truth_key =
+        key_of(configs[i], {"mesh", "material", "lighting", "camera", "ground_truth", "transport"});
     double relight_seconds = 0, gpu_seconds = 0;
     double rms = 0, p99 = 0, max_error = 0, image_error = 0;
     for (int light = 0; light < args.lights; ++light) {
       environment.set_rotation(rotation_about_up(360.0 * light / args.lights) * scene_rotation);
       const Eigen::MatrixX3d l = scene.project_light(environment, *basis);
       Relit relit;
-      relight_seconds += median_seconds(3, [&] { relit = relight_view(data, data.compressed, l, camera); });
+      relight_seconds +=
+          median_seconds(3, [&] { relit = relight_view(data, data.compressed, l, camera); });
       auto& truth_list = truths[truth_key];
       if (static_cast<int>(truth_list.size()) <= light) {
         SceneSpec rotated = scene;
-        rotated.lighting.set("rotation", scene.lighting.get_real("rotation") + 360.0 * light / args.lights);
+        rotated.lighting.set("rotation",
+                             scene.lighting.get_real("rotation") + 360.0 * light / args.lights);
         StageTimes times;
-        truth_list.push_back(render_ground_truth(rotated, data.mesh, context.registry, quiet, times));
+        truth_list.push_back(
+            render_ground_truth(rotated, data.mesh, context.registry, quiet, times));
       }
       const Rendered& truth = truth_list[light];
       const ErrorStats e = vertex_error(relit.vertex_radiance, truth.vertex_radiance);
@@ -353,11 +357,10 @@ int bench(Context& context, const BenchArgs& args) {
   std::cout << "results: " << (out / "results.json").string() << " (" << lines.size()
             << " configurations)\n";
   if (!args.no_report) {
-    const std::string command = "/usr/bin/python3 " +
-                                (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
-                                " " + out.string() + " \"" + base.file.filename().string() + "\"";
-    if (std::system(command.c_str()) != 0)
-      throw Error("the report script failed: " + command);
+    const std::string command =
+        "/usr/bin/python3 " + (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
+        " " + out.string() + " \"" + base.file.filename().string() + "\"";
+    if (std::system(command.c_str()) != 0) throw Error("the report script failed: " + command);
     std::cout << "report: " << (out / "report.md").string() << "\n";
   }
   return 0;

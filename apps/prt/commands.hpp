@@ -22,8 +22,8 @@ int bake(Context& context, const BakeArgs& args);
 struct RenderArgs {
   std::string scene, bake, output;
   bool ground_truth = false, compare = false;
-  float exposure = 0.0f;  // 0: the scene's [camera] exposure
-  std::string renderer;   // overrides the scene's [renderer] plugin
+  float exposure = 0.0f;                         // 0: the scene's [camera] exposure
+  std::string renderer;                          // overrides the scene's [renderer] plugin
   std::vector<std::string> renderer_parameters;  // key=value for it
 };
 int render(Context& context, const RenderArgs& args);

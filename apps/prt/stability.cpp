@@ -71,10 +71,9 @@ void rotation_errors(int order, double& orthogonality, double& reprojection) {
   for (int l = 0; l < order; ++l) {
     const auto block = r.block(l * l, l * l, 2 * l + 1, 2 * l + 1);
     orthogonality = std::max(
-        orthogonality,
-        (block * block.transpose() - Eigen::MatrixXd::Identity(2 * l + 1, 2 * l + 1))
-            .cwiseAbs()
-            .maxCoeff());
+        orthogonality, (block * block.transpose() - Eigen::MatrixXd::Identity(2 * l + 1, 2 * l + 1))
+                           .cwiseAbs()
+                           .maxCoeff());
   }
   Eigen::VectorXd c(r.rows());
   for (auto& x : c) x = normal(rng);
@@ -113,8 +112,9 @@ int stability(Context& context, const StabilityArgs& args) {
   report.markdown = "# Numerical stability report (`prt stability`)\n";
 
   // 1. SH evaluation.
-  report.section("SH evaluation: orthonormality of the highest band",
-                 "| order (bands) | highest l | max abs(Y^T W Y - I) | finite |\n|---|---|---|---|");
+  report.section(
+      "SH evaluation: orthonormality of the highest band",
+      "| order (bands) | highest l | max abs(Y^T W Y - I) | finite |\n|---|---|---|---|");
   int highest_evaluation = 0;
   for (int order : args.orders) {
     bool finite = true;
@@ -127,8 +127,9 @@ int stability(Context& context, const StabilityArgs& args) {
   report.value("evaluation_highest_l_1e-10", highest_evaluation);
 
   // 2. SH rotation.
-  report.section("SH rotation (Ivanic-Ruedenberg)",
-                 "| order | max abs(R R^T - I) | abs(R c - reprojected) for abs(c) = 1 |\n|---|---|---|");
+  report.section(
+      "SH rotation (Ivanic-Ruedenberg)",
+      "| order | max abs(R R^T - I) | abs(R c - reprojected) for abs(c) = 1 |\n|---|---|---|");
   int highest_rotation = 0;
   for (int order : args.orders) {
     if (order > args.max_rotation_order) continue;
@@ -145,9 +146,10 @@ int stability(Context& context, const StabilityArgs& args) {
   report.value("rotation_highest_l_1e-10", highest_rotation);
 
   // 3. The hemispherical Gram matrix.
-  report.section("Hemispherical SH: Gram matrix A and least squares (cut-off 1e-10)",
-                 "| order | condition number of A | discarded | LS worst | LS average | "
-                 "zero-hemisphere worst | zero-hemisphere average |\n|---|---|---|---|---|---|---|");
+  report.section(
+      "Hemispherical SH: Gram matrix A and least squares (cut-off 1e-10)",
+      "| order | condition number of A | discarded | LS worst | LS average | "
+      "zero-hemisphere worst | zero-hemisphere average |\n|---|---|---|---|---|---|---|");
   for (int order = 1; order <= args.hemisphere_order; ++order) {
     const auto ls = hemisphere::least_squares(order, 1e-10);
     const double condition = ls.singular_values[0] / ls.singular_values.tail(1)[0];
@@ -195,9 +197,9 @@ int stability(Context& context, const StabilityArgs& args) {
   }
 
   // 5. Float storage of the compressed form.
-  report.section(
-      "Float storage: radiance error bound from rounding the stored transfer",
-      "| transfer | max over vertices of 2^-24 sum abs(t_j l_j) / abs(t . l) | median |\n|---|---|---|");
+  report.section("Float storage: radiance error bound from rounding the stored transfer",
+                 "| transfer | max over vertices of 2^-24 sum abs(t_j l_j) / abs(t . l) | median "
+                 "|\n|---|---|---|");
   {
     // Diffuse transfer of a clamped cosine (unshadowed, order 10) under a
     // bright directional light, and glossy chains with and without A^-1.
@@ -245,8 +247,8 @@ int stability(Context& context, const StabilityArgs& args) {
       for (const char* kind : {"none", "hanning", "lanczos"}) {
         const Eigen::VectorXd windowed = sh::window(order, kind).cwiseProduct(coefficients);
         const Ringing r = ringing(windowed, order);
-        report.row(format("| %d | %s | %.4f | %.4g |", order, kind, r.negative_fraction,
-                          r.most_negative));
+        report.row(
+            format("| %d | %s | %.4f | %.4g |", order, kind, r.negative_fraction, r.most_negative));
         report.value("negative_fraction_" + std::string(kind) + "_order" + std::to_string(order),
                      r.negative_fraction);
         if (curve.is_open()) {

@@ -23,22 +23,36 @@
 
 namespace {
 
-void apply(prt::view::Viewer& viewer, const prt::view::Input& input, bool& quit,
-           bool& screenshot) {
+void apply(prt::view::Viewer& viewer, const prt::view::Input& input, bool& quit, bool& screenshot) {
   viewer.orbit(-0.3 * input.orbit_x, -0.3 * input.orbit_y);
   if (input.light_drag != 0) viewer.rotate_light(0.5 * input.light_drag);
   if (input.zoom != 0) viewer.zoom(input.zoom);
   for (int key : input.keys) {
     switch (key) {
-      case GLFW_KEY_LEFT: viewer.rotate_light(-15); break;
-      case GLFW_KEY_RIGHT: viewer.rotate_light(15); break;
-      case GLFW_KEY_E: viewer.next_encoding(); break;
-      case GLFW_KEY_H: viewer.toggle_heatmap(); break;
-      case GLFW_KEY_M: viewer.toggle_method(); break;
-      case GLFW_KEY_P: screenshot = true; break;
+      case GLFW_KEY_LEFT:
+        viewer.rotate_light(-15);
+        break;
+      case GLFW_KEY_RIGHT:
+        viewer.rotate_light(15);
+        break;
+      case GLFW_KEY_E:
+        viewer.next_encoding();
+        break;
+      case GLFW_KEY_H:
+        viewer.toggle_heatmap();
+        break;
+      case GLFW_KEY_M:
+        viewer.toggle_method();
+        break;
+      case GLFW_KEY_P:
+        screenshot = true;
+        break;
       case GLFW_KEY_ESCAPE:
-      case GLFW_KEY_Q: quit = true; break;
-      default: break;
+      case GLFW_KEY_Q:
+        quit = true;
+        break;
+      default:
+        break;
     }
   }
 }
@@ -52,8 +66,9 @@ int main(int argc, char** argv) {
   double light_step = -1, orbit_step = 0;
   std::string screenshot_file = "prt-view.png";
   app.add_option("scene", options.scene, "scene description (.toml)")->required();
-  app.add_option("--frames", frames,
-                 "render this many frames with a scripted light rotation, then exit (0: interactive)")
+  app.add_option(
+         "--frames", frames,
+         "render this many frames with a scripted light rotation, then exit (0: interactive)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--light-step", light_step,
                  "scripted light rotation per frame, degrees (default 360 / frames)");

@@ -1,9 +1,9 @@
 #include "viewer.hpp"
 
-#include <glm/glm.hpp>
-#include <glm/gtc/matrix_transform.hpp>
 #include <cmath>
 #include <cstdio>
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <iostream>
 
 #include "prt/bake_file.hpp"
@@ -38,8 +38,10 @@ Eigen::Vector3f heat(float t) {
 }  // namespace
 
 Viewer::Viewer(PluginRegistry& registry, const Options& options)
-    : registry_(registry), scene_(SceneSpec::load(options.scene, registry)),
-      heatmap_(options.heatmap), background_(options.background) {
+    : registry_(registry),
+      scene_(SceneSpec::load(options.scene, registry)),
+      heatmap_(options.heatmap),
+      background_(options.background) {
   const auto bake_file = scene_.bake_path();
   if (std::filesystem::exists(bake_file)) {
     data_ = read_bake(bake_file);

@@ -40,8 +40,7 @@ double Brdf::evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) con
   if (model == "ward") {
     const double e = (h.x() * h.x() / (alpha_x * alpha_x) + h.y() * h.y() / (alpha_y * alpha_y)) /
                      (h.z() * h.z());
-    return value + ks * std::exp(-e) /
-                       (4 * M_PI * alpha_x * alpha_y * std::sqrt(cos_in * cos_out));
+    return value + ks * std::exp(-e) / (4 * M_PI * alpha_x * alpha_y * std::sqrt(cos_in * cos_out));
   }
   // Cook-Torrance: Beckmann D, Schlick F, Torrance-Sparrow G.
   const double nh = h.z(), vh = std::max(1e-12, out.dot(h)), m2 = roughness * roughness;
@@ -59,8 +58,7 @@ std::string Brdf::describe() const {
   else if (model == "ward")
     std::snprintf(text, sizeof text, "ward kd=%g ks=%g alpha=(%g, %g)", kd, ks, alpha_x, alpha_y);
   else if (model == "cook-torrance")
-    std::snprintf(text, sizeof text, "cook-torrance kd=%g ks=%g m=%g f0=%g", kd, ks, roughness,
-                  f0);
+    std::snprintf(text, sizeof text, "cook-torrance kd=%g ks=%g m=%g f0=%g", kd, ks, roughness, f0);
   else
     std::snprintf(text, sizeof text, "lambert kd=%g", kd);
   return text;
@@ -81,7 +79,8 @@ Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int exit_order, const std::vector<
   tbb::parallel_for(Eigen::Index(0), q, [&](Eigen::Index v) {
     const Eigen::Vector3d out = h.directions.row(v).transpose();
     Eigen::RowVectorXd rho(q);
-    for (Eigen::Index s = 0; s < q; ++s) rho[s] = brdf.evaluate(h.directions.row(s).transpose(), out);
+    for (Eigen::Index s = 0; s < q; ++s)
+      rho[s] = brdf.evaluate(h.directions.row(s).transpose(), out);
     f.row(v) = rho * light;
   });
   return exit.transpose() * h.weights.asDiagonal() * f;

@@ -1,8 +1,5 @@
 #include "prt/environment.hpp"
 
-#include "prt/camera.hpp"
-#include "prt/image.hpp"
-
 #include <ImfArray.h>
 #include <ImfRgbaFile.h>
 #include <stb/stb_image.h>
@@ -11,7 +8,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "prt/camera.hpp"
 #include "prt/error.hpp"
+#include "prt/image.hpp"
 #include "prt/quadrature.hpp"
 
 namespace prt {
@@ -169,8 +168,7 @@ Eigen::MatrixX3d Environment::project(const Basis& basis) const {
 void draw_environment(const Environment& environment, const Camera& camera, Image& image) {
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x) {
-      const Eigen::Vector3f l =
-          environment.radiance(camera.ray(x + 0.5f, y + 0.5f).cast<double>());
+      const Eigen::Vector3f l = environment.radiance(camera.ray(x + 0.5f, y + 0.5f).cast<double>());
       float* out = image.at(x, y);
       for (int c = 0; c < 3; ++c) out[c] = l[c];
     }

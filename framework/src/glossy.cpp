@@ -57,7 +57,7 @@ TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
   if (visibility.vertices() != mesh.vertex_count() ||
       visibility.directions() != static_cast<std::size_t>(set.size()))
     throw Error("glossy transfer: visibility does not match the mesh and directions");
-  const Eigen::MatrixXd values = light_basis.evaluate(set.directions);      // s x N_i
+  const Eigen::MatrixXd values = light_basis.evaluate(set.directions);    // s x N_i
   const Eigen::MatrixXd projection = light_basis.projection_matrix(set);  // s x N_i
   const std::vector<Frame> frames = tangent_frames(mesh);
   const std::size_t words = VisibilityBits::words_for(set.size());

@@ -42,8 +42,7 @@ double mean_absolute_difference(const Image& a, const Image& b) {
 Image8 read_png(const std::filesystem::path& file) {
   int width = 0, height = 0, channels = 0;
   unsigned char* pixels = stbi_load(file.string().c_str(), &width, &height, &channels, 3);
-  if (!pixels)
-    throw Error(file.string() + ": cannot read image (" + stbi_failure_reason() + ")");
+  if (!pixels) throw Error(file.string() + ": cannot read image (" + stbi_failure_reason() + ")");
   Image8 image{width, height, std::vector<std::uint8_t>(pixels, pixels + 3 * width * height)};
   stbi_image_free(pixels);
   return image;

@@ -3,10 +3,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
-
-#include <Eigen/Geometry>
 
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
@@ -60,8 +59,8 @@ Interreflection interreflect(const Mesh& mesh, const DirectionSet& set, const Hi
   return out;
 }
 
-Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& direct,
-                                      int bounces, double albedo, int samples, std::uint64_t seed,
+Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& direct, int bounces,
+                                      double albedo, int samples, std::uint64_t seed,
                                       Progress* progress) {
   RayCaster caster(mesh);
   const auto v_count = static_cast<Eigen::Index>(mesh.vertex_count());
@@ -89,7 +88,8 @@ Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& 
           const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
           const Eigen::Vector3d d =
               r * std::cos(phi) * t + r * std::sin(phi) * bt + std::sqrt(1.0 - u1) * nrm;
-          for (int c = 0; c < 3; ++c) origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
+          for (int c = 0; c < 3; ++c)
+            origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
         }
         caster.intersect(mesh, origins.data(), directions.data(), n, triangle.data(), u.data(),
                          v.data());

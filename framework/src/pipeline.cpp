@@ -9,9 +9,9 @@
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
 #include "prt/interreflection.hpp"
-#include "prt/subsurface.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
+#include "prt/subsurface.hpp"
 #include "prt/transport.hpp"
 
 namespace prt {
@@ -128,10 +128,10 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   } else {
     Progress progress("bake transfer", double(data.mesh.vertex_count()),
                       transport.shadowed ? "rays" : "", options.quiet);
-    result = transport.keep_visibility
-                 ? diffuse_transfer(data.mesh, set, Eigen::MatrixXd(set.size(), 0), transport,
-                                    &progress)
-                 : diffuse_transfer(data.mesh, set, *basis, transport, &progress);
+    result =
+        transport.keep_visibility
+            ? diffuse_transfer(data.mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress)
+            : diffuse_transfer(data.mesh, set, *basis, transport, &progress);
   }
   times.add(transport.keep_visibility ? "trace" : "trace + project", result.trace_seconds);
   if (basis->can_fit()) {
@@ -153,18 +153,19 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     // near zero on convex parts, large in concave ones.
     std::vector<double> gain(static_cast<std::size_t>(light.total.rows()));
     for (Eigen::Index p = 0; p < light.total.rows(); ++p)
-      gain[p] = light.total.row(p).norm() /
-                    std::max(1e-30f, result.transfer.coefficients.row(p).norm()) -
-                1.0;
+      gain[p] =
+          light.total.row(p).norm() / std::max(1e-30f, result.transfer.coefficients.row(p).norm()) -
+          1.0;
     std::sort(gain.begin(), gain.end());
     for (const auto& [name, q] : {std::pair{"p50", 0.5}, {"p90", 0.9}, {"p99", 0.99}})
       data.metrics[std::string("bounce_gain_") + name] = gain[std::size_t(q * (gain.size() - 1))];
     data.metrics["bounce_gain_max"] = gain.empty() ? 0.0 : gain.back();
     if (!options.quiet)
-      std::printf("inter-reflection: transfer gain per vertex median %.1f%%, 90th %.1f%%, "
-                  "99th %.1f%%, max %.1f%%\n",
-                  100 * data.metrics["bounce_gain_p50"], 100 * data.metrics["bounce_gain_p90"],
-                  100 * data.metrics["bounce_gain_p99"], 100 * data.metrics["bounce_gain_max"]);
+      std::printf(
+          "inter-reflection: transfer gain per vertex median %.1f%%, 90th %.1f%%, "
+          "99th %.1f%%, max %.1f%%\n",
+          100 * data.metrics["bounce_gain_p50"], 100 * data.metrics["bounce_gain_p90"],
+          100 * data.metrics["bounce_gain_p99"], 100 * data.metrics["bounce_gain_max"]);
     result.transfer.coefficients = std::move(light.total);
     for (std::size_t b = 0; b < light.bounce_norms.size(); ++b)
       data.metrics["bounce_" + std::to_string(b + 1) + "_norm"] = light.bounce_norms[b];
@@ -179,15 +180,14 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   }
   if (glossy) {
     clock = Stopwatch();
-    const GlossyChain chain = GlossyChain::make(
-        scene.brdf(), scene.exit_basis(), sh_order_of(*basis),
-        scene.material.get_string("projection") == "least-squares",
-        scene.material.get_real("cutoff"));
+    const GlossyChain chain =
+        GlossyChain::make(scene.brdf(), scene.exit_basis(), sh_order_of(*basis),
+                          scene.material.get_string("projection") == "least-squares",
+                          scene.material.get_real("cutoff"));
     times.add("BRDF matrix", clock.seconds());
     clock = Stopwatch();
     Progress progress("glossy matrices", double(data.mesh.vertex_count()), "", options.quiet);
-    result.transfer =
-        glossy_transfer(data.mesh, set, result.visibility, *basis, chain, &progress);
+    result.transfer = glossy_transfer(data.mesh, set, result.visibility, *basis, chain, &progress);
     times.add("glossy matrices (" + std::to_string(chain.exit.rows()) + "x" +
                   std::to_string(basis->size()) + ")",
               clock.seconds());
@@ -299,9 +299,8 @@ Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,
   out.exit_coefficients = exit_coefficients(transfer, light, exit.rows());
   if (exit.glossy()) {
     out.frames = tangent_frames(data.mesh);
-    out.vertex_radiance =
-        evaluate_exit(out.exit_coefficients, exit,
-                      local_view_directions(data.mesh, out.frames, camera.position));
+    out.vertex_radiance = evaluate_exit(
+        out.exit_coefficients, exit, local_view_directions(data.mesh, out.frames, camera.position));
   } else {
     out.vertex_radiance = out.exit_coefficients;
   }

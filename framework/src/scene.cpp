@@ -8,10 +8,10 @@
 
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
-#include "prt/sh.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
+#include "prt/sh.hpp"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -256,7 +256,8 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
   if (bounces > 0 && scene.glossy())
     throw Error(scene.transport.location("bounces"),
                 "section [transport]: inter-reflection is implemented for diffuse transfer only; "
-                "use bounces = 0 with brdf = \"" + scene.material.get_string("brdf") + "\"");
+                "use bounces = 0 with brdf = \"" +
+                    scene.material.get_string("brdf") + "\"");
   if (bounces > 0 && !scene.transport.get_bool("shadowed"))
     throw Error(scene.transport.location("bounces"),
                 "section [transport]: bounces gather light from the shadow rays' hits; they need "

@@ -66,8 +66,8 @@ RayCaster::~RayCaster() = default;
 bool front_face(const Mesh& mesh, std::uint32_t t, float u, float v,
                 const Eigen::Vector3f& direction) {
   const auto& tri = mesh.triangles[t];
-  const Eigen::Vector3f n = (1.f - u - v) * mesh.normals[tri[0]] + u * mesh.normals[tri[1]] +
-                            v * mesh.normals[tri[2]];
+  const Eigen::Vector3f n =
+      (1.f - u - v) * mesh.normals[tri[0]] + u * mesh.normals[tri[1]] + v * mesh.normals[tri[2]];
   return n.dot(direction) < 0.f;
 }
 
@@ -264,8 +264,9 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
     std::vector<std::uint64_t> bits(count * words);
     std::vector<std::vector<SurfaceHit>> hits(options.keep_hits ? count : 0);
     if (caster) {
-      const std::uint64_t cast = caster->trace_visibility(
-          mesh, vertices, count, dirs_f.data(), s, bits.data(), hits.empty() ? nullptr : hits.data());
+      const std::uint64_t cast =
+          caster->trace_visibility(mesh, vertices, count, dirs_f.data(), s, bits.data(),
+                                   hits.empty() ? nullptr : hits.data());
       rays += cast;
       if (progress) progress->add(double(count), double(cast));
     } else {

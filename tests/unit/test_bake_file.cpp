@@ -119,7 +119,8 @@ TEST_CASE("damaged and foreign files are refused with a clear message", "[bake]"
     f.openGroup("/").openAttribute("format_version").write(H5::PredType::NATIVE_DOUBLE, &version);
   }
   CHECK_THROWS_WITH(read_bake(dir / "future.h5"),
-                    Catch::Contains("format version 99") && Catch::Contains("reads version " + std::to_string(kBakeFormatVersion)));
+                    Catch::Contains("format version 99") &&
+                        Catch::Contains("reads version " + std::to_string(kBakeFormatVersion)));
 }
 
 TEST_CASE("the same scene and seed bake to bit-identical files", "[bake_file][reproducibility]") {

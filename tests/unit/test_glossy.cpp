@@ -1,18 +1,18 @@
 #include <Eigen/Geometry>
 #include <catch2/catch.hpp>
+#include <cstdio>
 #include <random>
 
+#include "../common/scenes.hpp"
 #include "prt/basis.hpp"
 #include "prt/brdf.hpp"
 #include "prt/glossy.hpp"
 #include "prt/hemisphere.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
-#include <cstdio>
 #include "prt/registry.hpp"
 #include "prt/sh.hpp"
 #include "prt/transport.hpp"
-#include "../common/scenes.hpp"
 
 using namespace prt;
 
@@ -100,7 +100,8 @@ TEST_CASE("BRDFs are reciprocal, zero below the horizon and conserve energy", "[
       const Eigen::Vector3d in(std::sqrt(1 - z * z), 0, z);
       double albedo = 0;
       for (Eigen::Index k = 0; k < h.size(); ++k)
-        albedo += h.weights[k] * b.evaluate(in, h.directions.row(k).transpose()) * h.directions(k, 2);
+        albedo +=
+            h.weights[k] * b.evaluate(in, h.directions.row(k).transpose()) * h.directions(k, 2);
       INFO(name << " at cos " << z);
       CHECK(albedo <= 1.02);
       CHECK(albedo > 0.25);
@@ -159,10 +160,12 @@ TEST_CASE("glossy transfer reproduces the exit radiance of an open vertex", "[gl
     for (const bool least_squares : {true, false}) {
       const GlossyChain chain =
           GlossyChain::make(brdf, ExitBasis::hemisphere(5, false), 5, least_squares, 1e-10);
-      const TransferSignal t = glossy_transfer(open.mesh, set, open.visibility, *basis, chain, nullptr);
+      const TransferSignal t =
+          glossy_transfer(open.mesh, set, open.visibility, *basis, chain, nullptr);
       REQUIRE(t.coefficients.cols() == 25 * 25);
       for (std::size_t p = 0; p < open.mesh.vertex_count(); ++p) {
-        const Eigen::MatrixXd m = Eigen::Map<const MatrixXfRow>(t.coefficients.row(p).data(), 25, 25).cast<double>();
+        const Eigen::MatrixXd m =
+            Eigen::Map<const MatrixXfRow>(t.coefficients.row(p).data(), 25, 25).cast<double>();
         const Eigen::VectorXd e = m * light.col(0);
         for (int i = 0; i < 20; ++i) {
           const Eigen::Vector3d v = uniform_upper(rng);
@@ -195,7 +198,8 @@ TEST_CASE("white furnace: a Lambertian sphere of albedo 1 under light 1 returns 
   const TransportResult traced =
       diffuse_transfer(sphere, set, Eigen::MatrixXd(set.size(), 0), options, nullptr);
   Brdf white;  // lambert, kd = 1
-  const GlossyChain chain = GlossyChain::make(white, ExitBasis::hemisphere(5, true), 5, true, 1e-10);
+  const GlossyChain chain =
+      GlossyChain::make(white, ExitBasis::hemisphere(5, true), 5, true, 1e-10);
   const TransferSignal t = glossy_transfer(sphere, set, traced.visibility, *basis, chain, nullptr);
   Eigen::MatrixX3d light = Eigen::MatrixX3d::Zero(25, 3);
   light.row(0).setConstant(2 * std::sqrt(M_PI));  // L = 1 everywhere
@@ -291,7 +295,8 @@ TEST_CASE("glossy radiance follows the camera; Lambertian radiance does not", "[
   Progress::set_enabled(false);
   for (const char* brdf : {"phong", "lambert"}) {
     StageTimes times;
-    const SceneSpec left = glossy_box(registry, brdf, -1.5), right = glossy_box(registry, brdf, 1.5);
+    const SceneSpec left = glossy_box(registry, brdf, -1.5),
+                    right = glossy_box(registry, brdf, 1.5);
     const BakeData data = bake(left, registry, {true}, times);
     CHECK(data.transfer.kind == (std::string(brdf) == "phong" ? "glossy" : "diffuse"));
     const Rendered a = render(left, data, registry, times);

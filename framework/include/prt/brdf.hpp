@@ -13,10 +13,10 @@ namespace prt {
 class Params;
 
 struct Brdf {
-  std::string model = "lambert";  // lambert | phong | ward | cook-torrance
-  double kd = 1.0;                // diffuse weight
-  double ks = 0.0;                // specular weight
-  double exponent = 32;           // Phong
+  std::string model = "lambert";        // lambert | phong | ward | cook-torrance
+  double kd = 1.0;                      // diffuse weight
+  double ks = 0.0;                      // specular weight
+  double exponent = 32;                 // Phong
   double alpha_x = 0.2, alpha_y = 0.2;  // Ward roughness along tangent / bitangent
   double roughness = 0.3;               // Cook-Torrance Beckmann slope
   double f0 = 0.04;                     // Cook-Torrance Schlick reflectance at normal incidence

@@ -28,15 +28,15 @@ struct Interreflection {
   MatrixXfRow total;                 // direct + every bounce
   std::vector<double> bounce_norms;  // Frobenius norm of each bounce's transfer
 };
-Interreflection interreflect(const Mesh& mesh, const DirectionSet& directions,
-                             const HitLists& hits, const MatrixXfRow& direct, int bounces,
-                             double albedo, Progress* progress);
+Interreflection interreflect(const Mesh& mesh, const DirectionSet& directions, const HitLists& hits,
+                             const MatrixXfRow& direct, int bounces, double albedo,
+                             Progress* progress);
 
 // The ground truth's bounces, independent of any basis and of the bake's
 // directions: per vertex `samples` fresh cosine-distributed rays gather the
 // previous bounce's radiance (v x 3) from their front-face hits.
-Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& direct,
-                                      int bounces, double albedo, int samples, std::uint64_t seed,
+Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& direct, int bounces,
+                                      double albedo, int samples, std::uint64_t seed,
                                       Progress* progress);
 
 }  // namespace prt

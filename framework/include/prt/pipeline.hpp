@@ -55,8 +55,8 @@ struct Rendered {
 // of it) for a light vector and camera: per-vertex exit coefficients, glossy
 // frames and the radiance each vertex sends to the camera (albedo included).
 struct Relit {
-  MatrixXfRow exit_coefficients;   // v x 3 N_r
-  std::vector<Frame> frames;       // glossy only
+  MatrixXfRow exit_coefficients;  // v x 3 N_r
+  std::vector<Frame> frames;      // glossy only
   Eigen::MatrixX3f vertex_radiance;
 };
 Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,

@@ -55,8 +55,8 @@ class CpuRenderer final : public Renderer {
     if (!in.exit_coefficients && !in.transfer) throw Error("cpu renderer: no glossy transfer");
     const MatrixXfRow e = in.exit_coefficients ? *in.exit_coefficients
                                                : exit_coefficients(*in.transfer, in.light, rows);
-    if (e.rows() != Eigen::Index(mesh.vertex_count()) ||
-        e.cols() != 3 * rows || in.frames->size() != mesh.vertex_count())
+    if (e.rows() != Eigen::Index(mesh.vertex_count()) || e.cols() != 3 * rows ||
+        in.frames->size() != mesh.vertex_count())
       throw Error("cpu renderer: glossy input does not match the mesh");
     MatrixXfRow attributes(e.rows(), 3 * rows + 3);
     attributes.leftCols(3 * rows) = e;
@@ -68,8 +68,8 @@ class CpuRenderer final : public Renderer {
     const Eigen::Vector3f albedo = in.albedo;
     rasterize(mesh, attributes, in.camera, image, [&](const float* a, float* rgb) {
       double y[kMaxExitCoefficients];
-      exit.evaluate(upper_hemisphere(Eigen::Vector3d(a[3 * rows], a[3 * rows + 1], a[3 * rows + 2])),
-                    y);
+      exit.evaluate(
+          upper_hemisphere(Eigen::Vector3d(a[3 * rows], a[3 * rows + 1], a[3 * rows + 2])), y);
       for (int c = 0; c < 3; ++c) {
         double sum = 0;
         for (int i = 0; i < rows; ++i) sum += y[i] * a[3 * i + c];

@@ -62,9 +62,9 @@ std::vector<std::uint8_t> rasterize(const Mesh& mesh, const MatrixXfRow& attribu
           // Perspective-correct weights.
           const float p0 = l0 * a.w(), p1 = l1 * b.w(), p2 = l2 * c.w();
           const float sum = p0 + p1 + p2;
-          interpolated = (p0 * attributes.row(t[0]) + p1 * attributes.row(t[1]) +
-                          p2 * attributes.row(t[2])) /
-                         sum;
+          interpolated =
+              (p0 * attributes.row(t[0]) + p1 * attributes.row(t[1]) + p2 * attributes.row(t[2])) /
+              sum;
           shade(interpolated.data(), image.at(x, y));
         }
       }

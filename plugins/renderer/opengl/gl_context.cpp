@@ -1,6 +1,6 @@
-#include <string>
-
 #include "gl_context.hpp"
+
+#include <string>
 // epoxy before GLFW: it provides the GL declarations.
 #include <GLFW/glfw3.h>
 
@@ -21,8 +21,9 @@ OffscreenContext::OffscreenContext() {
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
   window_ = glfwCreateWindow(16, 16, "prt offscreen", nullptr, nullptr);
   if (!window_)
-    throw Error("opengl renderer: cannot create an OpenGL 3.3 core context; run under "
-                "`xvfb-run -a` with Mesa, or use renderer \"cpu\"");
+    throw Error(
+        "opengl renderer: cannot create an OpenGL 3.3 core context; run under "
+        "`xvfb-run -a` with Mesa, or use renderer \"cpu\"");
   make_current();
 }
 

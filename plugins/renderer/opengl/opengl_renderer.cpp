@@ -51,7 +51,8 @@ class OpenGLRenderer final : public Renderer {
  public:
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
-      "OpenGL 3.3: per-cluster constants on the CPU, weighted sums and glossy evaluation on the GPU";
+      "OpenGL 3.3: per-cluster constants on the CPU, weighted sums and glossy evaluation on the "
+      "GPU";
   static constexpr auto parameters() {
     return std::array{
         schema::choice("method", "single-pass", "single-pass|per-cluster",
@@ -159,7 +160,8 @@ class OpenGLRenderer final : public Renderer {
     } else {
       defines += "#define COMPONENTS " + std::to_string(t->components) + "\n#define SPARSE " +
                  (t->sparse() ? "1" : "0") + "\n";
-      if (t->sparse() && glossy) throw Error("opengl renderer: sparse glossy transfer is not supported");
+      if (t->sparse() && glossy)
+        throw Error("opengl renderer: sparse glossy transfer is not supported");
       cluster_of_vertex_.upload(GL_R32I, t->cluster_of_vertex.data(),
                                 t->cluster_of_vertex.size() * sizeof(std::int32_t));
       weights_.upload(GL_R32F, t->weights.data(), t->weights.size() * sizeof(float));
@@ -191,7 +193,8 @@ class OpenGLRenderer final : public Renderer {
         groups = std::max(groups, group_of_vertex(std::uint32_t(p)) + 1);
       std::vector<std::vector<std::uint32_t>> per_group(groups);
       for (const auto& tri : mesh.triangles) {
-        std::array<int, 3> g{group_of_vertex(tri[0]), group_of_vertex(tri[1]), group_of_vertex(tri[2])};
+        std::array<int, 3> g{group_of_vertex(tri[0]), group_of_vertex(tri[1]),
+                             group_of_vertex(tri[2])};
         for (int i = 0; i < 3; ++i)
           if ((i == 0 || g[i] != g[0]) && (i < 2 || g[2] != g[1]))
             per_group[g[i]].insert(per_group[g[i]].end(), tri.begin(), tri.end());
@@ -327,7 +330,8 @@ class OpenGLRenderer final : public Renderer {
     if (background_ && in.background) draw_environment(*in.background, in.camera, image);
     for (int y = 0; y < height_; ++y)
       for (int x = 0; x < width_; ++x) {
-        const float* p = &pixels[4 * (std::size_t(height_ - 1 - y) * width_ + x)];  // GL rows bottom-up
+        const float* p =
+            &pixels[4 * (std::size_t(height_ - 1 - y) * width_ + x)];  // GL rows bottom-up
         if (p[3] <= 0.f) continue;  // no triangle here: keep the background
         float* out = image.at(x, y);
         for (int c = 0; c < 3; ++c) out[c] = p[c];
