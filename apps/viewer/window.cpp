@@ -3,29 +3,11 @@
 #include <GLFW/glfw3.h>
 
 #include "display_shaders.hpp"
+#include "gl_context.hpp"
 #include "prt/error.hpp"
 
 namespace prt::view {
 
-namespace {
-
-GLuint compile(GLenum type, const char* body) {
-  const std::string source = std::string("#version 330 core\n") + body;
-  const char* text = source.c_str();
-  const GLuint shader = glCreateShader(type);
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048];
-    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    throw Error(std::string("prt-view: display shader does not compile: ") + log);
-  }
-  return shader;
-}
-
-}  // namespace
 
 Window::Window(int width, int height, const std::string& title) {
   if (!glfwInit())
@@ -45,14 +27,7 @@ Window::Window(int width, int height, const std::string& title) {
   glfwSetKeyCallback(window_, on_key);
   make_current();
   glfwSwapInterval(0);  // measure frames, not the display's refresh
-  program_ = glCreateProgram();
-  const GLuint vs = compile(GL_VERTEX_SHADER, kDisplayVert);
-  const GLuint fs = compile(GL_FRAGMENT_SHADER, kDisplayFrag);
-  glAttachShader(program_, vs);
-  glAttachShader(program_, fs);
-  glLinkProgram(program_);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
+  program_ = build_program("display", "", kDisplayVert, kDisplayFrag);
   glGenVertexArrays(1, &vao_);
   glGenTextures(1, &texture_);
   glBindTexture(GL_TEXTURE_2D, texture_);

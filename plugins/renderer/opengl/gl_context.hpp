@@ -3,6 +3,8 @@
 #pragma once
 #include <epoxy/gl.h>
 
+#include <string>
+
 struct GLFWwindow;
 
 namespace prt {
