@@ -26,7 +26,7 @@ TEST_CASE("the build's plug-ins are discovered from their info records", "[regis
   PluginRegistry r({PRT_BUILD_PLUGIN_DIR});
   CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sh"});
   CHECK(r.names(PluginKind::compressor) == std::vector<std::string>{"cpca", "none", "pca", "vq"});
-  CHECK(r.names(PluginKind::renderer) == std::vector<std::string>{"cpu"});
+  CHECK(r.names(PluginKind::renderer) == std::vector<std::string>{"cpu", "opengl"});
   const auto& sh = r.find(PluginKind::basis, "sh");
   CHECK(r.find(PluginKind::basis, "hsh").schema().find("cutoff") != nullptr);
   CHECK(std::string(sh.info.build_key) == host_build_key());
