@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the sweeps of docs/benchmarks.md: two CGAL meshes under two
-# Blender HDRIs, 3 bases x 3 compressors x 3 budgets each (27 configurations),
+# Blender HDRIs, 3 bases x 3 compressors x 3 budgets each (27 configurations)
+# plus Haar at 3 budgets,
 # errors over the scene's light and a copy rotated by 180 degrees. Cube-map
 # directions (6 x 16 x 16), which eigentransport needs and SH takes as well.
 #   scripts/bench_docs.sh            (needs a built tree and scripts/setup.sh's data)
@@ -32,5 +33,10 @@ exposure = 0.7
 samples = 512
 EOT
   "$prt" -q bench "$scene" --out "$root/docs/bench/$1_$2" --lights 2 \
-    --sweep "$bases" --sweep "$compressors"
+    --sweep "$bases" --sweep "$compressors" --no-report
+  # Haar keeps its k largest coefficients and takes no compressor: its three
+  # budgets join the same results (and plots) as a fourth basis.
+  "$prt" -q bench "$scene" --out "$root/docs/bench/$1_$2" --lights 2 \
+    --sweep 'basis=haar resolution=16 k=32|haar resolution=16 k=64|haar resolution=16 k=128' \
+    --sweep 'compressor=none' 
 done

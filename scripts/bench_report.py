@@ -70,15 +70,25 @@ def plot(results, cost_key, cost_label, path, scale=1.0):
     return [results[i]["label"] for i in front]
 
 
+def heat(grey):
+    """A grey error image as a heat map (black/blue small, red/yellow large)."""
+    colour = matplotlib.colormaps["inferno"]
+    lut = [tuple(int(255 * c) for c in colour(v / 255.0)[:3]) for v in range(256)]
+    out = Image.new("RGB", grey.size)
+    out.putdata([lut[v] for v in grey.getdata()])
+    return out
+
+
 def strip(folder, results, path, width=160):
     images = os.path.join(folder, "images")
     truth = Image.open(os.path.join(images, "ground_truth.png")).convert("RGB")
     height = int(truth.height * width / truth.width)
     rows = []
     for r in results:
+        error = Image.open(os.path.join(images, f"{r['image']}.error.png")).convert("L")
         cells = [truth,
-                 Image.open(os.path.join(images, f"config{r['index']}.png")).convert("RGB"),
-                 Image.open(os.path.join(images, f"error{r['index']}.png")).convert("RGB")]
+                 Image.open(os.path.join(images, f"{r['image']}.png")).convert("RGB"),
+                 heat(error)]
         row = Image.new("RGB", (3 * width, height + 14), "white")
         for k, cell in enumerate(cells):
             row.paste(cell.resize((width, height)), (k * width, 14))
@@ -125,7 +135,8 @@ def main(folder, title):
             f"{1000 * r['gpu_frame_seconds']:.1f} | {r['transfer_se']:.4g} | {r['rms']:.4g} | "
             f"{r['p99']:.4g} | {r['max']:.4g} | {r['image_error']:.4g} |")
     lines += ["", "## Images", "",
-              "Ground truth | configuration | 4 x absolute error, one row per configuration:", "",
+              "Ground truth | configuration | error heat-map (4 x absolute difference, inferno), "
+              "one row per configuration:", "",
               "![image strip](strip.png)", ""]
     with open(os.path.join(folder, "report.md"), "w") as f:
         f.write("\n".join(lines))

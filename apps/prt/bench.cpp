@@ -8,6 +8,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -118,6 +119,13 @@ std::string label_of(const std::vector<Override>& overrides) {
   for (const Override& o : overrides)
     label += (label.empty() ? "" : " ") + (o.key.empty() ? o.value : o.key + "=" + o.value);
   return label.empty() ? "scene" : label;
+}
+
+// A file-name stem for a configuration's images.
+std::string stem_of(const std::string& label) {
+  std::string stem;
+  for (char c : label) stem += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return stem;
 }
 
 std::string json_escape(const std::string& s) {
@@ -311,12 +319,12 @@ int bench(Context& context, const BenchArgs& args) {
       image_error += mean_absolute_difference(image, truth_image) / args.lights;
       if (light == 0) {
         const float exposure = static_cast<float>(scene.camera.get_real("exposure"));
-        write_png(image, out / "images" / ("config" + std::to_string(i) + ".png"), exposure);
+        write_png(image, out / "images" / (stem_of(label) + ".png"), exposure);
         write_png(truth_image, out / "images" / "ground_truth.png", exposure);
         Image difference = image;
         for (std::size_t k = 0; k < difference.rgb.size(); ++k)
           difference.rgb[k] = 4.f * std::abs(image.rgb[k] - truth_image.rgb[k]);
-        write_png(difference, out / "images" / ("error" + std::to_string(i) + ".png"), exposure);
+        write_png(difference, out / "images" / (stem_of(label) + ".error.png"), exposure);
         if (gpu) {
           gpu->render(input);
           gpu_seconds = gpu->statistics().at("draw_seconds");
@@ -327,12 +335,12 @@ int bench(Context& context, const BenchArgs& args) {
     char line[2048];
     std::snprintf(
         line, sizeof line,
-        "{\"label\": \"%s\", \"index\": %zu, \"trace_seconds\": %.6g, \"project_seconds\": %.6g, "
+        "{\"label\": \"%s\", \"image\": \"%s\", \"index\": %zu, \"trace_seconds\": %.6g, \"project_seconds\": %.6g, "
         "\"encode_seconds\": %.6g, \"bake_seconds\": %.6g, \"bytes\": %.0f, \"file_bytes\": %.0f, "
         "\"bytes_per_vertex\": %.4g, \"relight_seconds\": %.6g, \"gpu_frame_seconds\": %.6g, "
         "\"transfer_se\": %.6g, \"rms\": %.6g, \"p99\": %.6g, \"max\": %.6g, "
         "\"image_error\": %.6g, \"lights\": %d}",
-        json_escape(label).c_str(), i, trace_seconds, project_seconds, encode_seconds,
+        json_escape(label).c_str(), stem_of(label).c_str(), i, trace_seconds, project_seconds, encode_seconds,
         trace_seconds + project_seconds + encode_seconds, bytes, file_bytes,
         bytes / double(data.mesh.vertex_count()), relight_seconds, gpu_seconds, se, rms, p99,
         max_error, image_error, args.lights);

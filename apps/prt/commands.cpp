@@ -196,7 +196,9 @@ int demo(Context& context, const DemoArgs& args) {
   const std::string scene =
       args.scene.empty() ? std::string(PRT_SOURCE_DIR) + "/scenes/bunny.toml" : args.scene;
   if (int code = bake(context, {scene, ""})) return code;
-  return render(context, {scene, "", "", false, false, 0.0f});
+  RenderArgs render_args;
+  render_args.scene = scene;
+  return render(context, render_args);
 }
 
 int image_diff(const std::string& a_file, const std::string& b_file) {

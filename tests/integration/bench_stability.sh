@@ -42,13 +42,13 @@ rows=$(($(wc -l <sweep/results.csv) - 1))
 [ "$rows" = 6 ] || { echo "FAIL: $rows rows, expected 6"; exit 1; }
 # Transfer SE and RMS error are numbers (no NaN, no empty fields).
 awk -F, 'NR > 1 && ($12 != $12 + 0 || $13 != $13 + 0) { print "FAIL: non-numeric error"; exit 1 }' sweep/results.csv
-stamp=$(stat -c %Y sweep/images/config0.png)
+stamp=$(stat -c %Y sweep/images/sh_order_3_none.png)
 sleep 1
 "$prt" -q bench box.toml --out sweep --sweep 'basis=sh order=3|sh order=5|sh order=6' \
   --sweep 'compressor=none|vq clusters=8|cpca clusters=4 components=2' >/dev/null
 rows=$(($(wc -l <sweep/results.csv) - 1))
 [ "$rows" = 9 ] || { echo "FAIL: resumed sweep has $rows rows, expected 9"; exit 1; }
-[ "$(stat -c %Y sweep/images/config0.png)" = "$stamp" ] || { echo "FAIL: done work redone"; exit 1; }
+[ "$(stat -c %Y sweep/images/sh_order_3_none.png)" = "$stamp" ] || { echo "FAIL: done work redone"; exit 1; }
 echo "bench: 6 configurations, resumed to 9 without redoing the first 6"
 if "$prt" -q bench box.toml --sweep basis.ordr=3,5 2>err.txt; then echo "FAIL: bad key"; exit 1; fi
 grep -q 'ordr' err.txt || { echo "FAIL: unclear message: $(cat err.txt)"; exit 1; }
