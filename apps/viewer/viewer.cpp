@@ -129,10 +129,13 @@ void Viewer::update_light() {
 }
 
 Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camera& cam) const {
-  const Eigen::MatrixX3f shown =
-      relight_view(data_, encodings_[current_].transfer, light, cam).vertex_radiance;
+  const auto* frames = frames_.empty() ? nullptr : &frames_;
   const Eigen::MatrixX3f exact =
-      relight_view(data_, encodings_[1].transfer, light, cam).vertex_radiance;
+      relight_view(data_, encodings_[1].transfer, light, cam, frames).vertex_radiance;
+  const Eigen::MatrixX3f shown =
+      current_ == 1
+          ? exact
+          : relight_view(data_, encodings_[current_].transfer, light, cam, frames).vertex_radiance;
   const float scale = std::max(1e-12f, exact.rowwise().norm().maxCoeff());
   Eigen::MatrixX3f colours(shown.rows(), 3);
   for (Eigen::Index p = 0; p < shown.rows(); ++p)

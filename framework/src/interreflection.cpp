@@ -34,9 +34,12 @@ MatrixXfRow gather_bounce(const Mesh& mesh, const DirectionSet& set, const HitLi
     Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(previous.cols());
     const Eigen::Vector3d n = mesh.normals[p].cast<double>();
     for (const SurfaceHit& h : hits[p]) {
-      const double cosine = std::max(0.0, n.dot(set.directions.row(h.direction)));
-      sum += (set.weights[h.direction] * cosine / M_PI) *
-             at_hit(mesh, previous, h.triangle, h.u, h.v).cast<double>();
+      const double weight =
+          set.weights[h.direction] * std::max(0.0, n.dot(set.directions.row(h.direction))) / M_PI;
+      // The hit point's transfer, interpolated over its triangle (no temporaries).
+      const auto& t = mesh.triangles[h.triangle];
+      const double b[3] = {1.0 - h.u - h.v, h.u, h.v};
+      for (int c = 0; c < 3; ++c) sum += (weight * b[c]) * previous.row(t[c]).cast<double>();
     }
     next.row(p) = (albedo * sum).cast<float>();
   });

@@ -216,7 +216,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   data.compressor = {compressor_choice.name, compressor_info.info.version,
                      compressor_choice.params.describe()};
   data.albedo = scene.albedo();
-  data.material = scene.brdf().describe();
+  data.material = scene.material_description();
   data.bounces = bounces;
   data.subsurface = subsurface;
   data.basis_state = basis->save();
@@ -240,7 +240,7 @@ TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options) {
 }
 
 void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
-  const std::string material = scene.brdf().describe();
+  const std::string material = scene.material_description();
   const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
   if (data.material != material || data.bounces != bounces ||
       data.subsurface != scene.material.get_bool("subsurface") ||
@@ -293,12 +293,13 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
 }
 
 Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,
-                   const Eigen::MatrixX3d& light, const Camera& camera) {
+                   const Eigen::MatrixX3d& light, const Camera& camera,
+                   const std::vector<Frame>* frames) {
   Relit out;
   const ExitBasis& exit = data.transfer.exit;
   out.exit_coefficients = exit_coefficients(transfer, light, exit.rows());
   if (exit.glossy()) {
-    out.frames = tangent_frames(data.mesh);
+    out.frames = frames ? *frames : tangent_frames(data.mesh);
     out.vertex_radiance = evaluate_exit(
         out.exit_coefficients, exit, local_view_directions(data.mesh, out.frames, camera.position));
   } else {

@@ -3,6 +3,7 @@
 #include <toml++/toml.h>
 
 #include <array>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -37,10 +38,12 @@ const ParamSchema& material_schema() {
               "reflectance model: lambert bakes vectors, the others glossy matrices"),
        real("diffuse", "1", 0, 1, "kd: weight of the Lambertian part"),
        real("specular", "0.5", 0, 1, "ks: weight of the glossy lobe"),
-       real("exponent", "32", 0, 10000, "phong: lobe exponent"),
-       reals("anisotropic_roughness", "0.1,0.3", 2, 1e-3, 10,
+       // Lobe limits: the BRDF matrix's 48 x 98 quadrature resolves them (and
+       // order-5..12 SH cannot hold sharper lobes anyway).
+       real("exponent", "32", 0, 1000, "phong: lobe exponent"),
+       reals("anisotropic_roughness", "0.1,0.3", 2, 0.03, 10,
              "ward: roughness along the tangent and the bitangent"),
-       real("roughness", "0.3", 1e-3, 10, "cook-torrance: Beckmann slope m"),
+       real("roughness", "0.3", 0.03, 10, "cook-torrance: Beckmann slope m"),
        real("fresnel", "0.04", 0, 1, "cook-torrance: Schlick reflectance at normal incidence"),
        integer("exit_order", "5", 1, kMaxExitOrder,
                "glossy: SH order of exit radiance over the local hemisphere (N_r = order^2)"),
@@ -353,6 +356,22 @@ ExitBasis SceneSpec::exit_basis() const {
 
 double SceneSpec::bounce_albedo() const {
   return albedo().cast<double>().mean();  // lambert: albedo() includes kd
+}
+
+std::string SceneSpec::material_description() const {
+  std::string text = brdf().describe();
+  if (glossy())
+    text += " projection=" + material.get_string("projection") +
+            " cutoff=" + std::to_string(material.get_real("cutoff"));
+  if (material.get_bool("subsurface")) {
+    const SubsurfaceMaterial m = subsurface();
+    char more[200];
+    std::snprintf(more, sizeof more,
+                  " subsurface sigma_a=%g sigma_s=%g eta=%g mm_per_unit=%g error=%g", m.sigma_a,
+                  m.sigma_s, m.eta, m.mm_per_unit, m.error);
+    text += more;
+  }
+  return text;
 }
 
 SubsurfaceMaterial SceneSpec::subsurface() const {

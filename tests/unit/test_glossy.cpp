@@ -317,3 +317,22 @@ TEST_CASE("glossy radiance follows the camera; Lambertian radiance does not", "[
   }
   Progress::set_enabled(true);
 }
+
+TEST_CASE("a bake made with another projection or material is refused", "[glossy]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  StageTimes times;
+  const SceneSpec scene = glossy_box(registry, "phong", 1.0);
+  const BakeData data = bake(scene, registry, {true}, times);
+  char text[1024];
+  std::snprintf(text, sizeof text, kGlossyBox, "phong", 1.0);
+  std::string changed = text;
+  changed.replace(changed.find("exit_reduced = true"), 19,
+                  "exit_reduced = true\nprojection = \"zero\"");
+  CHECK_THROWS_WITH(render(SceneSpec::parse(changed, "zero.toml", registry), data, registry, times),
+                    Catch::Contains("bake again"));
+  CHECK_THROWS_WITH(render(glossy_box(registry, "cook-torrance", 1.0), data, registry, times),
+                    Catch::Contains("bake again"));
+  CHECK_NOTHROW(render(glossy_box(registry, "phong", -1.0), data, registry, times));
+  Progress::set_enabled(true);
+}

@@ -59,8 +59,10 @@ struct Relit {
   std::vector<Frame> frames;      // glossy only
   Eigen::MatrixX3f vertex_radiance;
 };
+// `frames` (glossy): the mesh's tangent frames when the caller keeps them.
 Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,
-                   const Eigen::MatrixX3d& light, const Camera& camera);
+                   const Eigen::MatrixX3d& light, const Camera& camera,
+                   const std::vector<Frame>* frames = nullptr);
 // The renderer's input for it; points into `data`, `transfer` and `relit`.
 RenderInput render_input(const BakeData& data, const CompressedTransfer& transfer,
                          const Relit& relit, const Eigen::MatrixX3d& light, const Camera& camera);

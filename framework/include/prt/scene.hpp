@@ -58,6 +58,8 @@ struct SceneSpec {
   // (transfer is monochrome; the RGB albedo tints the final radiance).
   double bounce_albedo() const;
   SubsurfaceMaterial subsurface() const;
+  // Everything about the material a bake depends on (recorded in bake files).
+  std::string material_description() const;
 };
 
 }  // namespace prt

@@ -59,7 +59,13 @@ GLuint build_program(const char* name, const std::string& defines, const char* v
                      const char* fragment) {
   const std::string header = "#version 330 core\n" + defines + "#line 1\n";
   const GLuint vs = compile(GL_VERTEX_SHADER, header + vertex, name);
-  const GLuint fs = compile(GL_FRAGMENT_SHADER, header + fragment, name);
+  GLuint fs = 0;
+  try {
+    fs = compile(GL_FRAGMENT_SHADER, header + fragment, name);
+  } catch (...) {
+    glDeleteShader(vs);
+    throw;
+  }
   const GLuint program = glCreateProgram();
   glAttachShader(program, vs);
   glAttachShader(program, fs);

@@ -125,7 +125,18 @@ class OpenGLRenderer final : public Renderer {
       throw Error("opengl renderer: neither transfer nor vertex radiance given");
     const CompressedTransfer* t = in.vertex_radiance ? nullptr : in.transfer;
     const int rows = glossy ? in.exit_basis->rows() : 1;
-    const Key key{&mesh, mesh.vertex_count(), t, t ? t->dimension : 0, rows, per_cluster_};
+    // Identity and shape of the data: a caller may reuse an address for new data.
+    const Key key{&mesh,
+                  mesh.vertex_count(),
+                  t,
+                  t ? t->dimension : 0,
+                  t ? t->components : 0,
+                  t ? t->clusters() : 0,
+                  t ? t->weights.data() : nullptr,
+                  t ? t->supercluster_of_cluster.size() : 0,
+                  t && t->sparse(),
+                  rows,
+                  per_cluster_};
     if (program_ && key == key_) return;
     release();
     key_ = key;
@@ -167,6 +178,15 @@ class OpenGLRenderer final : public Renderer {
       weights_.upload(GL_R32F, t->weights.data(), t->weights.size() * sizeof(float));
       weight_index_.upload(GL_R32I, t->weight_index.data(),
                            t->weight_index.size() * sizeof(std::int32_t));
+    }
+    if (glossy) {
+      GLint limit = 0;
+      glGetIntegerv(GL_MAX_VERTEX_OUTPUT_COMPONENTS, &limit);
+      if (rows + 3 + 4 > limit)  // e_p, the view vector and gl_Position
+        throw Error("opengl renderer: " + std::to_string(rows) +
+                    " exit coefficients per vertex exceed this driver's " + std::to_string(limit) +
+                    " vertex output components; lower [material] exit_order or use renderer "
+                    "\"cpu\"");
     }
     program_ = build_program("transfer", defines, kTransferVert, kTransferFrag);
     if (glossy) {
@@ -334,7 +354,8 @@ class OpenGLRenderer final : public Renderer {
             &pixels[4 * (std::size_t(height_ - 1 - y) * width_ + x)];  // GL rows bottom-up
         if (p[3] <= 0.f) continue;  // no triangle here: keep the background
         float* out = image.at(x, y);
-        for (int c = 0; c < 3; ++c) out[c] = p[c];
+        // Per-cluster glossy passes blend unclamped partial sums: clamp the total.
+        for (int c = 0; c < 3; ++c) out[c] = std::max(0.f, p[c]);
       }
     return image;
   }
@@ -356,6 +377,11 @@ class OpenGLRenderer final : public Renderer {
     std::size_t vertices = 0;
     const CompressedTransfer* transfer = nullptr;
     Eigen::Index dimension = 0;
+    int components = 0;
+    Eigen::Index clusters = 0;
+    const float* weights = nullptr;
+    std::size_t superclusters = 0;
+    bool sparse = false;
     int rows = 0;
     bool per_cluster = false;
     bool operator==(const Key&) const = default;
