@@ -36,9 +36,16 @@ GlossyChain GlossyChain::make(const Brdf& brdf, const ExitBasis& exit, int light
   GlossyChain chain{exit, light_order, least_squares,
                     brdf_matrix(brdf, exit.order, exit.kept, light_order)};
   if (!least_squares) return chain;
-  const int dropped = static_cast<int>(exit.kept.size()) < exit.order * exit.order
-                          ? sh::index(1, 0)  // the reduced basis drops l = 1, m = 0
-                          : -1;
+  // The one SH index the exit basis leaves out, if any (the reduced basis).
+  int dropped = -1;
+  for (int i = 0, k = 0; i < exit.order * exit.order; ++i) {
+    if (k < static_cast<int>(exit.kept.size()) && exit.kept[k] == i)
+      ++k;
+    else if (dropped < 0)
+      dropped = i;
+    else
+      throw Error("glossy transfer: the exit basis may leave out at most one function");
+  }
   const auto exit_ls = hemisphere::least_squares(exit.order, cutoff, dropped);
   const auto light_ls = hemisphere::least_squares(light_order, cutoff);
   chain.matrix = exit_ls.inverse * chain.matrix * light_ls.inverse;
