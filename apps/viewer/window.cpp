@@ -8,7 +8,6 @@
 
 namespace prt::view {
 
-
 Window::Window(int width, int height, const std::string& title) {
   if (!glfwInit())
     throw Error("prt-view: cannot initialise GLFW (no display?); run under `xvfb-run -a`");

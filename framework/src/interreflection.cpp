@@ -3,7 +3,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 
@@ -79,18 +78,11 @@ Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& 
         // Seeded per vertex and bounce: independent of scheduling.
         std::mt19937_64 rng((seed + 1000003ull * (b + 1)) * 0x9E3779B97F4A7C15ull + p);
         std::uniform_real_distribution<double> jitter(0.0, 1.0);
-        const Eigen::Vector3d nrm = mesh.normals[p].cast<double>();
-        const Eigen::Vector3d t =
-            (std::abs(nrm.x()) > 0.9 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(1, 0, 0))
-                .cross(nrm)
-                .normalized();
-        const Eigen::Vector3d bt = nrm.cross(t);
+        const CosineHemisphere hemisphere(mesh.normals[p].cast<double>());
         const Eigen::Vector3f o = mesh.positions[p] + caster.offset() * mesh.normals[p];
         for (int k = 0; k < n; ++k) {  // stratified cosine-weighted directions
           const double u1 = (k / side + jitter(rng)) / side, u2 = (k % side + jitter(rng)) / side;
-          const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
-          const Eigen::Vector3d d =
-              r * std::cos(phi) * t + r * std::sin(phi) * bt + std::sqrt(1.0 - u1) * nrm;
+          const Eigen::Vector3d d = hemisphere.sample(u1, u2);
           for (int c = 0; c < 3; ++c)
             origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
         }

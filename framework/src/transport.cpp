@@ -394,6 +394,19 @@ std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& set, Progress* pr
   return rays;
 }
 
+CosineHemisphere::CosineHemisphere(const Eigen::Vector3d& normal)
+    : normal_(normal),
+      tangent_((std::abs(normal.x()) > 0.9 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(1, 0, 0))
+                   .cross(normal)
+                   .normalized()),
+      bitangent_(normal.cross(tangent_)) {}
+
+Eigen::Vector3d CosineHemisphere::sample(double u1, double u2) const {
+  const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
+  return r * std::cos(phi) * tangent_ + r * std::sin(phi) * bitangent_ +
+         std::sqrt(1.0 - u1) * normal_;
+}
+
 Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
                                        int samples, std::uint64_t seed, Progress* progress,
                                        const Reflectance& reflectance) {
@@ -417,11 +430,7 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
       std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + v);
       std::uniform_real_distribution<double> jitter(0.0, 1.0);
       const Eigen::Vector3d nrm = mesh.normals[v].cast<double>();
-      const Eigen::Vector3d t =
-          (std::abs(nrm.x()) > 0.9 ? Eigen::Vector3d(0, 1, 0) : Eigen::Vector3d(1, 0, 0))
-              .cross(nrm)
-              .normalized();
-      const Eigen::Vector3d b = nrm.cross(t);
+      const CosineHemisphere hemisphere(nrm);
       const Eigen::Vector3f o = mesh.positions[v] + caster.offset() * mesh.normals[v];
       for (int k = 0; k < n; ++k) {
         // Stratified in [0,1)^2 within each strategy.
@@ -430,8 +439,7 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
         const double u2 = (stratum % side + jitter(rng)) / side;
         Eigen::Vector3d d;
         if (k < per_strategy) {  // cosine-weighted hemisphere
-          const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
-          d = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(1.0 - u1) * nrm;
+          d = hemisphere.sample(u1, u2);
         } else {
           d = sampler->sample(u1, u2).direction;
         }

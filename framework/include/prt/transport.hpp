@@ -136,6 +136,18 @@ TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& directio
 // yardstick of the bake benchmark.
 std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& directions, Progress* progress);
 
+// Cosine-weighted directions about a unit normal: sample(u1, u2) maps the unit
+// square to the hemisphere with density cos / pi (Malley's method). Shared by
+// the ground truth's direct light and its bounces.
+class CosineHemisphere {
+ public:
+  explicit CosineHemisphere(const Eigen::Vector3d& normal);
+  Eigen::Vector3d sample(double u1, double u2) const;
+
+ private:
+  Eigen::Vector3d normal_, tangent_, bitangent_;
+};
+
 // Ground truth: per-vertex exit radiance (v x 3) for albedo 1, by Monte Carlo
 // over the environment with cosine-weighted stratified samples and ray-cast
 // visibility; no basis involved.
