@@ -182,6 +182,8 @@ int bench(Context& context, const BenchArgs& args) {
   const SceneSpec base = SceneSpec::load(args.scene, context.registry);
   const fs::path out =
       args.out.empty() ? fs::path("bench_" + base.file.stem().string()) : fs::path(args.out);
+  if (fs::exists(out) && !fs::is_directory(out))
+    throw Error(out.string() + ": the bench output folder exists and is not a directory");
   fs::create_directories(out / "images");
 
   // The cartesian product of the swept values.

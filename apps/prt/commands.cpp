@@ -6,6 +6,7 @@
 
 #include "prt/bake_file.hpp"
 #include "prt/compressor.hpp"
+#include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 
@@ -34,6 +35,8 @@ int bake(Context& context, const BakeArgs& args) {
   StageTimes times;
   times.add("parse + validate scene", clock.seconds());
   const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
+  check_output({output, FileKind::bake, "bake file", args.output.empty()}, scene.input_files(),
+               args.force);
   BakeData data = bake(scene, context.registry, {context.quiet}, times);
   clock = Stopwatch();
   write_bake(output, data);
@@ -63,6 +66,9 @@ int render(Context& context, const RenderArgs& args) {
   times.add("parse + validate scene", clock.seconds());
   const fs::path output = args.output.empty() ? scene.image_path() : fs::path(args.output);
   const fs::path bake_file = args.bake.empty() ? scene.bake_path() : fs::path(args.bake);
+  std::vector<fs::path> inputs = scene.input_files();
+  inputs.push_back(bake_file);
+  check_output({output, FileKind::png, "image", args.output.empty()}, inputs, args.force);
 
   Rendered result;
   if (args.ground_truth) {
@@ -123,6 +129,9 @@ void parse_parameter(const std::string& text, std::size_t index, Params& params)
 }
 
 int compress(Context& context, const CompressArgs& args) {
+  const fs::path output = args.output.empty() ? fs::path(args.bake) : fs::path(args.output);
+  if (!args.output.empty())  // without -o the bake is re-compressed in place, atomically
+    check_output({output, FileKind::bake, "output bake file"}, {args.bake}, args.force);
   Stopwatch clock;
   BakeData data = read_bake(args.bake);
   StageTimes times;
@@ -139,7 +148,6 @@ int compress(Context& context, const CompressArgs& args) {
   record(report, data.metrics);
   const auto& info = context.registry.find(PluginKind::compressor, args.compressor);
   data.compressor = {args.compressor, info.info.version, params.describe()};
-  const fs::path output = args.output.empty() ? fs::path(args.bake) : fs::path(args.output);
   clock = Stopwatch();
   write_bake(output, data);
   times.add("write bake file", clock.seconds());

@@ -16,12 +16,13 @@ struct Context {
 
 struct BakeArgs {
   std::string scene, output;
+  bool force = false;  // replace an existing output of another kind
 };
 int bake(Context& context, const BakeArgs& args);
 
 struct RenderArgs {
   std::string scene, bake, output;
-  bool ground_truth = false, compare = false;
+  bool ground_truth = false, compare = false, force = false;
   float exposure = 0.0f;                         // 0: the scene's [camera] exposure
   std::string renderer;                          // overrides the scene's [renderer] plugin
   std::vector<std::string> renderer_parameters;  // key=value for it
@@ -31,7 +32,7 @@ int render(Context& context, const RenderArgs& args);
 struct CompressArgs {
   std::string bake, output, compressor = "cpca";
   std::vector<std::string> parameters;  // key=value
-  bool json = false;
+  bool json = false, force = false;
 };
 int compress(Context& context, const CompressArgs& args);
 
@@ -47,7 +48,7 @@ struct BenchArgs {
   std::string scene, out;
   std::vector<std::string> sweeps;  // section.key=v1,v2,...
   int lights = 2;                   // the scene's light plus rotated copies
-  bool gpu = false, no_report = false;
+  bool gpu = false, no_report = false, force = false;
 };
 int bench(Context& context, const BenchArgs& args);
 
@@ -56,11 +57,13 @@ struct StabilityArgs {
   int max_rotation_order = 101;
   int hemisphere_order = 12;
   std::string json, figure_data;
+  bool force = false;
 };
 int stability(Context& context, const StabilityArgs& args);
 
 struct CompareArgs {
   std::string scene, bases, csv, json;
+  bool force = false;
 };
 int compare_bases(Context& context, const CompareArgs& args);
 

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "prt/output_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
 #include "prt/pipeline.hpp"
@@ -48,6 +49,9 @@ struct Row {
 
 int compare_bases(Context& context, const CompareArgs& args) {
   const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  for (const std::string& table : {args.csv, args.json})
+    if (!table.empty())
+      check_output({table, FileKind::text, "table"}, scene.input_files(), args.force);
   const Mesh mesh = scene.load_mesh();
   const DirectionSet set = scene.directions();
   std::vector<BasisSpec> specs;
@@ -156,16 +160,8 @@ int compare_bases(Context& context, const CompareArgs& args) {
     json << line;
   }
   json << "\n]\n";
-  auto save = [](const std::string& file, const std::string& text) {
-    if (file.empty()) return;
-    write_atomically(file, [&](const std::filesystem::path& temporary) {
-      std::ofstream out(temporary);
-      out << text;
-      if (!out) throw Error(file + ": cannot write");
-    });
-  };
-  save(args.csv, csv.str());
-  save(args.json, json.str());
+  if (!args.csv.empty()) write_text_file(args.csv, csv.str());
+  if (!args.json.empty()) write_text_file(args.json, json.str());
   std::printf("%-28s %6s %12s %14s %12s %10s\n", "basis", "coeffs", "bytes", "transport L2",
               "shading RMS", "relative");
   for (const auto& r : rows)

@@ -6,6 +6,10 @@
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
 
+namespace {
+const char* kForceHelp = "replace an existing output file of another kind (never an input)";
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"prt: precomputed radiance transfer with plug-in bases, compressors and renderers"};
   app.require_subcommand(1);
@@ -16,12 +20,14 @@ int main(int argc, char** argv) {
   auto* bake_cmd = app.add_subcommand("bake", "trace, project and compress a scene's transfer");
   bake_cmd->add_option("scene", bake.scene, "scene description (.toml)")->required();
   bake_cmd->add_option("-o,--output", bake.output, "bake file (default: from the scene)");
+  bake_cmd->add_flag("--force", bake.force, kForceHelp);
 
   prt::cli::RenderArgs render;
   auto* render_cmd = app.add_subcommand("render", "relight a bake and write an image");
   render_cmd->add_option("scene", render.scene, "scene description (.toml)")->required();
   render_cmd->add_option("-b,--bake", render.bake, "bake file (default: from the scene)");
   render_cmd->add_option("-o,--output", render.output, "PNG image (default: from the scene)");
+  render_cmd->add_flag("--force", render.force, kForceHelp);
   render_cmd->add_flag("--ground-truth", render.ground_truth,
                        "render the Monte Carlo ground truth instead of the bake");
   render_cmd->add_option("-r,--renderer", render.renderer,
@@ -45,6 +51,7 @@ int main(int argc, char** argv) {
                            "compressor parameter key=value (repeatable)");
   compress_cmd->add_option("-o,--output", compress.output, "output bake file (default: in place)");
   compress_cmd->add_flag("--json", compress.json, "print the metrics as JSON");
+  compress_cmd->add_flag("--force", compress.force, kForceHelp);
 
   prt::cli::AnalyzeArgs analyze;
   auto* analyze_cmd = app.add_subcommand("analyze", "numerical analyses");
@@ -74,6 +81,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 64));
   bench_cmd->add_flag("--gpu", bench.gpu, "also time the OpenGL renderer (needs a display)");
   bench_cmd->add_flag("--no-report", bench.no_report, "skip the plots and the Markdown report");
+  bench_cmd->add_flag("--force", bench.force, kForceHelp);
 
   prt::cli::StabilityArgs stability;
   auto* stability_cmd =
@@ -87,6 +95,7 @@ int main(int argc, char** argv) {
   stability_cmd->add_option("--json", stability.json, "write the figures as JSON");
   stability_cmd->add_option("--figure-data", stability.figure_data,
                             "write the sun-ringing curves as CSV (for scripts/stability_plot.py)");
+  stability_cmd->add_flag("--force", stability.force, kForceHelp);
 
   std::vector<std::string> diff_images;
   auto* diff_cmd = app.add_subcommand(
@@ -103,6 +112,7 @@ int main(int argc, char** argv) {
       ->required();
   compare_cmd->add_option("--csv", compare.csv, "write the table as CSV");
   compare_cmd->add_option("--json", compare.json, "write the table as JSON");
+  compare_cmd->add_flag("--force", compare.force, kForceHelp);
 
   std::string info_file;
   auto* info_cmd = app.add_subcommand("info", "print a bake file's contents");
@@ -120,6 +130,8 @@ int main(int argc, char** argv) {
   try {
     prt::cli::Context context{prt::PluginRegistry(prt::PluginRegistry::default_directories()),
                               quiet};
+    for (const auto& problem : context.registry.problems())
+      std::cerr << "prt: warning: " << problem.message << "\n";
     if (*bake_cmd) return prt::cli::bake(context, bake);
     if (*render_cmd) return prt::cli::render(context, render);
     if (*compress_cmd) return prt::cli::compress(context, compress);
@@ -131,8 +143,15 @@ int main(int argc, char** argv) {
     if (*diff_cmd) return prt::cli::image_diff(diff_images[0], diff_images[1]);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);
-  } catch (const std::exception& e) {
+  } catch (const prt::Error& e) {
     std::cerr << "prt: " << e.what() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "prt: error: out of memory: the scene or file needs more memory than this "
+                 "machine has\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "prt: error: " << e.what() << "\n";
     return 1;
   }
   return 0;

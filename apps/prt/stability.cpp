@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <random>
 
 #include "commands.hpp"
@@ -13,6 +14,7 @@
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/hemisphere.hpp"
+#include "prt/output_file.hpp"
 #include "prt/quadrature.hpp"
 #include "prt/sh.hpp"
 
@@ -108,6 +110,8 @@ Ringing ringing(const Eigen::VectorXd& coefficients, int order) {
 }  // namespace
 
 int stability(Context& context, const StabilityArgs& args) {
+  for (const std::string& file : {args.json, args.figure_data})
+    if (!file.empty()) check_output({file, FileKind::text, "report"}, {}, args.force);
   Report report;
   report.markdown = "# Numerical stability report (`prt stability`)\n";
 
@@ -234,11 +238,9 @@ int stability(Context& context, const StabilityArgs& args) {
           for (int c = 0; c < 3; ++c) pixels[3 * (std::size_t(y) * width + x) + c] = 1e5f;
       }
     const Environment env = Environment::from_pixels(width, height, pixels);
-    std::ofstream curve;
-    if (!args.figure_data.empty()) {
-      curve.open(args.figure_data);
-      curve << "order,window,angle_degrees,radiance\n";
-    }
+    std::ostringstream curve;
+    const bool figure = !args.figure_data.empty();
+    if (figure) curve << "order,window,angle_degrees,radiance\n";
     for (int order : {5, 10, 15, 20}) {
       Params params;
       params.set("order", std::int64_t(order));
@@ -251,7 +253,7 @@ int stability(Context& context, const StabilityArgs& args) {
             format("| %d | %s | %.4f | %.4g |", order, kind, r.negative_fraction, r.most_negative));
         report.value("negative_fraction_" + std::string(kind) + "_order" + std::to_string(order),
                      r.negative_fraction);
-        if (curve.is_open()) {
+        if (figure) {
           // Radiance along the great circle through the sun and the pole.
           const Eigen::Vector3d axis = sun.cross(Eigen::Vector3d::UnitY()).normalized();
           std::vector<double> y(static_cast<std::size_t>(order) * order);
@@ -265,11 +267,12 @@ int stability(Context& context, const StabilityArgs& args) {
         }
       }
     }
+    if (figure) write_text_file(args.figure_data, curve.str());
   }
   report.json += "}";
   std::printf("%s", report.markdown.c_str());
   if (!args.json.empty()) {
-    std::ofstream(args.json) << report.json << "\n";
+    write_text_file(args.json, report.json + "\n");
     std::printf("\nJSON -> %s\n", args.json.c_str());
   }
   return 0;

@@ -16,6 +16,7 @@
 
 #include "prt/error.hpp"
 #include "prt/image.hpp"
+#include "prt/output_file.hpp"
 #include "prt/progress.hpp"
 #include "prt/registry.hpp"
 #include "viewer.hpp"
@@ -86,8 +87,14 @@ int main(int argc, char** argv) {
   prt::Progress::set_enabled(!options.quiet);
   try {
     prt::PluginRegistry registry(prt::PluginRegistry::default_directories());
+    for (const auto& problem : registry.problems())
+      std::cerr << "prt-view: warning: " << problem.message << "\n";
     // The window first: the renderer's own context must go before GLFW does.
-    const auto camera = prt::SceneSpec::load(options.scene, registry).camera;
+    const prt::SceneSpec scene = prt::SceneSpec::load(options.scene, registry);
+    std::vector<std::filesystem::path> inputs = scene.input_files();
+    inputs.push_back(scene.bake_path());
+    prt::check_output({screenshot_file, prt::FileKind::png, "screenshot"}, inputs);
+    const auto& camera = scene.camera;
     prt::view::Window window(static_cast<int>(camera.get_int("width")),
                              static_cast<int>(camera.get_int("height")), "prt-view");
     prt::view::Viewer viewer(registry, options);
@@ -110,8 +117,15 @@ int main(int argc, char** argv) {
       }
     }
     return 0;
-  } catch (const std::exception& e) {
+  } catch (const prt::Error& e) {
     std::cerr << "prt-view: " << e.what() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "prt-view: error: out of memory: the scene needs more memory than this "
+                 "machine has\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "prt-view: error: " << e.what() << "\n";
     return 1;
   }
 }

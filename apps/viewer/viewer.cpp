@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "prt/bake_file.hpp"
+#include "prt/output_file.hpp"
 #include "prt/glossy.hpp"
 #include "prt/progress.hpp"
 
@@ -47,6 +48,7 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
     data_ = read_bake(bake_file);
   } else {
     std::cerr << "prt-view: " << bake_file.string() << " does not exist; baking it\n";
+    check_output({bake_file, FileKind::bake, "bake file", true}, scene_.input_files());
     StageTimes times;
     data_ = bake(scene_, registry_, {options.quiet}, times);
     write_bake(bake_file, data_);

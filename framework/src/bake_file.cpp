@@ -1,46 +1,47 @@
 #include "prt/bake_file.hpp"
 
 #include <H5Cpp.h>
-#include <unistd.h>
 
+#include <fstream>
+
+#include "bake_userblock.hpp"
 #include "prt/error.hpp"
+#include "prt/output_file.hpp"
 
 namespace prt {
 namespace fs = std::filesystem;
-
-void write_atomically(const fs::path& file, const std::function<void(const fs::path&)>& write) {
-  const fs::path folder = file.parent_path();
-  if (!folder.empty()) fs::create_directories(folder);
-  // Built by appends: GCC 12 warns falsely (-Wrestrict) on "." + std::string.
-  std::string name = ".";
-  name.append(file.filename().string()).append(".tmp-").append(std::to_string(getpid()));
-  const fs::path temporary = folder / name;
-  try {
-    write(temporary);
-    fs::rename(temporary, file);
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    throw;
-  }
-}
 
 namespace {
 
 const char* kFormatName = "prt-bake";
 
-void write_text(H5::H5Object& object, const std::string& name, const std::string& value) {
-  H5::StrType type(H5::PredType::C_S1, std::max<std::size_t>(value.size(), 1));
-  H5::Attribute a = object.createAttribute(name, type, H5::DataSpace(H5S_SCALAR));
-  a.write(type, value.empty() ? std::string(" ") : value);
+// Variable-length UTF-8, so h5py reads the attribute as str, not bytes.
+H5::StrType text_type() {
+  H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
+  type.setCset(H5T_CSET_UTF8);
+  return type;
 }
+
+void write_text(H5::H5Object& object, const std::string& name, const std::string& value) {
+  const H5::StrType type = text_type();
+  H5::Attribute a = object.createAttribute(name, type, H5::DataSpace(H5S_SCALAR));
+  a.write(type, value);
+}
+
+// Attributes are small: anything larger is damage or a crafted file.
+constexpr hsize_t kMaxAttributeBytes = 1 << 20;
 
 std::string read_text(const H5::H5Object& object, const std::string& name) {
   if (!object.attrExists(name)) throw Error("attribute \"" + name + "\" is missing");
   H5::Attribute a = object.openAttribute(name);
+  if (a.getTypeClass() != H5T_STRING || a.getSpace().getSimpleExtentNpoints() != 1)
+    throw Error("attribute \"" + name + "\" is not a text");
+  if (a.getStorageSize() > kMaxAttributeBytes)
+    throw Error("attribute \"" + name + "\" is too large");
   std::string value;
   a.read(a.getStrType(), value);
-  return value == " " ? std::string() : value;
+  if (value.size() > kMaxAttributeBytes) throw Error("attribute \"" + name + "\" is too large");
+  return value;
 }
 
 void write_number(H5::H5Object& object, const std::string& name, double value) {
@@ -51,9 +52,23 @@ void write_number(H5::H5Object& object, const std::string& name, double value) {
 
 double read_number(const H5::H5Object& object, const std::string& name) {
   if (!object.attrExists(name)) throw Error("attribute \"" + name + "\" is missing");
+  H5::Attribute a = object.openAttribute(name);
+  if (a.getTypeClass() != H5T_FLOAT || a.getSpace().getSimpleExtentNpoints() != 1)
+    throw Error("attribute \"" + name + "\" is not a number");
   double value = 0;
-  object.openAttribute(name).read(H5::PredType::NATIVE_DOUBLE, &value);
+  a.read(H5::PredType::NATIVE_DOUBLE, &value);
+  if (!std::isfinite(value)) throw Error("attribute \"" + name + "\" is NaN or infinite");
   return value;
+}
+
+// A count stored as a number: a whole number in [0, limit].
+std::int64_t read_count(const H5::H5Object& object, const std::string& name, double limit) {
+  const double value = read_number(object, name);
+  if (value < 0 || value > limit || value != std::floor(value))
+    throw Error("attribute \"" + name + "\" = " + std::to_string(value) +
+                " is not a count in [0, " + std::to_string(static_cast<std::int64_t>(limit)) +
+                "]");
+  return static_cast<std::int64_t>(value);
 }
 
 // A group without modification timestamps, so the same bake gives the same bytes.
@@ -95,19 +110,92 @@ void write_array(H5::Group& group, const std::string& name, const T* data, hsize
   if (rows > 0 && cols > 0) set.write(data, h5_type<T>());
 }
 
+// The size of the file being read: no dataset may claim more bytes than it.
+thread_local hsize_t file_bytes = 0;
+
+// Refuses data stored outside the file (external storage, virtual datasets):
+// a bake file must not pull other files' bytes into its values.
+void require_contiguous_in_file(const H5::DataSet& set, const std::string& name) {
+  const H5::DSetCreatPropList properties = set.getCreatePlist();
+  if (H5Pget_external_count(properties.getId()) != 0)
+    throw Error("dataset \"" + name + "\" uses external storage (refused: a bake holds its data)");
+  if (H5Pget_layout(properties.getId()) == H5D_VIRTUAL)
+    throw Error("dataset \"" + name + "\" is a virtual dataset (refused: a bake holds its data)");
+}
+
 template <class T>
 std::vector<T> read_array(const H5::Group& group, const std::string& name, hsize_t& rows,
                           hsize_t& cols) {
   if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
   H5::DataSet set = group.openDataSet(name);
+  require_contiguous_in_file(set, name);
   H5::DataSpace space = set.getSpace();
   if (space.getSimpleExtentNdims() != 2) throw Error("dataset \"" + name + "\" is not 2-D");
   hsize_t dims[2];
   space.getSimpleExtentDims(dims);
   rows = dims[0], cols = dims[1];
+  const H5T_class_t expected = std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER;
+  if (set.getTypeClass() != expected)
+    throw Error("dataset \"" + name + "\" has the wrong element type");
+  // Stored uncompressed, so its bytes must be in the file: checked before allocating.
+  const double bytes = static_cast<double>(rows) * static_cast<double>(cols) *
+                       static_cast<double>(set.getDataType().getSize());
+  if (bytes > static_cast<double>(file_bytes) ||
+      (bytes > 0 && static_cast<double>(set.getStorageSize()) < bytes))
+    throw Error("dataset \"" + name + "\" declares " + std::to_string(rows) + " x " +
+                std::to_string(cols) + " values that are not stored in the file");
   std::vector<T> values(rows * cols);
   if (!values.empty()) set.read(values.data(), h5_type<T>());
+  if constexpr (std::is_floating_point_v<T>)
+    for (std::size_t i = 0; i < values.size(); ++i)
+      if (!std::isfinite(values[i]))
+        throw Error("dataset \"" + name + "\" has a NaN or infinite value at row " +
+                    std::to_string(i / std::max<hsize_t>(cols, 1)));
   return values;
+}
+
+// The scene's text, of any size: a 1-D dataset of bytes.
+void write_bytes(H5::H5Object& parent, const std::string& name, const std::string& text) {
+  const hsize_t size = text.size();
+  H5::DSetCreatPropList properties;
+  H5Pset_obj_track_times(properties.getId(), false);
+  H5::DataSet set = parent.createDataSet(name, H5::PredType::NATIVE_UINT8, H5::DataSpace(1, &size),
+                                         properties);
+  if (size > 0) set.write(text.data(), H5::PredType::NATIVE_UINT8);
+}
+
+std::string read_bytes(const H5::Group& group, const std::string& name) {
+  if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
+  H5::DataSet set = group.openDataSet(name);
+  require_contiguous_in_file(set, name);
+  H5::DataSpace space = set.getSpace();
+  if (space.getSimpleExtentNdims() != 1 || set.getTypeClass() != H5T_INTEGER ||
+      set.getDataType().getSize() != 1)
+    throw Error("dataset \"" + name + "\" is not a byte string");
+  hsize_t size = 0;
+  space.getSimpleExtentDims(&size);
+  if (size > file_bytes || (size > 0 && set.getStorageSize() < size))
+    throw Error("dataset \"" + name + "\" declares bytes that are not stored in the file");
+  std::string text(size, '\0');
+  if (size > 0) set.read(text.data(), H5::PredType::NATIVE_UINT8);
+  return text;
+}
+
+// External links would let a bake file read other files; refused anywhere.
+herr_t refuse_external_link(hid_t, const char* name, const H5L_info_t* info, void* found) {
+  if (info->type == H5L_TYPE_EXTERNAL || info->type >= H5L_TYPE_UD_MIN) {
+    *static_cast<std::string*>(found) = name;
+    return 1;
+  }
+  return 0;
+}
+
+void require_no_external_links(const H5::H5File& h5) {
+  std::string found;
+  if (H5Lvisit(h5.getId(), H5_INDEX_NAME, H5_ITER_NATIVE, refuse_external_link, &found) < 0)
+    throw Error("cannot list the file's objects");
+  if (!found.empty())
+    throw Error("\"" + found + "\" is an external link (refused: a bake holds its data)");
 }
 
 void write_matrix(H5::Group& group, const std::string& name, const MatrixXfRow& m) {
@@ -161,12 +249,14 @@ void write_bake(const fs::path& file, const BakeData& data) {
     throw Error(file.string() + ": transfer rows do not match the mesh's vertices");
   write_atomically(file, [&](const fs::path& temporary) {
     try {
-      H5::H5File h5(temporary.string(), H5F_ACC_TRUNC);
+      H5::FileCreatPropList creation;
+      creation.setUserblock(kBakeUserBlockSize);
+      H5::H5File h5(temporary.string(), H5F_ACC_TRUNC, creation);
       H5::Group root = h5.openGroup("/");
       write_text(root, "format", kFormatName);
       write_number(root, "format_version", kBakeFormatVersion);
       write_text(root, "scene_file", data.scene_file);
-      write_text(root, "scene_text", data.scene_text);
+      write_bytes(root, "scene_text", data.scene_text);
       write_text(root, "transport", data.transport);
       write_plugin(root, "basis", data.basis);
       write_plugin(root, "compressor", data.compressor);
@@ -218,29 +308,34 @@ void write_bake(const fs::path& file, const BakeData& data) {
       }
       H5::Group metrics = create_group(h5, "metrics");
       for (const auto& [name, value] : data.metrics) write_number(metrics, name, value);
+      h5.close();
     } catch (const H5::Exception& e) {
       throw Error(file.string() + ": cannot write bake file: " + e.getDetailMsg());
     }
+    seal_bake_file(temporary, kBakeFormatVersion);
   });
 }
 
 BakeData read_bake(const fs::path& file) {
   H5::Exception::dontPrint();
-  if (!fs::is_regular_file(file)) throw Error(file.string() + ": bake file not found");
-  if (!H5::H5File::isHdf5(file.string()))
-    throw Error(file.string() + ": not a PRT bake file (not HDF5, or damaged)");
+  // Length and checksum first: a damaged file never reaches libhdf5's parser.
+  const int version = verify_bake_file(file);
+  if (version != kBakeFormatVersion)
+    throw Error(file.string() + ": bake format version " + std::to_string(version) +
+                ", but this build reads version " + std::to_string(kBakeFormatVersion) +
+                "; re-bake the scene");
+  file_bytes = fs::file_size(file);
   BakeData data;
   try {
     H5::H5File h5(file.string(), H5F_ACC_RDONLY);
+    require_no_external_links(h5);
     H5::Group root = h5.openGroup("/");
     if (!root.attrExists("format") || read_text(root, "format") != kFormatName)
       throw Error("it is an HDF5 file but not a PRT bake");
-    const int version = static_cast<int>(read_number(root, "format_version"));
-    if (version != kBakeFormatVersion)
-      throw Error("format version " + std::to_string(version) + ", but this build reads version " +
-                  std::to_string(kBakeFormatVersion) + "; re-bake the scene");
+    if (read_number(root, "format_version") != kBakeFormatVersion)
+      throw Error("its header and its format_version attribute disagree");
     data.scene_file = read_text(root, "scene_file");
-    data.scene_text = read_text(root, "scene_text");
+    data.scene_text = read_bytes(root, "scene_text");
     data.transport = read_text(root, "transport");
     data.basis = read_plugin(root, "basis");
     data.compressor = read_plugin(root, "compressor");
@@ -258,9 +353,9 @@ BakeData read_bake(const fs::path& file) {
     H5::Group transfer = h5.openGroup("transfer");
     data.transfer.kind = read_text(transfer, "kind");
     data.material = read_text(transfer, "material");
-    data.bounces = static_cast<int>(read_number(transfer, "bounces"));
-    data.subsurface = read_number(transfer, "subsurface") != 0;
-    data.transfer.exit.order = static_cast<int>(read_number(transfer, "exit_order"));
+    data.bounces = static_cast<int>(read_count(transfer, "bounces", 1000));
+    data.subsurface = read_count(transfer, "subsurface", 1) != 0;
+    data.transfer.exit.order = static_cast<int>(read_count(transfer, "exit_order", kMaxExitOrder));
     data.transfer.exit.kept = read_array<int>(transfer, "exit_kept", rows, cols);
     const ExitBasis& exit = data.transfer.exit;
     if ((data.transfer.kind == "glossy") != exit.glossy() || exit.order > kMaxExitOrder)
@@ -268,12 +363,15 @@ BakeData read_bake(const fs::path& file) {
     for (int i : exit.kept)
       if (i < 0 || i >= exit.order * exit.order) throw Error("exit basis index out of range");
     data.transfer.coefficients = read_matrix(transfer, "coefficients");
+    if (data.transfer.coefficients.rows() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
+      throw Error("the transfer has " + std::to_string(data.transfer.coefficients.rows()) +
+                  " rows for " + std::to_string(data.mesh.vertex_count()) + " vertices");
 
     H5::Group compressed = h5.openGroup("compressed");
     CompressedTransfer& c = data.compressed;
     c.compressor = read_text(compressed, "compressor");
-    c.components = static_cast<int>(read_number(compressed, "components"));
-    c.dimension = static_cast<Eigen::Index>(read_number(compressed, "dimension"));
+    c.components = static_cast<int>(read_count(compressed, "components", 1 << 30));
+    c.dimension = static_cast<Eigen::Index>(read_count(compressed, "dimension", 1 << 30));
     c.cluster_of_vertex = read_array<std::int32_t>(compressed, "cluster_of_vertex", rows, cols);
     c.weights = read_matrix(compressed, "weights");
     c.means = read_matrix(compressed, "means");
@@ -284,11 +382,21 @@ BakeData read_bake(const fs::path& file) {
     c.weight_index = read_array<std::int32_t>(compressed, "weight_index", rows, cols);
     Eigen::Index total = 0;
     for (auto n : counts) total += n;
+    const Eigen::Index columns = data.transfer.coefficients.cols();
+    if (columns != c.dimension)
+      throw Error("the transfer has " + std::to_string(columns) +
+                  " columns but the compressed dimension is " + std::to_string(c.dimension));
+    if (columns % exit.rows() != 0)
+      throw Error("the transfer's " + std::to_string(columns) +
+                  " columns are not a whole number of exit-basis rows (" +
+                  std::to_string(exit.rows()) + ")");
     if (static_cast<Eigen::Index>(counts.size()) != c.clusters() || total != stacked.rows() ||
         stacked.cols() != c.dimension || data.transfer.coefficients.rows() != c.vertices())
       throw Error("compressed transfer has inconsistent sizes");
     for (Eigen::Index k = 0, row = 0; k < c.clusters(); row += counts[k++]) {
-      if (counts[k] < 0) throw Error("negative component count");
+      if (counts[k] < 0 || counts[k] > c.components)
+        throw Error("cluster " + std::to_string(k) + " has " + std::to_string(counts[k]) +
+                    " components, outside [0, " + std::to_string(c.components) + "]");
       c.representatives.push_back(stacked.middleRows(row, counts[k]));
     }
     c.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
@@ -303,10 +411,8 @@ BakeData read_bake(const fs::path& file) {
     }
     H5::Group metrics = h5.openGroup("metrics");
     for (int i = 0; i < metrics.getNumAttrs(); ++i) {
-      H5::Attribute a = metrics.openAttribute(static_cast<unsigned>(i));
-      double value = 0;
-      a.read(H5::PredType::NATIVE_DOUBLE, &value);
-      data.metrics[a.getName()] = value;
+      const std::string name = metrics.openAttribute(static_cast<unsigned>(i)).getName();
+      data.metrics[name] = read_number(metrics, name);
     }
   } catch (const H5::Exception& e) {
     throw Error(file.string() + ": damaged bake file (" + e.getDetailMsg() + ")");

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "image_file_check.hpp"
 #include "prt/camera.hpp"
 #include "prt/error.hpp"
 #include "prt/image.hpp"
@@ -53,6 +54,7 @@ Environment Environment::load(const std::filesystem::path& file) {
 
 Environment Environment::load_hdr(const std::filesystem::path& file) {
   require_file(file);
+  check_radiance_file(file);
   int width = 0, height = 0, channels = 0;
   float* data = stbi_loadf(file.c_str(), &width, &height, &channels, 3);
   if (!data)
@@ -78,9 +80,13 @@ Environment Environment::load_exr(const std::filesystem::path& file) {
     const Imath::Box2i window = in.dataWindow();
     width = window.max.x - window.min.x + 1;
     height = window.max.y - window.min.y + 1;
+    check_image_resolution(file, std::int64_t(window.max.x) - window.min.x + 1,
+                           std::int64_t(window.max.y) - window.min.y + 1);
     pixels.resizeErase(height, width);
     in.setFrameBuffer(&pixels[0][0] - window.min.x - window.min.y * width, 1, width);
     in.readPixels(window.min.y, window.max.y);
+  } catch (const Error&) {
+    throw;
   } catch (const std::exception& e) {
     throw Error(file.string() + ": cannot read OpenEXR image: " + e.what());
   }

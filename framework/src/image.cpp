@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "prt/bake_file.hpp"
+#include "prt/output_file.hpp"
 #include "prt/error.hpp"
 
 namespace prt {

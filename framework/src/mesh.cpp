@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 
+#include "mesh_file_check.hpp"
 #include "prt/error.hpp"
 
 namespace prt {
@@ -121,7 +122,14 @@ void Mesh::validate(const std::string& source) const {
 
 Mesh load_mesh(const std::filesystem::path& file) {
   const std::string source = file.string();
-  if (!std::filesystem::is_regular_file(file)) throw Error(source + ": mesh file not found");
+  std::error_code error;
+  const auto status = std::filesystem::status(file, error);
+  if (!std::filesystem::exists(status)) throw Error(source + ": mesh file not found");
+  if (!std::filesystem::is_regular_file(status))
+    throw Error(source + ": the mesh is " +
+                (std::filesystem::is_directory(status) ? "a directory" : "not a regular file") +
+                "; name a mesh file");
+  const DeclaredMeshSize declared = check_mesh_file(file);
   reject_non_finite_text(file);
   OMesh om;
   om.request_vertex_normals();
@@ -152,6 +160,16 @@ Mesh load_mesh(const std::filesystem::path& file) {
                 std::to_string(om.n_vertices()) + " vertices)");
   // Faces OpenMesh refused (a vertex repeated) count as degenerate.
   mesh.skipped_degenerate_faces = count_lines_containing(log, "ImporterT: Face");
+  // Readers drop some bad faces without a word (binary PLY indices out of
+  // range or negative): what was read must account for what was declared.
+  if (declared.known && om.n_vertices() < declared.vertices)
+    throw Error(source + ": read " + std::to_string(om.n_vertices()) + " of the " +
+                std::to_string(declared.vertices) + " vertices its header declares");
+  if (declared.known && om.n_faces() + mesh.skipped_degenerate_faces < declared.faces)
+    throw Error(source + ": " +
+                std::to_string(declared.faces - om.n_faces() - mesh.skipped_degenerate_faces) +
+                " of its " + std::to_string(declared.faces) +
+                " faces could not be read (vertex indices out of range or negative?)");
   if (const auto complex = count_lines_containing(log, "complex"))
     std::cerr << "warning: " << source << ": " << complex
               << " non-manifold face(s); OpenMesh duplicated their vertices\n";

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <unistd.h>
 
 #include "prt/basis.hpp"
 #include "prt/compressor.hpp"
@@ -55,6 +57,40 @@ void add_subsurface(const MatrixXfRow& scattered, TransferSignal& transfer) {
   }
   transfer.coefficients.leftCols(scattered.cols()) +=
       static_cast<float>(2.0 * std::sqrt(M_PI)) * scattered;
+}
+
+// Memory this machine can give now (MemAvailable), in bytes.
+double available_memory() {
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  double kilobytes = 0;
+  while (meminfo >> key >> kilobytes) {
+    if (key == "MemAvailable:") return kilobytes * 1024.0;
+    meminfo.ignore(256, '\n');
+  }
+  return double(sysconf(_SC_AVPHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+}
+
+// Refuses, before any ray, a bake whose largest arrays cannot fit: the
+// transfer (twice: exact and decoded), kept visibility bits and bounce hits,
+// and the basis evaluated at every direction.
+void require_memory(const SceneSpec& scene, const Mesh& mesh, const DirectionSet& set,
+                    const Basis& basis, bool keep_visibility, bool keep_hits) {
+  const double v = double(mesh.vertex_count()), d = double(set.size()), n = double(basis.size());
+  const double rows = scene.glossy() ? double(scene.exit_basis().rows()) : 1.0;
+  const double bytes = 2 * v * rows * n * sizeof(float) + d * n * sizeof(double) +
+                       (keep_visibility ? v * d / 8 : 0) + (keep_hits ? v * d * 8 : 0);
+  const double available = available_memory();
+  if (bytes > available) {
+    char message[400];
+    std::snprintf(message, sizeof message,
+                  "this bake needs about %.1f GB (%.0f vertices x %.0f coefficients%s, %.0f "
+                  "directions), but %.1f GB are available; lower the basis size, rays or mesh "
+                  "resolution",
+                  bytes / 1e9, v, rows * n, rows > 1 ? " per glossy matrix" : "", d,
+                  available / 1e9);
+    throw Error(scene.basis.where, message);
+  }
 }
 
 }  // namespace
@@ -116,6 +152,8 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   // Bases fitted to the visibility and glossy matrices need the bits kept;
   // everything else projects while tracing.
   transport.keep_visibility = basis->can_fit() || glossy;
+  require_memory(scene, data.mesh, set, *basis, transport.keep_visibility || options.traced,
+                 transport.keep_hits);
   TransportResult result;
   if (options.traced) {  // a sweep traced these rays once for many configurations
     transport.keep_visibility = true;

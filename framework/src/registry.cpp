@@ -1,6 +1,8 @@
 #include "prt/registry.hpp"
 
 #include <dlfcn.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <boost/dll/shared_library.hpp>
@@ -79,7 +81,16 @@ PluginDescriptor read_descriptor(const fs::path& file) {
 }  // namespace
 
 PluginRegistry::PluginRegistry(const std::vector<fs::path>& directories) {
-  for (const auto& directory : directories) scan(directory);
+  std::vector<fs::path> scanned;
+  for (const auto& directory : directories) {
+    std::error_code error;
+    const bool seen = std::any_of(scanned.begin(), scanned.end(), [&](const fs::path& other) {
+      return fs::equivalent(directory, other, error);
+    });
+    if (seen) continue;  // the same folder twice would make every plug-in a duplicate
+    scan(directory);
+    scanned.push_back(directory);
+  }
 }
 
 PluginRegistry::~PluginRegistry() = default;
@@ -112,24 +123,78 @@ std::vector<fs::path> PluginRegistry::default_directories() {
   return directories;
 }
 
+namespace {
+
+// Code may be loaded only from what no one but its owner (root or this
+// user) can change: a folder or file others may write could hold anyone's code.
+std::string unsafe_to_load(const fs::path& path, const char* what) {
+  struct stat s {};
+  if (stat(path.c_str(), &s) != 0) return "";
+  if (s.st_mode & (S_IWGRP | S_IWOTH))
+    return path.string() + ": skipped: the " + what +
+           " is writable by others than its owner (chmod go-w to use it)";
+  if (s.st_uid != 0 && s.st_uid != geteuid())
+    return path.string() + ": skipped: the " + what + " belongs to another user (uid " +
+           std::to_string(s.st_uid) + ")";
+  return "";
+}
+
+// "libprt-<kind>-<name>.so": what a file that cannot be read claims to be.
+PluginProblem problem_from_file_name(const fs::path& file, std::string message) {
+  PluginProblem problem{file, PluginKind::basis, "", std::move(message)};
+  std::string stem = file.stem().string().substr(std::strlen("libprt-"));
+  for (PluginKind kind : {PluginKind::basis, PluginKind::compressor, PluginKind::renderer}) {
+    const std::string prefix = std::string(to_string(kind)) + "-";
+    if (stem.rfind(prefix, 0) == 0) {
+      problem.kind = kind;
+      problem.name = stem.substr(prefix.size());
+    }
+  }
+  return problem;
+}
+
+}  // namespace
+
 void PluginRegistry::scan(const fs::path& directory) {
+  if (directory.empty()) return;
   std::error_code error;
   if (!fs::is_directory(directory, error)) {
-    if (directory.empty()) return;
-    throw Error(directory.string() + ": plug-in directory does not exist");
+    problems_.push_back({directory, PluginKind::basis, "",
+                         directory.string() + ": plug-in directory does not exist"});
+    return;
+  }
+  if (auto why = unsafe_to_load(directory, "plug-in folder"); !why.empty()) {
+    problems_.push_back({directory, PluginKind::basis, "", why});
+    return;
   }
   std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(directory))
-    if (entry.is_regular_file() && is_candidate(entry.path())) files.push_back(entry.path());
+  for (fs::directory_iterator it(directory, error), end; !error && it != end; it.increment(error))
+    if (it->is_regular_file(error) && is_candidate(it->path())) files.push_back(it->path());
   std::sort(files.begin(), files.end());
-  for (const auto& file : files) {
-    PluginDescriptor d = read_descriptor(file);
-    for (const auto& other : plugins_)
-      if (other.kind() == d.kind() && other.name() == d.name())
-        throw Error(file.string() + ": duplicate " + to_string(d.kind()) + " plug-in name \"" +
-                    d.name() + "\", also provided by " + other.file.string());
-    plugins_.push_back(std::move(d));
+  for (const auto& file : files) scan_file(file);
+}
+
+void PluginRegistry::scan_file(const fs::path& file) {
+  if (auto why = unsafe_to_load(file, "plug-in file"); !why.empty()) {
+    problems_.push_back(problem_from_file_name(file, why));
+    return;
   }
+  PluginDescriptor d;
+  try {
+    d = read_descriptor(file);
+  } catch (const Error& e) {
+    problems_.push_back(problem_from_file_name(file, e.what()));
+    return;
+  }
+  for (const auto& other : plugins_)
+    if (other.kind() == d.kind() && other.name() == d.name()) {
+      problems_.push_back({file, d.kind(), d.name(),
+                           file.string() + ": duplicate " + to_string(d.kind()) +
+                               " plug-in name \"" + d.name() + "\", also provided by " +
+                               other.file.string()});
+      return;
+    }
+  plugins_.push_back(std::move(d));
 }
 
 std::vector<std::string> PluginRegistry::names(PluginKind kind) const {
@@ -141,6 +206,9 @@ std::vector<std::string> PluginRegistry::names(PluginKind kind) const {
 
 const PluginDescriptor& PluginRegistry::find(PluginKind kind, const std::string& name,
                                              const SourceLocation& where) const {
+  // A skipped file that claims this name: its problem is the answer.
+  for (const auto& problem : problems_)
+    if (problem.kind == kind && problem.name == name) throw Error(where, problem.message);
   for (const auto& p : plugins_)
     if (p.kind() == kind && p.name() == name) return p;
   const auto available = names(kind);

@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -160,10 +161,55 @@ void resolve_paths(Params& params, const ParamSchema& schema, const SceneSpec& s
     const std::string value = params.get_string(spec.name);
     if (value.empty()) continue;
     const fs::path resolved = scene.resolve(value);
-    if (!fs::exists(resolved))
+    std::error_code error;
+    const auto status = fs::status(resolved, error);
+    if (!fs::exists(status))
       params.fail(spec.name, schema.owner + ": " + spec.name + " \"" + value +
                                  "\" not found (looked for " + resolved.string() + ")");
+    if (!fs::is_regular_file(status))
+      params.fail(spec.name, schema.owner + ": " + spec.name + " \"" + value + "\" (" +
+                                 resolved.string() + ") is " +
+                                 (fs::is_directory(status) ? "a directory" : "not a regular file") +
+                                 "; name a file");
     params.set(spec.name, resolved.string(), params.location(spec.name));
+  }
+}
+
+// toml++ 3.3 reaches an "unreachable" point on some malformed byte
+// sequences, so text is checked first: valid UTF-8 (no overlong forms or
+// surrogates) and no control characters but tab, CR and LF. TOML forbids
+// these anyway; the message says where.
+void require_plain_utf8_text(const std::string& text, const fs::path& file) {
+  int line = 1, column = 1;
+  auto fail = [&](const std::string& what) {
+    throw Error(SourceLocation{file.string(), line, column}, what + "; a scene is UTF-8 text");
+  };
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c < 0x80) {
+      if (c == '\n') {
+        ++line, column = 1, ++i;
+        continue;
+      }
+      if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f)
+        fail("control character 0x" + std::string(1, "0123456789abcdef"[c >> 4]) +
+             std::string(1, "0123456789abcdef"[c & 15]));
+      ++column, ++i;
+      continue;
+    }
+    const int length = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc0 ? 2 : 0;
+    if (length == 0 || c > 0xf4 || c == 0xc0 || c == 0xc1 || i + length > text.size())
+      fail("invalid UTF-8 byte");
+    std::uint32_t code = c & (0xff >> (length + 1));
+    for (int k = 1; k < length; ++k) {
+      const auto next = static_cast<unsigned char>(text[i + k]);
+      if ((next & 0xc0) != 0x80) fail("invalid UTF-8 sequence");
+      code = (code << 6) | (next & 0x3f);
+    }
+    const std::uint32_t smallest[5] = {0, 0, 0x80, 0x800, 0x10000};
+    if (code < smallest[length] || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff))
+      fail("invalid UTF-8 sequence");
+    ++column, i += length;
   }
 }
 
@@ -172,8 +218,8 @@ PluginChoice read_plugin(const toml::table& root, const std::string& section,
                          const PluginRegistry& registry, const SceneSpec& scene) {
   PluginChoice choice;
   const toml::table* table = root[section].as_table();
-  const SourceLocation section_where =
-      table ? location_of(table->source(), scene.file) : SourceLocation{scene.file.string()};
+  const SourceLocation section_where = table ? location_of(table->source(), scene.file)
+                                             : SourceLocation{scene.file.string(), 1, 1};
   choice.where = section_where;
   choice.name = default_name;
   if (table) {
@@ -195,8 +241,19 @@ PluginChoice read_plugin(const toml::table& root, const std::string& section,
 }  // namespace
 
 SceneSpec SceneSpec::load(const fs::path& file, const PluginRegistry& registry) {
-  std::ifstream in(file);
-  if (!in) throw Error(file.string() + ": scene file not found or unreadable");
+  std::error_code error;
+  const auto status = fs::status(file, error);
+  if (!fs::exists(status)) throw Error(file.string() + ": scene file not found");
+  if (!fs::is_regular_file(status))
+    throw Error(file.string() + ": the scene is " +
+                (fs::is_directory(status) ? "a directory" : "not a regular file") +
+                "; name a .toml file");
+  // A scene is a page of text; a huge file is a mistake (and toml++ would hold it all).
+  constexpr std::uintmax_t kMaxSceneBytes = 16 << 20;
+  if (fs::file_size(file, error) > kMaxSceneBytes)
+    throw Error(file.string() + ": scene file larger than 16 MiB; is it a scene?");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw Error(file.string() + ": scene file unreadable");
   std::stringstream text;
   text << in.rdbuf();
   return parse(text.str(), file, registry);
@@ -207,6 +264,7 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
   SceneSpec scene;
   scene.file = file;
   scene.text = text;
+  require_plain_utf8_text(text, file);
   toml::table root;
   try {
     root = toml::parse(text, file.string());
@@ -230,8 +288,9 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
 
   auto section = [&](const std::string& name, const ParamSchema& schema) {
     const toml::table* table = root[name].as_table();
+    // A missing section's errors point at the file's start.
     const SourceLocation where =
-        table ? location_of(table->source(), file) : SourceLocation{file.string()};
+        table ? location_of(table->source(), file) : SourceLocation{file.string(), 1, 1};
     Params params = read_table(table, where, file);
     params.validate(schema);
     resolve_paths(params, schema, scene);
@@ -292,6 +351,13 @@ fs::path SceneSpec::image_path() const {
   return name.empty() ? fs::path(file.stem().string() + ".png") : resolve(name);
 }
 
+std::vector<fs::path> SceneSpec::input_files() const {
+  std::vector<fs::path> files{file};
+  for (const std::string& name : {mesh.get_string("file"), lighting.get_string("environment")})
+    if (!name.empty()) files.emplace_back(name);
+  return files;
+}
+
 Mesh SceneSpec::load_mesh() const {
   const std::string file_name = mesh.get_string("file");
   if (!file_name.empty()) return prt::load_mesh(file_name);
@@ -337,6 +403,15 @@ Camera SceneSpec::make_camera(const Mesh& m) const {
   if (camera.has("target")) c.target = vec("target");
   if (camera.has("position")) c.position = vec("position");
   c.up = vec("up");
+  // A camera at its target, or looking along its up vector, sees nothing.
+  const Eigen::Vector3f forward = c.target - c.position;
+  const float scale = std::max({c.target.norm(), c.position.norm(), 1e-20f});
+  if (!forward.allFinite() || forward.norm() <= 1e-6f * scale)
+    throw Error(camera.has("position") ? camera.location("position") : camera.location(),
+                "section [camera]: position and target coincide; the camera has no direction");
+  if (c.up.norm() == 0 || forward.normalized().cross(c.up.normalized()).norm() < 1e-6f)
+    throw Error(camera.has("up") ? camera.location("up") : camera.location(),
+                "section [camera]: up is parallel to the viewing direction (or zero)");
   return c;
 }
 

@@ -43,7 +43,13 @@ void CompressedTransfer::validate(Eigen::Index vertex_count) const {
       static_cast<Eigen::Index>(supercluster_of_cluster.size()) != clusters())
     throw Error("compressed transfer: supercluster ids do not match the clusters");
   for (auto s : supercluster_of_cluster)
-    if (s < 0) throw Error("compressed transfer: negative supercluster id");
+    if (s < 0 || s >= clusters())
+      throw Error("compressed transfer: supercluster id " + std::to_string(s) +
+                  " out of range (there are " + std::to_string(clusters()) + " clusters)");
+  if (!weights.allFinite()) throw Error("compressed transfer: NaN or infinite weight");
+  if (!means.allFinite()) throw Error("compressed transfer: NaN or infinite cluster mean");
+  for (const auto& r : representatives)
+    if (!r.allFinite()) throw Error("compressed transfer: NaN or infinite representative");
   if (sparse()) {
     if (static_cast<Eigen::Index>(weight_index.size()) != vertices() * components)
       throw Error("compressed transfer: sparse indices do not match the weights");

@@ -4,8 +4,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include "../../framework/src/bake_userblock.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/error.hpp"
+#include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/registry.hpp"
@@ -113,11 +115,7 @@ TEST_CASE("damaged and foreign files are refused with a clear message", "[bake]"
   CHECK_THROWS_WITH(read_bake(dir / "other.h5"), Catch::Contains("not a PRT bake"));
 
   fs::copy_file(dir / "whole.h5", dir / "future.h5", fs::copy_options::overwrite_existing);
-  {
-    H5::H5File f((dir / "future.h5").string(), H5F_ACC_RDWR);
-    double version = 99;
-    f.openGroup("/").openAttribute("format_version").write(H5::PredType::NATIVE_DOUBLE, &version);
-  }
+  seal_bake_file(dir / "future.h5", 99);  // a well-formed file of a later format
   CHECK_THROWS_WITH(read_bake(dir / "future.h5"),
                     Catch::Contains("format version 99") &&
                         Catch::Contains("reads version " + std::to_string(kBakeFormatVersion)));

@@ -70,34 +70,56 @@ TEST_CASE("plug-in parameters are validated against the schema before creation",
   CHECK(r.loaded_count() == 0);
 }
 
+namespace {
+// The one message a registry over `dir` recorded while skipping its files.
+std::string problem_in(const fs::path& dir) {
+  PluginRegistry r({dir});
+  REQUIRE(r.problems().size() == 1);
+  return r.problems()[0].message;
+}
+}  // namespace
+
 TEST_CASE("each plug-in failure gives one clear error naming the file", "[registry]") {
-  CHECK_THROWS_WITH(PluginRegistry({case_dir("not_a_plugin")}),
-                    Catch::Contains("libprt-basis-notaplugin.so: not a PRT plug-in"));
-  CHECK_THROWS_WITH(PluginRegistry({case_dir("missing_symbol")}),
-                    Catch::Contains("libprt-basis-missing.so") &&
-                        Catch::Contains("lacks the symbol prt_plugin_destroy"));
-  CHECK_THROWS_WITH(PluginRegistry({case_dir("abi_mismatch")}),
-                    Catch::Contains("libprt-basis-abi.so: plug-in ABI version 999") &&
-                        Catch::Contains("this host reads ABI version 1"));
-  CHECK_THROWS_WITH(PluginRegistry({case_dir("build_key")}),
-                    Catch::Contains("libprt-basis-key.so") &&
-                        Catch::Contains("was built for \"gcc-4-foreign\"") &&
-                        Catch::Contains(host_build_key()));
-  CHECK_THROWS_WITH(PluginRegistry({case_dir("duplicate")}),
-                    Catch::Contains("duplicate basis plug-in name \"constant\"") &&
-                        Catch::Contains("libprt-basis-dup-a.so") &&
-                        Catch::Contains("libprt-basis-dup-b.so"));
+  using Catch::Contains;
+  CHECK_THAT(problem_in(case_dir("not_a_plugin")),
+             Contains("libprt-basis-notaplugin.so: not a PRT plug-in"));
+  CHECK_THAT(problem_in(case_dir("missing_symbol")),
+             Contains("libprt-basis-missing.so") &&
+                 Contains("lacks the symbol prt_plugin_destroy"));
+  CHECK_THAT(problem_in(case_dir("abi_mismatch")),
+             Contains("libprt-basis-abi.so: plug-in ABI version 999") &&
+                 Contains("this host reads ABI version 1"));
+  CHECK_THAT(problem_in(case_dir("build_key")), Contains("libprt-basis-key.so") &&
+                                                    Contains("was built for \"gcc-4-foreign\"") &&
+                                                    Contains(host_build_key()));
+  CHECK_THAT(problem_in(case_dir("duplicate")),
+             Contains("duplicate basis plug-in name \"constant\"") &&
+                 Contains("libprt-basis-dup-a.so") && Contains("libprt-basis-dup-b.so"));
+  CHECK_THAT(problem_in("/no/such/dir"), Contains("does not exist"));
+  // A skipped file is an error only for a scene that names what it declares.
+  PluginRegistry duplicate({case_dir("duplicate")});
+  Params none;
+  CHECK_THROWS_WITH(duplicate.create<Basis>("constant", none), Contains("duplicate"));
+  PluginRegistry key({case_dir("build_key")});
+  CHECK(key.names(PluginKind::basis).empty());
+  CHECK_THROWS_WITH(key.find(PluginKind::basis, "key"), Contains("was built for"));
+
   PluginRegistry throwing({case_dir("throwing")});
   Params p;
   CHECK_THROWS_WITH(throwing.create<Basis>("constant", p),
-                    Catch::Contains("failed to construct: this test plug-in always fails"));
+                    Contains("failed to construct: this test plug-in always fails"));
   PluginRegistry good({case_dir("good")});
   CHECK_THROWS_WITH(good.find(PluginKind::basis, "constnat"),
-                    Catch::Contains("no basis plug-in named \"constnat\"; available: constant") &&
-                        Catch::Contains("did you mean \"constant\""));
-  CHECK_THROWS_WITH(good.find(PluginKind::renderer, "cpu"),
-                    Catch::Contains("available: (none found)"));
-  CHECK_THROWS_WITH(PluginRegistry({"/no/such/dir"}), Catch::Contains("does not exist"));
+                    Contains("no basis plug-in named \"constnat\"; available: constant") &&
+                        Contains("did you mean \"constant\""));
+  CHECK_THROWS_WITH(good.find(PluginKind::renderer, "cpu"), Contains("available: (none found)"));
+}
+
+TEST_CASE("one bad file on the plug-in path does not hide the others", "[registry]") {
+  PluginRegistry r({PRT_BUILD_PLUGIN_DIR, case_dir("not_a_plugin"), "/no/such/dir"});
+  CHECK(r.problems().size() == 2);
+  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sh"});
+  CHECK_NOTHROW(r.find(PluginKind::basis, "sh"));
 }
 
 TEST_CASE("PRT_PLUGIN_PATH adds directories after the build's", "[registry]") {

@@ -3,7 +3,6 @@
 #pragma once
 #include <Eigen/Core>
 #include <filesystem>
-#include <functional>
 #include <map>
 #include <string>
 
@@ -14,7 +13,8 @@
 namespace prt {
 
 // 2: glossy matrices, material, bounces and subsurface recorded.
-constexpr int kBakeFormatVersion = 2;
+// 3: a checksummed PRT-BAKE user block; scene text as a dataset; UTF-8 text attributes.
+constexpr int kBakeFormatVersion = 3;
 
 struct PluginRecord {
   std::string name, version, parameters;
@@ -37,10 +37,5 @@ struct BakeData {
 
 void write_bake(const std::filesystem::path& file, const BakeData& data);
 BakeData read_bake(const std::filesystem::path& file);
-
-// Writes through a temporary file in the same folder and renames it into
-// place only after `write` returns; on any exception the temporary is removed.
-void write_atomically(const std::filesystem::path& file,
-                      const std::function<void(const std::filesystem::path&)>& write);
 
 }  // namespace prt

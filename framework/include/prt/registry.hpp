@@ -29,11 +29,22 @@ struct PluginDescriptor {
 // The build key of the host, to compare with each plug-in's.
 const char* host_build_key();
 
+// A file or folder on the plug-in path that was skipped, and why. `name` is
+// the plug-in name it declares, or that its file name suggests (may be empty).
+struct PluginProblem {
+  std::filesystem::path file;
+  PluginKind kind = PluginKind::basis;
+  std::string name;
+  std::string message;
+};
+
 class PluginRegistry {
  public:
-  // Scans `directories` in order for files named libprt-*.so. Any malformed
-  // candidate (not a plug-in, wrong ABI or build key, missing symbol) or a
-  // duplicate name throws prt::Error naming the file.
+  // Scans `directories` in order for files named libprt-*.so. A malformed
+  // candidate (not a plug-in, wrong ABI or build key, missing symbol), a
+  // duplicate name, a missing folder, or a folder or file that others than its
+  // owner or root may write is skipped and recorded in problems(); asking for
+  // a plug-in of that name then throws that problem's message.
   explicit PluginRegistry(const std::vector<std::filesystem::path>& directories);
   ~PluginRegistry();
   PluginRegistry(const PluginRegistry&) = delete;
@@ -44,6 +55,8 @@ class PluginRegistry {
 
   const std::vector<PluginDescriptor>& plugins() const { return plugins_; }
   std::vector<std::string> names(PluginKind kind) const;
+  // What was skipped while scanning, one located message each.
+  const std::vector<PluginProblem>& problems() const { return problems_; }
 
   // Throws with the list of available names of that kind when absent.
   const PluginDescriptor& find(PluginKind kind, const std::string& name,
@@ -68,7 +81,9 @@ class PluginRegistry {
   std::shared_ptr<PluginObject> create_object(PluginKind kind, const std::string& name,
                                               Params& params, const SourceLocation& where);
   void scan(const std::filesystem::path& directory);
+  void scan_file(const std::filesystem::path& file);
   std::vector<PluginDescriptor> plugins_;
+  std::vector<PluginProblem> problems_;
   std::map<std::filesystem::path, std::shared_ptr<boost::dll::shared_library>> modules_;
 };
 

@@ -3,6 +3,7 @@
 #pragma once
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "prt/brdf.hpp"
 #include "prt/camera.hpp"
@@ -42,6 +43,9 @@ struct SceneSpec {
   // in the current directory.
   std::filesystem::path bake_path() const;
   std::filesystem::path image_path() const;
+  // Files a run reads (the scene, its mesh and environment map): no output
+  // may be written over them.
+  std::vector<std::filesystem::path> input_files() const;
 
   Mesh load_mesh() const;
   DirectionSet directions() const;  // [transport] directions, rays, seed

@@ -1,0 +1,83 @@
+#include "image_file_check.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "prt/error.hpp"
+
+namespace prt {
+namespace fs = std::filesystem;
+
+void check_image_resolution(const fs::path& file, std::int64_t width, std::int64_t height) {
+  const std::string where = file.string() + ": ";
+  if (width < 1 || height < 1 || width > (1 << 20) || height > (1 << 20))
+    throw Error(where + "image size " + std::to_string(width) + " x " + std::to_string(height) +
+                " is out of range");
+  std::error_code error;
+  const double bytes = static_cast<double>(fs::file_size(file, error));
+  const double pixels = static_cast<double>(width) * static_cast<double>(height);
+  if (pixels > double(1 << 22) && pixels * 8 > 64 * bytes)
+    throw Error(where + "the header declares " + std::to_string(width) + " x " +
+                std::to_string(height) + " pixels, more than a file of " +
+                std::to_string(static_cast<long long>(bytes)) + " bytes can hold (damaged?)");
+}
+
+void check_radiance_file(const fs::path& file) {
+  const std::string where = file.string() + ": ";
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || (line.rfind("#?RADIANCE", 0) != 0 && line.rfind("#?RGBE", 0) != 0))
+    throw Error(where + "not a Radiance HDR image (no #?RADIANCE line)");
+  // Header lines end at an empty line; the resolution line follows.
+  for (int lines = 0; std::getline(in, line) && !line.empty(); ++lines)
+    if (lines > 1000) throw Error(where + "Radiance header without an end");
+  if (!std::getline(in, line)) throw Error(where + "Radiance header without a resolution line");
+  char y_axis[3] = {}, x_axis[3] = {};
+  long long height = 0, width = 0;
+  if (std::sscanf(line.c_str(), "%2s %lld %2s %lld", y_axis, &height, x_axis, &width) != 4 ||
+      std::string(y_axis) != "-Y" || std::string(x_axis) != "+X")
+    throw Error(where + "unsupported Radiance resolution line \"" + line.substr(0, 40) +
+                "\" (expected -Y H +X W)");
+  check_image_resolution(file, width, height);
+
+  // Walk every scanline: new-style run-length (2 2 hi lo, then 4 channels of
+  // runs) or flat RGBE. Old-style runs are not produced by today's writers.
+  std::vector<unsigned char> buffer((std::istreambuf_iterator<char>(in)),
+                                    std::istreambuf_iterator<char>());
+  std::size_t at = 0;
+  auto truncated = [&](long long y) {
+    return Error(where + "truncated Radiance image: scanline " + std::to_string(y + 1) + " of " +
+                 std::to_string(height) + " is incomplete");
+  };
+  for (long long y = 0; y < height; ++y) {
+    const bool rle = width >= 8 && width < 32768 && at + 4 <= buffer.size() && buffer[at] == 2 &&
+                     buffer[at + 1] == 2 && !(buffer[at + 2] & 0x80);
+    if (!rle) {
+      if (buffer.size() - at < static_cast<std::size_t>(4 * width)) throw truncated(y);
+      at += 4 * width;
+      continue;
+    }
+    if (((buffer[at + 2] << 8) | buffer[at + 3]) != width)
+      throw Error(where + "damaged Radiance image: scanline " + std::to_string(y + 1) +
+                  " has the wrong width");
+    at += 4;
+    for (int channel = 0; channel < 4; ++channel)
+      for (long long x = 0; x < width;) {
+        if (at >= buffer.size()) throw truncated(y);
+        const int count = buffer[at++];
+        const bool run = count > 128;
+        const int n = run ? count - 128 : count;
+        if (n == 0 || x + n > width)
+          throw Error(where + "damaged Radiance image: bad run in scanline " +
+                      std::to_string(y + 1));
+        const std::size_t bytes = run ? 1 : static_cast<std::size_t>(n);
+        if (buffer.size() - at < bytes) throw truncated(y);
+        at += bytes;
+        x += n;
+      }
+  }
+}
+
+}  // namespace prt
