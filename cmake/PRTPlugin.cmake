@@ -20,7 +20,8 @@ function(prt_add_plugin name)
     OUTPUT_NAME "${ARG_KIND}-${name}"
     LIBRARY_OUTPUT_DIRECTORY ${ARG_OUTPUT_DIR}
     CXX_VISIBILITY_PRESET hidden
-    VISIBILITY_INLINES_HIDDEN ON)
+    VISIBILITY_INLINES_HIDDEN ON
+    INSTALL_RPATH "$ORIGIN/../..")  # <libdir>/prt/plugins -> <libdir>
   set_property(GLOBAL APPEND PROPERTY PRT_PLUGIN_TARGETS ${target})
   if(TARGET PRT::${ARG_KIND}_conformance)
     add_test(NAME conformance.${ARG_KIND}.${name}

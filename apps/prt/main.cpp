@@ -144,7 +144,7 @@ int main(int argc, char** argv) {
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);
   } catch (const prt::Error& e) {
-    std::cerr << "prt: " << e.what() << "\n";
+    std::cerr << "prt: " << prt::error_line(e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "prt: error: out of memory: the scene or file needs more memory than this "

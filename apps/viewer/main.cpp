@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const prt::Error& e) {
-    std::cerr << "prt-view: " << e.what() << "\n";
+    std::cerr << "prt-view: " << prt::error_line(e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "prt-view: error: out of memory: the scene needs more memory than this "

@@ -115,7 +115,8 @@ struct TemporarySlot {
 };
 std::array<TemporarySlot, kMaxTemporaries> temporaries;
 struct sigaction previous_int {}, previous_term {};
-std::once_flag handlers_installed;
+std::mutex handlers_mutex;
+int active_registrations = 0;
 
 void remove_temporaries_and_reraise(int signal_number) {
   for (auto& slot : temporaries)
@@ -124,7 +125,11 @@ void remove_temporaries_and_reraise(int signal_number) {
   raise(signal_number);
 }
 
+// The handlers are in place only while a temporary exists, and the ones they
+// replaced are restored afterwards.
 void install_handlers() {
+  std::lock_guard lock(handlers_mutex);
+  if (active_registrations++ > 0) return;
   struct sigaction action {};
   action.sa_handler = remove_temporaries_and_reraise;
   sigemptyset(&action.sa_mask);
@@ -132,11 +137,18 @@ void install_handlers() {
   sigaction(SIGTERM, &action, &previous_term);
 }
 
+void restore_handlers() {
+  std::lock_guard lock(handlers_mutex);
+  if (--active_registrations > 0) return;
+  sigaction(SIGINT, &previous_int, nullptr);
+  sigaction(SIGTERM, &previous_term, nullptr);
+}
+
 // Holds a temporary's path in a slot while it exists.
 class TemporaryRegistration {
  public:
   explicit TemporaryRegistration(const fs::path& path) {
-    std::call_once(handlers_installed, install_handlers);
+    install_handlers();
     const std::string text = path.string();
     if (text.size() >= kMaxPath) return;
     for (auto& s : temporaries) {
@@ -150,6 +162,7 @@ class TemporaryRegistration {
   }
   ~TemporaryRegistration() {
     if (slot_) slot_->state.store(0);
+    restore_handlers();
   }
   TemporaryRegistration(const TemporaryRegistration&) = delete;
   TemporaryRegistration& operator=(const TemporaryRegistration&) = delete;

@@ -101,7 +101,8 @@ namespace {
 fs::path own_plugin_directory() {
   Dl_info info{};
   if (dladdr(reinterpret_cast<const void*>(&host_build_key), &info) && info.dli_fname) {
-    const fs::path installed = fs::path(info.dli_fname).parent_path() / "prt" / "plugins";
+    const fs::path installed =
+        fs::path(info.dli_fname).lexically_normal().parent_path() / "prt" / "plugins";
     std::error_code error;
     if (fs::is_directory(installed, error)) return installed;
   }

@@ -33,4 +33,8 @@ class __attribute__((visibility("default"))) Error : public std::runtime_error {
   static std::string format(const SourceLocation& where, const std::string& message);
 };
 
+// A refusal in the one documented form, "place: error: message" (place is a
+// file, file:line or file:line:col), or "error: message" where there is none.
+std::string error_line(const std::string& what);
+
 }  // namespace prt

@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# No command destroys data: an output path that is an input, a device, a FIFO,
+# a directory, or a file of another kind is refused before any work, and every
+# file is left as it was.
+set -u
+prt="$(realpath "$1")"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+failures=0
+pass=0
+cd "$work"
+
+cat >scene.toml <<EOT
+[mesh]
+generate = "sphere"
+detail = 1
+[lighting]
+constant = [1, 1, 1]
+[basis]
+plugin = "sh"
+order = 3
+[transport]
+rays = 64
+[output]
+bake = "scene.h5"
+image = "scene.png"
+EOT
+"$prt" -q bake scene.toml >/dev/null || { echo "FAIL: the scene does not bake"; exit 1; }
+"$prt" -q render scene.toml >/dev/null || { echo "FAIL: the scene does not render"; exit 1; }
+mkfifo fifo
+mkdir folder
+mknod device c 1 3 2>/dev/null || cp -a /dev/null device  # /dev/null's numbers: harmless
+echo "notes: keep me" >notes.txt
+cp scene.h5 other.h5
+snapshot() { for f in scene.toml scene.h5 other.h5 scene.png notes.txt; do md5sum "$f"; done; stat -c '%n %F' fifo folder device; }
+before="$(snapshot)"
+
+# refuse NAME PATTERN -- ARGS: non-zero exit, the pattern on stderr, nothing changed or left.
+refuse() {
+  local name="$1" pattern="$2"
+  shift 3
+  "$prt" -q "$@" >stdout 2>stderr
+  local code=$? problems=""
+  [ "$code" -ne 0 ] || problems+=" exit code 0;"
+  grep -q -- "$pattern" stderr || problems+=" message lacks '$pattern';"
+  [ "$(snapshot)" = "$before" ] || problems+=" a file changed;"
+  ls -a . folder | grep -q '\.tmp-' && problems+=" a temporary was left;"
+  [ -z "$(ls folder)" ] || problems+=" something was written into folder/;"
+  if [ -n "$problems" ]; then
+    echo "FAIL $name:$problems"
+    sed 's/^/    stderr: /' stderr
+    failures=$((failures + 1))
+  else
+    echo "ok   $name: $(head -n 1 stderr)"
+    pass=$((pass + 1))
+  fi
+}
+
+refuse "bake over its own scene" "same file as the input" -- bake scene.toml -o scene.toml
+refuse "bake over the scene, forced" "same file as the input" -- bake scene.toml -o ./scene.toml --force
+refuse "render over its input bake" "same file as the input" -- render scene.toml --bake scene.h5 -o scene.h5
+refuse "bake into a FIFO" "FIFO" -- bake scene.toml -o fifo
+refuse "bake into a device" "device" -- bake scene.toml -o device
+refuse "render into a device" "device" -- render scene.toml -o device
+refuse "bake into a directory" "directory" -- bake scene.toml -o folder
+refuse "bake over a PNG" "refusing to replace a PNG image" -- bake scene.toml -o scene.png
+refuse "bake over notes" "refusing to replace a text file" -- bake scene.toml -o notes.txt
+refuse "render over a bake" "refusing to replace a bake file" -- render scene.toml -o other.h5
+refuse "bake into a missing folder" "does not exist" -- bake scene.toml -o no/such/out.h5
+refuse "compress onto its input" "same file as the input" -- compress scene.h5 -c pca -o scene.h5
+refuse "compare-bases table over the scene" "same file as the input" -- compare-bases scene.toml --bases sh:order=2 --csv scene.toml
+sed 's|bake = "scene.h5"|bake = "folder"|' scene.toml >dir_output.toml
+before="$(snapshot)"
+refuse "[output] bake names a directory" "directory" -- bake dir_output.toml
+
+# --force replaces an output of another kind, never an input.
+"$prt" -q bake scene.toml -o notes.txt --force >/dev/null 2>stderr
+if [ $? -eq 0 ] && head -c 9 notes.txt | grep -q PRT-BAKE; then
+  echo "ok   --force replaces a file of another kind"
+  pass=$((pass + 1))
+else
+  echo "FAIL --force did not replace notes.txt"
+  failures=$((failures + 1))
+fi
+
+echo "$pass passed, $failures failed"
+[ "$failures" -eq 0 ]
