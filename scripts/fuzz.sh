@@ -25,7 +25,7 @@ cmake --build "$out" >/dev/null
 
 # Seeds made from the build: a small bake and the test plug-ins' ELF files.
 seeds="$out/seeds"
-mkdir -p "$seeds/bake" "$seeds/elf" "$seeds/image"
+mkdir -p "$seeds"/{scene,mesh,image,bake,elf}
 if [ ! -f "$seeds/bake/sphere.h5" ]; then
   work="$(mktemp -d)"
   printf '[mesh]\ngenerate = "sphere"\ndetail = 0\n[lighting]\nconstant = [1, 1, 1]\n[basis]\nplugin = "sh"\norder = 2\n[transport]\nrays = 16\n[compressor]\nplugin = "cpca"\nclusters = 2\ncomponents = 1\n' >"$work/s.toml"
@@ -37,6 +37,8 @@ if [ -f "$root/data/hdri/studio.exr" ] && [ ! -f "$seeds/image/studio.exr" ]; th
   { printf '\001'; cat "$root/data/hdri/studio.exr"; } >"$seeds/image/studio.exr"
 fi
 
+# Leaks inside third-party libraries are listed, with reasons, in this file.
+export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp:print_suppressions=0"
 status=0
 for target in $targets; do
   corpus="$out/corpus/$target"

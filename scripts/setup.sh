@@ -6,7 +6,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export DEBIAN_FRONTEND=noninteractive
 
 packages=(
-  build-essential cmake pkg-config ninja-build clang-format
+  build-essential cmake pkg-config ninja-build clang-format clang
   libeigen3-dev libembree-dev libopenmesh-dev libglfw3-dev libglm-dev
   libboost-dev libboost-filesystem-dev catch2 libtbb-dev libtomlplusplus-dev
   libcli11-dev libopenexr-dev libhdf5-dev hdf5-tools libstb-dev libepoxy-dev libimgui-dev

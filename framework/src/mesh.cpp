@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <mutex>
 #include <sstream>
 
 #include "mesh_file_check.hpp"
@@ -22,25 +23,33 @@ using OMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 
 // Captures what OpenMesh prints to its error log while a file is read, so
 // problems can be reported in one message instead of a stream of warnings.
+// The capture stream is connected once for the process: OpenMesh's
+// mostream::disconnect leaks the wrapper that connect allocated.
 class OpenMeshLogCapture {
  public:
-  OpenMeshLogCapture() {
-    omerr().disconnect(std::cerr);
-    omerr().connect(log_);
-    omlog().disable();
-  }
-  ~OpenMeshLogCapture() {
-    omerr().flush();
-    omerr().disconnect(log_);
-    omerr().connect(std::cerr);
+  OpenMeshLogCapture() : lock_(mutex()) {
+    static std::ostringstream& log = []() -> std::ostringstream& {
+      static std::ostringstream stream;
+      omerr().disconnect(std::cerr);
+      omerr().connect(stream);
+      omlog().disable();
+      return stream;
+    }();
+    log_ = &log;
+    log_->str("");
   }
   std::string text() {
     omerr().flush();
-    return log_.str();
+    return log_->str();
   }
 
  private:
-  std::ostringstream log_;
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  std::ostringstream* log_ = nullptr;
 };
 
 std::size_t count_lines_containing(const std::string& text, const std::string& needle) {

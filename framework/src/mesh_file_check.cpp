@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -50,10 +51,11 @@ class Checker {
   }
 
   // The next line that holds data; false at the end of the file.
-  bool next_data_line(std::string& line) {
+  bool next_data_line(std::string& line, bool in_header = true) {
     while (std::getline(in_, line)) {
       ++line_;
-      if (static_cast<std::uint64_t>(in_.tellg()) > kMaxHeaderBytes && in_.tellg() >= 0)
+      if (in_header && static_cast<std::uint64_t>(in_.tellg()) > kMaxHeaderBytes &&
+          in_.tellg() >= 0)
         fail("no complete header within the first 1 MiB");
       if (!is_blank_or_comment(line)) return true;
     }
@@ -91,6 +93,7 @@ class Checker {
   }
 
   DeclaredMeshSize off();
+  DeclaredMeshSize obj();
   DeclaredMeshSize ply();
   DeclaredMeshSize stl();
 
@@ -108,7 +111,8 @@ DeclaredMeshSize Checker::off() {
   std::string keyword;
   tokens >> keyword;
   const std::string k = lower(keyword);
-  if (k.size() < 3 || k.compare(k.size() - 3, 3, "off") != 0) fail("not an OFF file (no OFF keyword)");
+  if (k.size() < 3 || k.compare(k.size() - 3, 3, "off") != 0)
+    fail("not an OFF file (no OFF keyword)");
   std::vector<std::string> rest;
   for (std::string t; tokens >> t;) rest.push_back(t);
   const bool binary = !rest.empty() && lower(rest[0]) == "binary";
@@ -121,74 +125,123 @@ DeclaredMeshSize Checker::off() {
     std::istringstream counts(line);
     for (std::string t; counts >> t;) rest.push_back(t);
   }
-  if (rest.size() < 2) fail("the OFF header needs vertex and face counts");
+  // "nv nf [ne]" and nothing else: OpenMesh's reader loops on some junk here.
+  if (rest.size() < 2 || rest.size() > 3)
+    fail("the OFF header needs vertex, face and edge counts (\"nv nf ne\")");
   DeclaredMeshSize size{true, count(rest[0], "vertices"), count(rest[1], "faces")};
+  if (rest.size() == 3) count(rest[2], "edges");
+  if (size.vertices < 3 || size.faces < 1)
+    fail("the OFF header declares " + std::to_string(size.vertices) + " vertices and " +
+         std::to_string(size.faces) + " faces: no surface");
   // "x y z" needs 6 bytes with its newline, "3 a b c" 8.
-  require_room(6.0L * size.vertices + 8.0L * size.faces,
-               std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) +
-                   " faces");
-  require_lines(size.vertices + size.faces,
-                std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) +
-                    " faces");
+  require_room(
+      6.0L * size.vertices + 8.0L * size.faces,
+      std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) + " faces");
+  // Line by line (OpenMesh reserves what a face line's count says): a vertex
+  // line has 3 coordinates or more, a face line "k i_1 .. i_k" with 3 <= k.
+
+  std::uint64_t vertices = 0, faces = 0;
+  while (faces < size.faces && next_data_line(line, false)) {
+    std::istringstream stream(line);
+    std::vector<std::string> tokens;
+    for (std::string t; stream >> t;) tokens.push_back(t);
+    if (tokens.empty()) continue;  // only form feeds or vertical tabs
+    if (vertices < size.vertices) {
+      if (tokens.size() < 3) fail("a vertex needs 3 coordinates");
+      ++vertices;
+      continue;
+    }
+    const std::string& k = tokens[0];
+    if (k.find_first_not_of("0123456789") != std::string::npos || k.size() > 6 ||
+        std::stoul(k) < 3 || std::stoul(k) > tokens.size() - 1)
+      fail("a face must be \"k i_1 ... i_k\" with k >= 3 vertex indices, not \"" +
+           line.substr(0, 40) + "\"");
+    ++faces;
+  }
+  if (faces < size.faces)
+    fail("truncated: the header declares " + std::to_string(size.vertices) + " vertices and " +
+         std::to_string(size.faces) + " faces, but the file ends after " +
+         std::to_string(vertices) + " vertices and " + std::to_string(faces) + " faces");
   return size;
 }
 
 DeclaredMeshSize Checker::ply() {
   static const std::map<std::string, int> type_bytes{
-      {"char", 1},  {"int8", 1},   {"uchar", 1},   {"uint8", 1},   {"short", 2},
-      {"int16", 2}, {"ushort", 2}, {"uint16", 2},  {"int", 4},     {"int32", 4},
-      {"uint", 4},  {"uint32", 4}, {"float", 4},   {"float32", 4}, {"double", 8},
-      {"float64", 8}};
+      {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
+      {"ushort", 2}, {"uint16", 2},  {"int", 4},    {"int32", 4},  {"uint", 4},  {"uint32", 4},
+      {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
   struct Element {
     std::string name;
     std::uint64_t count = 0;
     long double min_bytes = 0;
+    std::vector<std::string> scalars;  // scalar property names
+    int lists = 0;
   };
   std::vector<Element> elements;
   std::string line, format;
   bool ended = false;
+  // The header is checked strictly, line by line: OpenMesh's PLY reader loops
+  // forever on some malformed headers.
   while (!ended && std::getline(in_, line)) {
     ++line_;
     if (static_cast<std::uint64_t>(in_.tellg()) > kMaxHeaderBytes)
       fail("no end_header within the first 1 MiB");
-    std::istringstream tokens(line);
-    std::string keyword;
-    tokens >> keyword;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream stream(line);
+    std::vector<std::string> tokens;
+    for (std::string t; stream >> t;) tokens.push_back(t);
+    const std::string keyword = tokens.empty() ? "" : tokens[0];
+    auto malformed = [&] { fail("malformed PLY header line \"" + line.substr(0, 60) + "\""); };
     if (line_ == 1) {
-      if (keyword != "ply") fail("not a PLY file (no \"ply\" line)");
+      if (line != "ply") fail("not a PLY file (no \"ply\" line)");
       continue;
     }
+    if (keyword == "comment" || keyword == "obj_info") continue;
     if (keyword == "format") {
-      tokens >> format;
+      if (tokens.size() != 3 || tokens[2] != "1.0" || !format.empty() || !elements.empty())
+        malformed();
+      format = tokens[1];
     } else if (keyword == "element") {
-      std::string name, n;
-      tokens >> name >> n;
-      elements.push_back({name, count(n, ("\"" + name + "\" elements").c_str()), 0});
+      if (tokens.size() != 3) malformed();
+      for (const auto& e : elements)
+        if (e.name == tokens[1]) fail("PLY element \"" + tokens[1] + "\" declared twice");
+      elements.push_back({tokens[1], count(tokens[2], ("\"" + tokens[1] + "\" elements").c_str())});
     } else if (keyword == "property") {
       if (elements.empty()) fail("a property before any element");
-      std::string type;
-      tokens >> type;
-      if (type == "list") {
-        std::string count_type, item_type;
-        tokens >> count_type >> item_type;
-        if (!type_bytes.count(count_type) || !type_bytes.count(item_type))
-          fail("unknown PLY property type in \"" + line + "\"");
+      Element& e = elements.back();
+      if (tokens.size() == 5 && tokens[1] == "list") {
+        if (!type_bytes.count(tokens[2]) || !type_bytes.count(tokens[3]))
+          fail("unknown PLY property type in \"" + line.substr(0, 60) + "\"");
         // A face lists at least 3 vertices; other lists may be empty.
-        const int items = elements.back().name == "face" ? 3 : 0;
-        elements.back().min_bytes += type_bytes.at(count_type) + items * type_bytes.at(item_type);
+        const int items = e.name == "face" ? 3 : 0;
+        e.min_bytes += type_bytes.at(tokens[2]) + items * type_bytes.at(tokens[3]);
+        ++e.lists;
+      } else if (tokens.size() == 3 && tokens[1] != "list") {
+        if (!type_bytes.count(tokens[1])) fail("unknown PLY property type \"" + tokens[1] + "\"");
+        e.min_bytes += type_bytes.at(tokens[1]);
+        e.scalars.push_back(tokens[2]);
       } else {
-        if (!type_bytes.count(type)) fail("unknown PLY property type \"" + type + "\"");
-        elements.back().min_bytes += type_bytes.at(type);
+        malformed();
       }
     } else if (keyword == "end_header") {
+      if (tokens.size() != 1) malformed();
       ended = true;
-    } else if (keyword != "comment" && keyword != "obj_info" && !keyword.empty()) {
+    } else {
       fail("unexpected PLY header line \"" + line.substr(0, 60) + "\"");
     }
   }
   if (!ended) fail("no end_header: the PLY header is incomplete");
   if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
     fail("unknown PLY format \"" + format + "\"");
+  auto has = [](const std::vector<std::string>& names, const char* name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
+  if (elements.empty() || elements[0].name != "vertex" || !has(elements[0].scalars, "x") ||
+      !has(elements[0].scalars, "y") || !has(elements[0].scalars, "z") || elements[0].lists)
+    fail("the first PLY element must be \"vertex\" with scalar properties x, y and z");
+  for (const auto& e : elements)
+    if (e.name == "face" && (e.lists != 1 || e.min_bytes == 0))
+      fail("the PLY element \"face\" must have one list property of vertex indices");
   DeclaredMeshSize size{true, 0, 0};
   long double needed = 0;
   std::uint64_t lines = 0;
@@ -198,11 +251,70 @@ DeclaredMeshSize Checker::ply() {
     needed += format == "ascii" ? 2.0L * e.count : e.min_bytes * e.count;
     lines += e.count;
   }
-  const std::string what = std::to_string(size.vertices) + " vertices and " +
-                           std::to_string(size.faces) + " faces";
+  const std::string what =
+      std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) + " faces";
   require_room(needed, what);
   if (format == "ascii") require_lines(lines, what);
   return size;
+}
+
+// OBJ declares no counts, and OpenMesh's reader asserts (aborts) on some
+// malformed lines: every line is checked to be a known statement with
+// numbers where numbers belong and face indices that refer to vertices.
+DeclaredMeshSize Checker::obj() {
+  auto number = [](const std::string& t) {
+    char* end = nullptr;
+    const double value = std::strtod(t.c_str(), &end);
+    return end && *end == '\0' && end != t.c_str() && std::isfinite(value);
+  };
+  std::uint64_t vertices = 0, texture = 0, normals = 0, faces = 0;
+  std::string line;
+  while (std::getline(in_, line)) {
+    ++line_;
+    std::istringstream stream(line);
+    std::vector<std::string> tokens;
+    for (std::string t; stream >> t;) tokens.push_back(t);
+    if (tokens.empty() || tokens[0][0] == '#') continue;
+    const std::string& keyword = tokens[0];
+    static const char* names[] = {"o", "g", "s", "usemtl", "mtllib"};
+    if (std::find(std::begin(names), std::end(names), keyword) != std::end(names)) continue;
+    for (char c : line)
+      if (static_cast<unsigned char>(c) >= 0x80 ||
+          (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\r'))
+        fail("unexpected byte in an OBJ statement");
+    if (keyword == "v" || keyword == "vn" || keyword == "vt") {
+      const std::size_t needed = keyword == "vt" ? 1 : 3;
+      if (tokens.size() < needed + 1 || tokens.size() > 5 ||
+          !std::all_of(tokens.begin() + 1, tokens.end(), number))
+        fail("\"" + keyword + "\" needs " + std::to_string(needed) + " or more numbers");
+      (keyword == "v" ? vertices : keyword == "vn" ? normals : texture)++;
+    } else if (keyword == "f") {
+      if (tokens.size() < 4) fail("a face needs 3 or more vertices");
+      for (std::size_t k = 1; k < tokens.size(); ++k) {
+        // i, i/t, i//n or i/t/n; negative indices count back from the end.
+        std::istringstream parts(tokens[k]);
+        std::string part;
+        const std::uint64_t limits[3] = {vertices, texture, normals};
+        for (int slot = 0; std::getline(parts, part, '/'); ++slot) {
+          if (slot > 2 || (part.empty() && slot == 0))
+            fail("malformed face vertex \"" + tokens[k] + "\"");
+          if (part.empty()) continue;
+          const std::string digits = part[0] == '-' ? part.substr(1) : part;
+          if (digits.empty() || digits.size() > 10 ||
+              digits.find_first_not_of("0123456789") != std::string::npos ||
+              std::stoull(digits) == 0 || std::stoull(digits) > limits[slot])
+            fail("face vertex \"" + tokens[k] + "\" refers to an element that does not exist");
+        }
+      }
+      ++faces;
+    } else if (keyword == "l" || keyword == "vp") {
+      continue;
+    } else {
+      fail("unknown OBJ statement \"" + keyword.substr(0, 20) + "\"");
+    }
+  }
+  if (vertices < 3 || faces < 1) fail("an OBJ mesh needs 3 vertices and a face");
+  return {true, vertices, faces};
 }
 
 DeclaredMeshSize Checker::stl() {
@@ -242,6 +354,7 @@ DeclaredMeshSize check_mesh_file(const fs::path& file) {
   if (extension == ".off") return checker.off();
   if (extension == ".ply") return checker.ply();
   if (extension == ".stl" || extension == ".stla" || extension == ".stlb") return checker.stl();
+  if (extension == ".obj") return checker.obj();
   return {};
 }
 

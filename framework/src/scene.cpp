@@ -1,9 +1,9 @@
 #include "prt/scene.hpp"
 
-#include <toml++/toml.h>
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -14,6 +14,7 @@
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
 #include "prt/sh.hpp"
+#include "toml_checked.hpp"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -175,42 +176,160 @@ void resolve_paths(Params& params, const ParamSchema& schema, const SceneSpec& s
   }
 }
 
-// toml++ 3.3 reaches an "unreachable" point on some malformed byte
-// sequences, so text is checked first: valid UTF-8 (no overlong forms or
-// surrogates) and no control characters but tab, CR and LF. TOML forbids
-// these anyway; the message says where.
-void require_plain_utf8_text(const std::string& text, const fs::path& file) {
+// toml++ 3.3 has undefined behaviour on non-ASCII text: its whitespace test
+// reaches __builtin_unreachable for most non-ASCII code points (e.g. U+00E9,
+// U+FCFF), and it may test any character of a malformed value. So toml++ is
+// handed ASCII only, with the same meaning: non-ASCII characters in basic
+// strings become \u escapes, literal strings holding them become basic
+// strings, comments lose them, and anywhere else they are refused (TOML's keys
+// and bare values are ASCII). The text is also checked to be valid UTF-8
+// without control characters, brackets to pair up and table headers to start
+// with a key (toml++ assumes both). Errors say where, in the original text.
+std::string ascii_scene_text(const std::string& text, const fs::path& file) {
+  enum class Context { code, comment, basic, literal, multiline_basic, multiline_literal };
+  Context context = Context::code;
   int line = 1, column = 1;
   auto fail = [&](const std::string& what) {
-    throw Error(SourceLocation{file.string(), line, column}, what + "; a scene is UTF-8 text");
+    throw Error(SourceLocation{file.string(), line, column}, what);
+  };
+  auto starts = [&](std::size_t i, const char* token) { return text.compare(i, 3, token) == 0; };
+  auto require_table_key = [&](std::size_t i) {
+    std::size_t k = i + 1;
+    if (k < text.size() && text[k] == '[') ++k;
+    while (k < text.size() && (text[k] == ' ' || text[k] == '\t')) ++k;
+    const char next = k < text.size() ? text[k] : '\n';
+    if (!(std::isalnum(static_cast<unsigned char>(next)) || next == '_' || next == '-' ||
+          next == '"' || next == '\'' || next == ']'))
+      fail("a table header must start with a key, e.g. [mesh]");
+  };
+  std::string out;
+  out.reserve(text.size());
+  // A literal string is copied as is, unless it holds a non-ASCII character:
+  // then it is rewritten as a basic string from its opening quote.
+  std::size_t literal_start = 0;
+  bool literal_rewritten = false, after_backslash = false, at_line_start = true;
+  std::string brackets;  // the '[' and '{' open in code
+  auto rewrite_literal = [&] {
+    const bool multiline = context == Context::multiline_literal;
+    const std::string body = out.substr(literal_start + (multiline ? 3 : 1));
+    out.resize(literal_start);
+    out += multiline ? "\"\"\"" : "\"";
+    for (char ch : body) {
+      if (ch == '\\' || ch == '"') out += '\\';
+      out += ch;
+    }
+    literal_rewritten = true;
   };
   for (std::size_t i = 0; i < text.size();) {
     const auto c = static_cast<unsigned char>(text[i]);
-    if (c < 0x80) {
-      if (c == '\n') {
-        ++line, column = 1, ++i;
-        continue;
+    if (c >= 0x80) {
+      const int length = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc0 ? 2 : 0;
+      if (length == 0 || c > 0xf4 || c == 0xc0 || c == 0xc1 || i + length > text.size())
+        fail("invalid UTF-8 byte; a scene is UTF-8 text");
+      std::uint32_t code = c & (0xff >> (length + 1));
+      for (int k = 1; k < length; ++k) {
+        const auto next = static_cast<unsigned char>(text[i + k]);
+        if ((next & 0xc0) != 0x80) fail("invalid UTF-8 sequence; a scene is UTF-8 text");
+        code = (code << 6) | (next & 0x3f);
       }
-      if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f)
-        fail("control character 0x" + std::string(1, "0123456789abcdef"[c >> 4]) +
-             std::string(1, "0123456789abcdef"[c & 15]));
-      ++column, ++i;
+      const std::uint32_t smallest[5] = {0, 0, 0x80, 0x800, 0x10000};
+      if (code < smallest[length] || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff))
+        fail("invalid UTF-8 sequence; a scene is UTF-8 text");
+      if (context == Context::code)
+        fail(
+            "non-ASCII character outside a string or comment (keys and values are ASCII; "
+            "quote it)");
+      if (after_backslash) fail("invalid escape sequence in a string");
+      if ((context == Context::literal || context == Context::multiline_literal) &&
+          !literal_rewritten)
+        rewrite_literal();
+      if (context == Context::comment) {
+        out += '?';
+      } else {
+        char escape[12];
+        std::snprintf(escape, sizeof escape, code > 0xffff ? "\\U%08X" : "\\u%04X",
+                      static_cast<unsigned>(code));
+        out += escape;
+      }
+      at_line_start = false;
+      ++column, i += length;
       continue;
     }
-    const int length = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc0 ? 2 : 0;
-    if (length == 0 || c > 0xf4 || c == 0xc0 || c == 0xc1 || i + length > text.size())
-      fail("invalid UTF-8 byte");
-    std::uint32_t code = c & (0xff >> (length + 1));
-    for (int k = 1; k < length; ++k) {
-      const auto next = static_cast<unsigned char>(text[i + k]);
-      if ((next & 0xc0) != 0x80) fail("invalid UTF-8 sequence");
-      code = (code << 6) | (next & 0x3f);
+    if ((c < 0x20 && c != '\t' && c != '\r' && c != '\n') || c == 0x7f)
+      fail("control character 0x" + std::string(1, "0123456789abcdef"[c >> 4]) +
+           std::string(1, "0123456789abcdef"[c & 15]) + "; a scene is UTF-8 text");
+    std::size_t step = 1;
+    const bool in_literal = context == Context::literal || context == Context::multiline_literal;
+    switch (context) {
+      case Context::code:
+        // Brackets must pair up: toml++ assumes a ']' or '}' closes what it opened.
+        if (c == '[') {
+          if (brackets.empty() && at_line_start) require_table_key(i);
+          brackets.push_back('[');
+        }
+        if (c == '{') brackets.push_back('{');
+        if (c == ']' || c == '}') {
+          if (brackets.empty() || brackets.back() != (c == ']' ? '[' : '{'))
+            fail(std::string("unmatched '") + char(c) + "'");
+          brackets.pop_back();
+        }
+        if (c == '#') context = Context::comment;
+        if (c == '"') {
+          const bool three = starts(i, "\"\"\"");
+          step = three ? 3 : 1;
+          context = three ? Context::multiline_basic : Context::basic;
+        }
+        if (c == '\'') {
+          const bool three = starts(i, "'''");
+          step = three ? 3 : 1;
+          literal_start = out.size(), literal_rewritten = false;
+          context = three ? Context::multiline_literal : Context::literal;
+        }
+        break;
+      case Context::basic:
+      case Context::multiline_basic:
+        if (after_backslash) {
+          after_backslash = false;
+        } else if (c == '\\') {
+          after_backslash = true;
+        } else if (context == Context::basic && c == '"') {
+          context = Context::code;
+        } else if (context == Context::multiline_basic && starts(i, "\"\"\"")) {
+          step = 3, context = Context::code;
+        }
+        break;
+      case Context::literal:
+        if (c == '\'') context = Context::code;
+        break;
+      case Context::multiline_literal:
+        if (starts(i, "'''")) step = 3, context = Context::code;
+        break;
+      case Context::comment:
+        break;
     }
-    const std::uint32_t smallest[5] = {0, 0, 0x80, 0x800, 0x10000};
-    if (code < smallest[length] || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff))
-      fail("invalid UTF-8 sequence");
-    ++column, i += length;
+    // Inside a rewritten literal, quotes and backslashes are escaped and the
+    // closing quotes become double quotes.
+    if (in_literal && literal_rewritten) {
+      if (context == Context::code) {
+        out += step == 3 ? "\"\"\"" : "\"";
+      } else {
+        if (c == '\\' || c == '"') out += '\\';
+        out += static_cast<char>(c);
+      }
+    } else {
+      out.append(text, i, step);
+    }
+    if (c == '\n') {
+      if (context == Context::comment || context == Context::basic || context == Context::literal)
+        context = Context::code;  // single-line contexts end with the line
+      ++line, column = 1, at_line_start = true, after_backslash = false;
+    } else {
+      if (c != ' ' && c != '\t' && c != '\r') at_line_start = false;
+      column += static_cast<int>(step);
+    }
+    i += step;
   }
+  return out;
 }
 
 PluginChoice read_plugin(const toml::table& root, const std::string& section,
@@ -218,8 +337,8 @@ PluginChoice read_plugin(const toml::table& root, const std::string& section,
                          const PluginRegistry& registry, const SceneSpec& scene) {
   PluginChoice choice;
   const toml::table* table = root[section].as_table();
-  const SourceLocation section_where = table ? location_of(table->source(), scene.file)
-                                             : SourceLocation{scene.file.string(), 1, 1};
+  const SourceLocation section_where =
+      table ? location_of(table->source(), scene.file) : SourceLocation{scene.file.string(), 1, 1};
   choice.where = section_where;
   choice.name = default_name;
   if (table) {
@@ -259,17 +378,23 @@ SceneSpec SceneSpec::load(const fs::path& file, const PluginRegistry& registry) 
   return parse(text.str(), file, registry);
 }
 
+void toml_assumption_broken(const char* what) {
+  throw Error(std::string("malformed TOML (the parser's check \"") + what + "\" failed)");
+}
+
 SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                            const PluginRegistry& registry) {
   SceneSpec scene;
   scene.file = file;
   scene.text = text;
-  require_plain_utf8_text(text, file);
+  const std::string ascii = ascii_scene_text(text, file);
   toml::table root;
   try {
-    root = toml::parse(text, file.string());
+    root = toml::parse(ascii, file.string());
   } catch (const toml::parse_error& e) {
     throw Error(location_of(e.source(), file), std::string(e.description()));
+  } catch (const Error& e) {  // a broken parser assumption: no position is known
+    throw Error(SourceLocation{file.string()}, e.what());
   }
   std::vector<std::string> valid(kSections.begin(), kSections.end());
   for (const auto& [key, node] : root) {

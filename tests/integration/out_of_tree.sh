@@ -14,3 +14,5 @@ cmake --build "$work/zonal" >/dev/null
 ctest --test-dir "$work/zonal" --output-on-failure
 # The installed prt finds the example through PRT_PLUGIN_PATH, next to its own plug-ins.
 PRT_PLUGIN_PATH="$work/zonal/plugins" "$work/prefix/bin/prt" plugins | grep -E "^(basis|compressor|renderer) "
+# The installed binaries and libraries load code only from where they belong.
+bash "$src/tests/integration/load_paths.sh" "$work/prefix"

@@ -360,6 +360,16 @@ TEST_CASE("scene files: not a file, not UTF-8 text, degenerate camera", "[harden
   write_file(dir / "nul.toml", std::string("[mesh]\0\n", 8));
   CHECK_THROWS_WITH(SceneSpec::load(dir / "nul.toml", registry),
                     Contains("nul.toml:1:7") && Contains("control character"));
+  // toml++ reaches undefined behaviour on non-ASCII text where a token may
+  // start; inside strings and comments it is fine.
+  write_file(dir / "bare.toml", "[mesh]\ngenerate = \xc3\xa9\n");
+  CHECK_THROWS_WITH(SceneSpec::load(dir / "bare.toml", registry),
+                    Contains("bare.toml:2:12") && Contains("non-ASCII character outside"));
+  write_file(dir / "accents.toml",
+             "# caf\xc3\xa9 \xef\xb3\xbf\n[mesh]\ngenerate = \"box\" # \xc3\xa9\n[lighting]\n"
+             "constant = [1, 1, 1]\n[output]\nimage = 'caf\xc3\xa9.png'\n");
+  CHECK(SceneSpec::load(dir / "accents.toml", registry).image_path().filename() ==
+        "caf\xc3\xa9.png");
   // A section-level error still has a line and column.
   write_file(dir / "nomesh.toml", "[lighting]\nconstant = [1, 1, 1]\n");
   CHECK_THROWS_WITH(SceneSpec::load(dir / "nomesh.toml", registry),
