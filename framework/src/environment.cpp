@@ -73,6 +73,7 @@ Environment Environment::load_hdr(const std::filesystem::path& file) {
 
 Environment Environment::load_exr(const std::filesystem::path& file) {
   require_file(file);
+  check_exr_file(file);
   Imf::Array2D<Imf::Rgba> pixels;
   int width = 0, height = 0;
   try {

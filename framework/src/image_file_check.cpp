@@ -24,6 +24,48 @@ void check_image_resolution(const fs::path& file, std::int64_t width, std::int64
                 std::to_string(static_cast<long long>(bytes)) + " bytes can hold (damaged?)");
 }
 
+void check_exr_file(const fs::path& file) {
+  // OpenEXR allocates what each header attribute declares before reading
+  // it; here every declared size must fit in what is left of the file.
+  const std::string where = file.string() + ": ";
+  std::ifstream in(file, std::ios::binary);
+  std::error_code error;
+  const std::uint64_t size = fs::file_size(file, error);
+  unsigned char head[8] = {};
+  in.read(reinterpret_cast<char*>(head), 8);
+  if (in.gcount() != 8 || head[0] != 0x76 || head[1] != 0x2f || head[2] != 0x31 || head[3] != 0x01)
+    throw Error(where + "not an OpenEXR image (no EXR magic number)");
+  const bool multipart = head[5] & 0x10;
+  const std::size_t max_name = (head[5] & 0x04) ? 255 : 31;
+  auto read_name = [&](std::string& name) {
+    name.clear();
+    for (char c; in.get(c);) {
+      if (c == '\0') return true;
+      if (name.size() >= max_name) return false;
+      name += c;
+    }
+    return false;
+  };
+  std::string name, type;
+  for (int headers = 0; headers < 1000; ++headers) {
+    int attributes = 0;
+    for (;; ++attributes) {
+      if (!read_name(name)) throw Error(where + "damaged OpenEXR header (attribute name)");
+      if (name.empty()) break;  // the header's end
+      std::int32_t bytes = 0;
+      if (!read_name(type) || !in.read(reinterpret_cast<char*>(&bytes), 4))
+        throw Error(where + "damaged OpenEXR header (attribute \"" + name + "\")");
+      const auto at = static_cast<std::uint64_t>(in.tellg());
+      if (bytes < 0 || static_cast<std::uint64_t>(bytes) > size - std::min(size, at))
+        throw Error(where + "OpenEXR attribute \"" + name + "\" declares " + std::to_string(bytes) +
+                    " bytes, more than the file holds (damaged?)");
+      in.seekg(bytes, std::ios::cur);
+    }
+    if (!multipart || attributes == 0) return;  // single part, or the list's empty header
+  }
+  throw Error(where + "damaged OpenEXR header (too many parts)");
+}
+
 void check_radiance_file(const fs::path& file) {
   const std::string where = file.string() + ": ";
   std::ifstream in(file, std::ios::binary);

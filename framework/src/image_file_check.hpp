@@ -12,6 +12,10 @@ namespace prt {
 // the file otherwise.
 void check_radiance_file(const std::filesystem::path& file);
 
+// An OpenEXR file: magic number, and every header attribute's declared size
+// within the file (OpenEXR allocates it before reading).
+void check_exr_file(const std::filesystem::path& file);
+
 // Refuses a resolution that the file's size cannot plausibly encode (a
 // compressed image holds at most 64x its size in half RGBA, beyond 4 Mpixels).
 void check_image_resolution(const std::filesystem::path& file, std::int64_t width,

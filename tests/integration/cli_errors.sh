@@ -64,9 +64,9 @@ expect_error "unknown plug-in" 'bad_plugin.toml:7:10: error: no basis plug-in na
 
 good_scene >"$work/good.toml"
 head -c 5000 /dev/urandom >"$work/corrupt.h5"
-expect_error "corrupt bake" 'corrupt.h5: not a PRT bake file' -- render good.toml --bake corrupt.h5
+expect_error "corrupt bake" 'corrupt.h5: error: not a PRT bake file' -- render good.toml --bake corrupt.h5
 
-expect_error "missing bake" 'out.h5: bake file not found' -- render good.toml
+expect_error "missing bake" 'out.h5: error: bake file not found' -- render good.toml
 
 good_scene | sed 's/^rays = 64/rays = 0/' >"$work/range.toml"
 expect_error "out of range" 'range.toml:10:1: error: section \[transport\]: parameter "rays" = 0 is out of range \[1, 4194304\]' -- bake range.toml
