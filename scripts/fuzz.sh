@@ -60,7 +60,10 @@ for target in $targets; do
     "$corpus" "$root/tests/fuzz/corpus/$target" "$seeds/$target" >"$log" 2>&1
   code=$?
   set -e
-  rm -rf /tmp/prt-fuzz-*
+  # The harnesses' scratch folders (/tmp/prt-fuzz-PID) of processes that are gone.
+  for dir in /tmp/prt-fuzz-*; do
+    [ -d "$dir" ] && ! kill -0 "${dir##*-}" 2>/dev/null && rm -rf "$dir"
+  done
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -n 1)
   size=$(ls "$corpus" | wc -l)
   if [ "$code" -eq 0 ]; then
