@@ -83,5 +83,31 @@ else
   failures=$((failures + 1))
 fi
 
+# Killed by SIGINT or SIGTERM at random moments: no temporary is left, and a
+# bake file that exists is complete.
+sed -e 's/^detail = 1$/detail = 4/' -e 's/^rays = 64$/rays = 2048/' scene.toml >slow.toml
+killed_ok=1
+for attempt in $(seq 1 12); do
+  rm -f slow.h5
+  "$prt" -q bake slow.toml -o slow.h5 >/dev/null 2>&1 &
+  pid=$!
+  sleep "0.$((RANDOM % 9))$((RANDOM % 10))"
+  kill -s "$([ $((attempt % 2)) -eq 0 ] && echo INT || echo TERM)" "$pid" 2>/dev/null
+  wait "$pid" 2>/dev/null
+  if ls -a | grep -q '\.tmp-'; then
+    echo "FAIL kill $attempt left a temporary: $(ls -a | grep '\.tmp-')"
+    killed_ok=0
+  elif [ -e slow.h5 ] && ! "$prt" -q info slow.h5 >/dev/null 2>&1; then
+    echo "FAIL kill $attempt left an unreadable slow.h5"
+    killed_ok=0
+  fi
+done
+if [ "$killed_ok" -eq 1 ]; then
+  echo "ok   12 bakes killed by SIGINT/SIGTERM left no temporary and no damaged file"
+  pass=$((pass + 1))
+else
+  failures=$((failures + 1))
+fi
+
 echo "$pass passed, $failures failed"
 [ "$failures" -eq 0 ]
