@@ -56,6 +56,7 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
   check_bake_matches(data_, scene_);
   basis_ = registry_.create<Basis>(scene_.basis.name, scene_.basis.params, scene_.basis.where);
   basis_->load(data_.basis_state);
+  check_bake_dimension(data_, *basis_);
   environment_ = scene_.load_environment();
   scene_rotation_ = environment_.rotation();
   base_light_ = scene_.project_light(environment_, *basis_);

@@ -1,6 +1,7 @@
 #include "image_file_check.hpp"
 
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -23,6 +24,21 @@ void check_image_resolution(const fs::path& file, std::int64_t width, std::int64
                 std::to_string(height) + " pixels, more than a file of " +
                 std::to_string(static_cast<long long>(bytes)) + " bytes can hold (damaged?)");
 }
+
+namespace {
+// An OpenEXR channel list: entries "name\0" + 16 bytes, ended by an empty
+// name exactly at the end of the attribute.
+bool channel_list_fills(const std::string& value) {
+  std::size_t at = 0;
+  while (at < value.size()) {
+    const std::size_t end = value.find('\0', at);
+    if (end == std::string::npos) return false;
+    if (end == at) return end + 1 == value.size();
+    at = end + 1 + 16;
+  }
+  return false;
+}
+}  // namespace
 
 void check_exr_file(const fs::path& file) {
   // OpenEXR allocates what each header attribute declares before reading
@@ -59,7 +75,20 @@ void check_exr_file(const fs::path& file) {
       if (bytes < 0 || static_cast<std::uint64_t>(bytes) > size - std::min(size, at))
         throw Error(where + "OpenEXR attribute \"" + name + "\" declares " + std::to_string(bytes) +
                     " bytes, more than the file holds (damaged?)");
-      in.seekg(bytes, std::ios::cur);
+      std::string value(static_cast<std::size_t>(bytes), '\0');
+      in.read(value.data(), bytes);
+      // OpenEXR reads these two by their contents, not their declared size:
+      // the contents must agree with it, or its reading drifts off the header.
+      if (type == "chlist" && !channel_list_fills(value))
+        throw Error(where + "damaged OpenEXR channel list (its entries do not fill its " +
+                    std::to_string(bytes) + " bytes)");
+      if (type == "preview") {
+        std::uint32_t w = 0, h = 0;
+        if (value.size() >= 8)
+          std::memcpy(&w, value.data(), 4), std::memcpy(&h, value.data() + 4, 4);
+        if (value.size() < 8 || 4.0 * w * h + 8 != static_cast<double>(value.size()))
+          throw Error(where + "damaged OpenEXR preview image (its size disagrees with its bytes)");
+      }
     }
     if (!multipart || attributes == 0) return;  // single part, or the list's empty header
   }

@@ -73,12 +73,14 @@ double available_memory() {
 
 // Refuses, before any ray, a bake whose largest arrays cannot fit: the
 // transfer (twice: exact and decoded), kept visibility bits and bounce hits,
-// and the basis evaluated at every direction.
+// and the basis evaluated at every direction (unless it projects by a fast
+// transform).
 void require_memory(const SceneSpec& scene, const Mesh& mesh, const DirectionSet& set,
                     const Basis& basis, bool keep_visibility, bool keep_hits) {
   const double v = double(mesh.vertex_count()), d = double(set.size()), n = double(basis.size());
   const double rows = scene.glossy() ? double(scene.exit_basis().rows()) : 1.0;
-  const double bytes = 2 * v * rows * n * sizeof(float) + d * n * sizeof(double) +
+  const double projection = basis.has_fast_projection(set) ? 0 : d * n * sizeof(double);
+  const double bytes = 2 * v * rows * n * sizeof(float) + projection +
                        (keep_visibility ? v * d / 8 : 0) + (keep_hits ? v * d * 8 : 0);
   const double available = available_memory();
   if (bytes > available) {
@@ -298,6 +300,19 @@ void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
                     wanted.substr(0, wanted.find('\n')) + "); bake again");
 }
 
+void check_bake_dimension(const BakeData& data, const Basis& basis) {
+  const Eigen::Index expected = Eigen::Index(basis.size()) * data.transfer.exit.rows();
+  if (data.transfer.dimension() != expected)
+    throw Error(data.scene_file + ": the bake's transfer has " +
+                std::to_string(data.transfer.dimension()) + " columns, but basis \"" +
+                data.basis.name + "\" has " + std::to_string(basis.size()) +
+                " coefficients" +
+                (data.transfer.exit.glossy()
+                     ? " x " + std::to_string(data.transfer.exit.rows()) + " exit rows"
+                     : std::string()) +
+                "; the bake file does not match its plug-ins (bake again)");
+}
+
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
                 StageTimes& times) {
   check_bake_matches(data, scene);
@@ -305,6 +320,7 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   PluginChoice basis_choice = scene.basis, renderer_choice = scene.renderer;
   auto basis = registry.create<Basis>(basis_choice.name, basis_choice.params, basis_choice.where);
   basis->load(data.basis_state);
+  check_bake_dimension(data, *basis);
   auto renderer = registry.create<Renderer>(renderer_choice.name, renderer_choice.params,
                                             renderer_choice.where);
   const Environment environment = scene.load_environment();

@@ -44,6 +44,9 @@ void record(const CompressionReport& report, std::map<std::string, double>& metr
 
 // Checks that `data` was baked with the scene's basis and parameters.
 void check_bake_matches(const BakeData& data, const SceneSpec& scene);
+// Throws unless the bake's transfer has one column per basis coefficient (per
+// exit-basis row for glossy transfer): a file's shape must fit its plug-ins.
+void check_bake_dimension(const BakeData& data, const Basis& basis);
 
 struct Rendered {
   Image image;
