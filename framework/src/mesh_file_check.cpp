@@ -30,14 +30,6 @@ bool is_blank_or_comment(const std::string& line) {
   return at == std::string::npos || line[at] == '#';
 }
 
-// Lines after the current position that hold data (not blank, not comments).
-std::uint64_t count_data_lines(std::istream& in) {
-  std::uint64_t count = 0;
-  for (std::string line; std::getline(in, line);)
-    if (!is_blank_or_comment(line)) ++count;
-  return count;
-}
-
 class Checker {
  public:
   explicit Checker(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
@@ -85,11 +77,33 @@ class Checker {
            " bytes, but only " + std::to_string(room) + " follow (truncated or damaged file)");
   }
 
-  void require_lines(std::uint64_t expected, const std::string& what) {
-    const std::uint64_t found = count_data_lines(in_);
-    if (found < expected)
-      fail("truncated: the header declares " + what + " (" + std::to_string(expected) +
-           " lines), but the file holds " + std::to_string(found));
+  // Text readers and this checker must tokenise alike: no control bytes but
+  // tab, CR and LF, no non-ASCII bytes outside '#' comments. Reads the whole
+  // file, then returns to where it was.
+  void require_plain_text() {
+    const auto start = in_.tellg();
+    std::uint64_t line = 1;
+    bool comment = false;
+    for (int c; (c = in_.get()) != std::char_traits<char>::eof();) {
+      if (c == '\n') {
+        ++line, comment = false;
+        continue;
+      }
+      if (c == '#') comment = true;
+      if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f || (c >= 0x80 && !comment)) {
+        line_ = line;
+        fail("unexpected byte 0x" + std::string(1, "0123456789abcdef"[c >> 4]) +
+             std::string(1, "0123456789abcdef"[c & 15]) + " in a text mesh");
+      }
+    }
+    in_.clear();
+    in_.seekg(start);
+  }
+
+  static bool is_number(const std::string& t) {
+    char* end = nullptr;
+    const double value = std::strtod(t.c_str(), &end);
+    return end && *end == '\0' && end != t.c_str() && std::isfinite(value);
   }
 
   DeclaredMeshSize off();
@@ -105,6 +119,7 @@ class Checker {
 };
 
 DeclaredMeshSize Checker::off() {
+  require_plain_text();
   std::string line;
   if (!next_data_line(line)) fail("empty OFF file");
   std::istringstream tokens(line);
@@ -176,6 +191,7 @@ DeclaredMeshSize Checker::ply() {
     long double min_bytes = 0;
     std::vector<std::string> scalars;  // scalar property names
     int lists = 0;
+    std::vector<bool> is_list;  // each property in order: a list or a scalar
   };
   std::vector<Element> elements;
   std::string line, format;
@@ -216,10 +232,12 @@ DeclaredMeshSize Checker::ply() {
         const int items = e.name == "face" ? 3 : 0;
         e.min_bytes += type_bytes.at(tokens[2]) + items * type_bytes.at(tokens[3]);
         ++e.lists;
+        e.is_list.push_back(true);
       } else if (tokens.size() == 3 && tokens[1] != "list") {
         if (!type_bytes.count(tokens[1])) fail("unknown PLY property type \"" + tokens[1] + "\"");
         e.min_bytes += type_bytes.at(tokens[1]);
         e.scalars.push_back(tokens[2]);
+        e.is_list.push_back(false);
       } else {
         malformed();
       }
@@ -254,7 +272,37 @@ DeclaredMeshSize Checker::ply() {
   const std::string what =
       std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) + " faces";
   require_room(needed, what);
-  if (format == "ascii") require_lines(lines, what);
+  if (format != "ascii") return size;
+  // ASCII: one line per element, every token a number, and each list's count
+  // within the line (OpenMesh reserves what a count says).
+  require_plain_text();
+  for (const auto& e : elements)
+    for (std::uint64_t k = 0; k < e.count; ++k) {
+      if (!next_data_line(line, false))
+        fail("truncated: the header declares " + what + ", but the file ends in the \"" + e.name +
+             "\" elements");
+      std::istringstream stream(line);
+      std::vector<std::string> tokens;
+      for (std::string t; stream >> t;) tokens.push_back(t);
+      std::size_t at = 0;
+      for (bool list : e.is_list) {
+        if (at >= tokens.size() || !is_number(tokens[at]))
+          fail("a \"" + e.name + "\" line needs a number for each property");
+        if (!list) {
+          ++at;
+          continue;
+        }
+        const std::string& n = tokens[at];
+        const bool whole = n.find_first_not_of("0123456789") == std::string::npos && n.size() < 6;
+        const std::size_t items = whole ? std::stoul(n) : 0;
+        if (!whole || (e.name == "face" && items < 3) || at + 1 + items > tokens.size())
+          fail("a list in a \"" + e.name + "\" line must be \"k v_1 ... v_k\", not \"" +
+               line.substr(0, 40) + "\"");
+        for (std::size_t i = at + 1; i <= at + items; ++i)
+          if (!is_number(tokens[i])) fail("a \"" + e.name + "\" line holds a non-number");
+        at += 1 + items;
+      }
+    }
   return size;
 }
 
@@ -262,11 +310,6 @@ DeclaredMeshSize Checker::ply() {
 // malformed lines: every line is checked to be a known statement with
 // numbers where numbers belong and face indices that refer to vertices.
 DeclaredMeshSize Checker::obj() {
-  auto number = [](const std::string& t) {
-    char* end = nullptr;
-    const double value = std::strtod(t.c_str(), &end);
-    return end && *end == '\0' && end != t.c_str() && std::isfinite(value);
-  };
   std::uint64_t vertices = 0, texture = 0, normals = 0, faces = 0;
   std::string line;
   while (std::getline(in_, line)) {
@@ -285,7 +328,7 @@ DeclaredMeshSize Checker::obj() {
     if (keyword == "v" || keyword == "vn" || keyword == "vt") {
       const std::size_t needed = keyword == "vt" ? 1 : 3;
       if (tokens.size() < needed + 1 || tokens.size() > 5 ||
-          !std::all_of(tokens.begin() + 1, tokens.end(), number))
+          !std::all_of(tokens.begin() + 1, tokens.end(), is_number))
         fail("\"" + keyword + "\" needs " + std::to_string(needed) + " or more numbers");
       (keyword == "v" ? vertices : keyword == "vn" ? normals : texture)++;
     } else if (keyword == "f") {
