@@ -24,5 +24,7 @@ cmake --build "$out" --parallel "$(nproc)" --target prt_tests prt_basis_conforma
 slow='16k clusters|iterative CPCA on the bunny'
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# Leaks inside third-party libraries only (OpenMesh, libhdf5), with reasons.
+export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp:print_suppressions=0"
 ctest --test-dir "$out" --output-on-failure --parallel "$(nproc)" --timeout 900 \
   -R '^(unit|conformance)\.' -E "$slow"
