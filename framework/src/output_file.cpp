@@ -23,6 +23,7 @@ const char* to_string(FileKind kind) {
     case FileKind::missing: return "nothing";
     case FileKind::bake: return "a bake file";
     case FileKind::png: return "a PNG image";
+    case FileKind::scene: return "a scene file";
     case FileKind::text: return "a text file";
     case FileKind::other: return "a file of another kind";
   }
@@ -45,7 +46,7 @@ FileKind detect_file_kind(const fs::path& file) {
     const auto c = static_cast<unsigned char>(head[i]);
     if (c == 0 || (c < 32 && c != '\n' && c != '\r' && c != '\t')) return FileKind::other;
   }
-  return FileKind::text;
+  return file.extension() == ".toml" ? FileKind::scene : FileKind::text;
 }
 
 namespace {

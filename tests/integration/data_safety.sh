@@ -32,7 +32,8 @@ mkdir folder
 mknod device c 1 3 2>/dev/null || cp -a /dev/null device  # /dev/null's numbers: harmless
 echo "notes: keep me" >notes.txt
 cp scene.h5 other.h5
-snapshot() { for f in scene.toml scene.h5 other.h5 scene.png notes.txt; do md5sum "$f"; done; stat -c '%n %F' fifo folder device; }
+cp scene.toml other.toml
+snapshot() { for f in scene.toml other.toml scene.h5 other.h5 scene.png notes.txt; do md5sum "$f"; done; stat -c '%n %F' fifo folder device; }
 before="$(snapshot)"
 
 # refuse NAME PATTERN -- ARGS: non-zero exit, the pattern on stderr, nothing changed or left.
@@ -68,6 +69,7 @@ refuse "bake over notes" "refusing to replace a text file" -- bake scene.toml -o
 refuse "render over a bake" "refusing to replace a bake file" -- render scene.toml -o other.h5
 refuse "bake into a missing folder" "does not exist" -- bake scene.toml -o no/such/out.h5
 refuse "compress onto its input" "same file as the input" -- compress scene.h5 -c pca -o scene.h5
+refuse "table over another scene" "refusing to replace a scene file" -- compare-bases scene.toml --bases sh:order=2 --json other.toml
 refuse "compare-bases table over the scene" "same file as the input" -- compare-bases scene.toml --bases sh:order=2 --csv scene.toml
 sed 's|bake = "scene.h5"|bake = "folder"|' scene.toml >dir_output.toml
 before="$(snapshot)"

@@ -114,7 +114,12 @@ TEST_CASE("outputs never replace inputs, devices, folders or files of another ki
   CHECK_THROWS_WITH(check_output({image, FileKind::bake, "bake file"}, {}),
                     Contains("refusing to replace a PNG image") && Contains("--force"));
   CHECK_THROWS_WITH(check_output({scene, FileKind::bake, "bake file"}, {}),
-                    Contains("a text file"));
+                    Contains("a scene file"));
+  CHECK_THROWS_WITH(check_output({scene, FileKind::text, "table"}, {}),
+                    Contains("refusing to replace a scene file"));
+  const fs::path notes = dir / "notes.txt";
+  write_file(notes, "notes\n");
+  CHECK_NOTHROW(check_output({notes, FileKind::text, "table"}, {}));
   CHECK_NOTHROW(check_output({image, FileKind::bake, "bake file"}, {}, true));
   CHECK_NOTHROW(check_output({image, FileKind::png, "image"}, {}));
   CHECK_NOTHROW(check_output({bake, FileKind::bake, "bake file"}, {}));

@@ -9,8 +9,9 @@
 
 namespace prt {
 
-// What a file holds, judged from its first bytes (never from its name).
-enum class FileKind { missing, bake, png, text, other };
+// What a file holds, judged from its first bytes; a text file named *.toml
+// counts as a scene, which only --force may replace.
+enum class FileKind { missing, bake, png, scene, text, other };
 const char* to_string(FileKind kind);
 FileKind detect_file_kind(const std::filesystem::path& file);
 
