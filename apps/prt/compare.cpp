@@ -12,9 +12,9 @@
 #include <sstream>
 
 #include "commands.hpp"
-#include "prt/output_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
+#include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/transport.hpp"

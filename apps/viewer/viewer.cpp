@@ -7,8 +7,8 @@
 #include <iostream>
 
 #include "prt/bake_file.hpp"
-#include "prt/output_file.hpp"
 #include "prt/glossy.hpp"
+#include "prt/output_file.hpp"
 #include "prt/progress.hpp"
 
 namespace prt::view {

@@ -66,8 +66,7 @@ std::int64_t read_count(const H5::H5Object& object, const std::string& name, dou
   const double value = read_number(object, name);
   if (value < 0 || value > limit || value != std::floor(value))
     throw Error("attribute \"" + name + "\" = " + std::to_string(value) +
-                " is not a count in [0, " + std::to_string(static_cast<std::int64_t>(limit)) +
-                "]");
+                " is not a count in [0, " + std::to_string(static_cast<std::int64_t>(limit)) + "]");
   return static_cast<std::int64_t>(value);
 }
 
@@ -159,8 +158,8 @@ void write_bytes(H5::H5Object& parent, const std::string& name, const std::strin
   const hsize_t size = text.size();
   H5::DSetCreatPropList properties;
   H5Pset_obj_track_times(properties.getId(), false);
-  H5::DataSet set = parent.createDataSet(name, H5::PredType::NATIVE_UINT8, H5::DataSpace(1, &size),
-                                         properties);
+  H5::DataSet set =
+      parent.createDataSet(name, H5::PredType::NATIVE_UINT8, H5::DataSpace(1, &size), properties);
   if (size > 0) set.write(text.data(), H5::PredType::NATIVE_UINT8);
 }
 

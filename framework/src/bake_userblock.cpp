@@ -59,9 +59,10 @@ int verify_bake_file(const fs::path& file) {
   static const char hdf5_signature[] = "\x89HDF\r\n\x1a\n";
   if (std::memcmp(block, kBakeMagic, sizeof kBakeMagic - 1) != 0) {
     if (std::memcmp(block, hdf5_signature, 8) == 0)
-      throw Error(where + "not a PRT bake file of this format (an HDF5 file without the "
-                          "PRT-BAKE header: a bake of format version 2 or older, or another "
-                          "HDF5 file); re-bake the scene");
+      throw Error(where +
+                  "not a PRT bake file of this format (an HDF5 file without the "
+                  "PRT-BAKE header: a bake of format version 2 or older, or another "
+                  "HDF5 file); re-bake the scene");
     throw Error(where + "not a PRT bake file (no PRT-BAKE header)");
   }
   if (size < kBakeUserBlockSize)
@@ -69,9 +70,8 @@ int verify_bake_file(const fs::path& file) {
   int version = 0;
   std::uint64_t length = 0;
   std::uint32_t stored = 0;
-  if (std::sscanf(block + sizeof kBakeMagic - 1,
-                  "format %d\nlength %" SCNu64 "\ncrc32 %8" SCNx32, &version, &length,
-                  &stored) != 3)
+  if (std::sscanf(block + sizeof kBakeMagic - 1, "format %d\nlength %" SCNu64 "\ncrc32 %8" SCNx32,
+                  &version, &length, &stored) != 3)
     throw Error(where + "damaged bake file header");
   if (length != size)
     throw Error(where + "truncated or extended bake file: its header says " +

@@ -20,7 +20,8 @@ constexpr std::uint64_t kMaxSymbolBytes = 1ull << 20;
 // file's size: a 1 GiB file costs a few kilobytes to inspect.
 class ElfFile {
  public:
-  explicit ElfFile(const std::filesystem::path& file) : where_(file.string()), in_(file, std::ios::binary) {
+  explicit ElfFile(const std::filesystem::path& file)
+      : where_(file.string()), in_(file, std::ios::binary) {
     std::error_code error;
     size_ = std::filesystem::file_size(file, error);
     if (!in_ || error) throw Error(where_ + ": cannot be read");

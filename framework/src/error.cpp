@@ -25,8 +25,7 @@ std::string error_line(const std::string& what) {
   if (what.find(": error: ") != std::string::npos) return what;
   // "place: message", where the place (a path, maybe with :line) has no spaces.
   const auto colon = what.find(": ");
-  if (colon != std::string::npos && colon > 0 &&
-      what.find_first_of(" \t\"") > colon)
+  if (colon != std::string::npos && colon > 0 && what.find_first_of(" \t\"") > colon)
     return what.substr(0, colon) + ": error: " + what.substr(colon + 2);
   return "error: " + what;
 }

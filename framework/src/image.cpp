@@ -10,8 +10,8 @@
 #include <cmath>
 
 #include "prt/bake_file.hpp"
-#include "prt/output_file.hpp"
 #include "prt/error.hpp"
+#include "prt/output_file.hpp"
 
 namespace prt {
 

@@ -20,12 +20,18 @@ namespace fs = std::filesystem;
 
 const char* to_string(FileKind kind) {
   switch (kind) {
-    case FileKind::missing: return "nothing";
-    case FileKind::bake: return "a bake file";
-    case FileKind::png: return "a PNG image";
-    case FileKind::scene: return "a scene file";
-    case FileKind::text: return "a text file";
-    case FileKind::other: return "a file of another kind";
+    case FileKind::missing:
+      return "nothing";
+    case FileKind::bake:
+      return "a bake file";
+    case FileKind::png:
+      return "a PNG image";
+    case FileKind::scene:
+      return "a scene file";
+    case FileKind::text:
+      return "a text file";
+    case FileKind::other:
+      return "a file of another kind";
   }
   return "?";
 }
@@ -61,7 +67,8 @@ std::string file_type_name(const struct stat& s) {
 }
 
 bool same_file(const fs::path& a, const fs::path& b) {
-  struct stat sa {}, sb {};
+  struct stat sa {
+  }, sb{};
   return stat(a.c_str(), &sa) == 0 && stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev &&
          sa.st_ino == sb.st_ino;
 }
@@ -115,7 +122,8 @@ struct TemporarySlot {
   char path[kMaxPath] = {};
 };
 std::array<TemporarySlot, kMaxTemporaries> temporaries;
-struct sigaction previous_int {}, previous_term {};
+struct sigaction previous_int {
+}, previous_term{};
 std::mutex handlers_mutex;
 int active_registrations = 0;
 
@@ -215,8 +223,8 @@ void write_atomically(const fs::path& file, const std::function<void(const fs::p
     temporary = folder / name;
     descriptor = open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (descriptor < 0 && errno != EEXIST)
-      throw Error(file.string() + ": cannot create a temporary file beside it: " +
-                  std::strerror(errno));
+      throw Error(file.string() +
+                  ": cannot create a temporary file beside it: " + std::strerror(errno));
   }
   if (descriptor < 0) throw Error(file.string() + ": cannot create a unique temporary file");
   close(descriptor);

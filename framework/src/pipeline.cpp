@@ -1,10 +1,11 @@
 #include "prt/pipeline.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <unistd.h>
 
 #include "prt/basis.hpp"
 #include "prt/compressor.hpp"
@@ -305,8 +306,7 @@ void check_bake_dimension(const BakeData& data, const Basis& basis) {
   if (data.transfer.dimension() != expected)
     throw Error(data.scene_file + ": the bake's transfer has " +
                 std::to_string(data.transfer.dimension()) + " columns, but basis \"" +
-                data.basis.name + "\" has " + std::to_string(basis.size()) +
-                " coefficients" +
+                data.basis.name + "\" has " + std::to_string(basis.size()) + " coefficients" +
                 (data.transfer.exit.glossy()
                      ? " x " + std::to_string(data.transfer.exit.rows()) + " exit rows"
                      : std::string()) +

@@ -1,6 +1,5 @@
 #include "prt/scene.hpp"
 
-
 #include <algorithm>
 #include <array>
 #include <cctype>

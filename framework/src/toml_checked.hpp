@@ -20,8 +20,7 @@ namespace prt {
 #undef TOML_HEADER_ONLY
 #undef TOML_SHARED_LIB
 #define TOML_HEADER_ONLY 1
-#define TOML_ASSERT(expr) \
-  ((expr) ? static_cast<void>(0) : ::prt::toml_assumption_broken(#expr))
+#define TOML_ASSERT(expr) ((expr) ? static_cast<void>(0) : ::prt::toml_assumption_broken(#expr))
 #include <toml++/impl/preprocessor.h>
 #undef TOML_UNREACHABLE
 #define TOML_UNREACHABLE ::prt::toml_assumption_broken("unreachable code")

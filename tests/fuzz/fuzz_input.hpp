@@ -13,7 +13,8 @@ namespace prt::fuzz {
 inline std::filesystem::path input_file(const std::uint8_t* data, std::size_t size,
                                         const std::string& extension) {
   static const std::filesystem::path dir = [] {
-    const auto d = std::filesystem::temp_directory_path() / ("prt-fuzz-" + std::to_string(getpid()));
+    const auto d =
+        std::filesystem::temp_directory_path() / ("prt-fuzz-" + std::to_string(getpid()));
     std::filesystem::create_directories(d);
     return d;
   }();

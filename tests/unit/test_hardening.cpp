@@ -2,11 +2,10 @@
 // and no output path can destroy data (issue: hardening).
 #include <H5Cpp.h>
 #include <elf.h>
+#include <stb/stb_image_write.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <stb/stb_image_write.h>
 
 #include <catch2/catch.hpp>
 #include <chrono>
@@ -17,9 +16,9 @@
 
 #include "../../framework/src/bake_userblock.hpp"
 #include "prt/bake_file.hpp"
-#include "prt/image.hpp"
 #include "prt/environment.hpp"
 #include "prt/error.hpp"
+#include "prt/image.hpp"
 #include "prt/mesh.hpp"
 #include "prt/output_file.hpp"
 #include "prt/registry.hpp"
@@ -97,8 +96,7 @@ TEST_CASE("outputs never replace inputs, devices, folders or files of another ki
   CHECK_THROWS_WITH(check_output({fifo, FileKind::png, "image"}, {}), Contains("FIFO"));
   CHECK_THROWS_WITH(check_output({dir / "no" / "such" / "x.h5", FileKind::bake, "bake file"}, {}),
                     Contains("does not exist"));
-  CHECK_NOTHROW(
-      check_output({dir / "new_folder" / "x.h5", FileKind::bake, "bake file", true}, {}));
+  CHECK_NOTHROW(check_output({dir / "new_folder" / "x.h5", FileKind::bake, "bake file", true}, {}));
   // The same file as an input, by name, by another path, or by a hard link.
   CHECK_THROWS_WITH(check_output({scene, FileKind::bake, "bake file"}, {scene}, true),
                     Contains("same file as the input"));
@@ -273,9 +271,8 @@ TEST_CASE("mesh headers that declare more than the file holds are refused at onc
   };
   for (const auto& [name, text] : cases) {
     write_file(dir / name, text);
-    const double seconds = seconds_of([&, n = name] {
-      CHECK_THROWS_WITH(load_mesh(dir / n), Contains(n));
-    });
+    const double seconds =
+        seconds_of([&, n = name] { CHECK_THROWS_WITH(load_mesh(dir / n), Contains(n)); });
     CHECK(seconds < 1.0);
   }
   CHECK_THROWS_WITH(load_mesh(dir / "huge_vertices.off"), Contains("1000000000000"));
@@ -410,7 +407,8 @@ TEST_CASE("the plug-in scanner reads headers only and skips unsafe or damaged fi
   // A 1 GiB file costs no more than its header to inspect.
   {
     std::ofstream junk(dir / "libprt-basis-junk.so", std::ios::binary);
-    junk << "\x7f" "ELF junk";
+    junk << "\x7f"
+            "ELF junk";
   }
   fs::resize_file(dir / "libprt-basis-junk.so", std::uintmax_t(1) << 30);
   const double seconds = seconds_of([&] {
@@ -428,8 +426,7 @@ TEST_CASE("the plug-in scanner reads headers only and skips unsafe or damaged fi
     CHECK(r.names(PluginKind::basis).empty());
     CHECK_THROWS_WITH(r.find(PluginKind::basis, "good"), Contains("writable by others"));
   }
-  fs::permissions(dir / "libprt-basis-good.so", fs::perms::others_write,
-                  fs::perm_options::remove);
+  fs::permissions(dir / "libprt-basis-good.so", fs::perms::others_write, fs::perm_options::remove);
   fs::permissions(dir, fs::perms::group_write, fs::perm_options::add);
   PluginRegistry r({dir});
   CHECK(r.names(PluginKind::basis).empty());

@@ -83,9 +83,9 @@ TEST_CASE("each plug-in failure gives one clear error naming the file", "[regist
   using Catch::Contains;
   CHECK_THAT(problem_in(case_dir("not_a_plugin")),
              Contains("libprt-basis-notaplugin.so: not a PRT plug-in"));
-  CHECK_THAT(problem_in(case_dir("missing_symbol")),
-             Contains("libprt-basis-missing.so") &&
-                 Contains("lacks the symbol prt_plugin_destroy"));
+  CHECK_THAT(
+      problem_in(case_dir("missing_symbol")),
+      Contains("libprt-basis-missing.so") && Contains("lacks the symbol prt_plugin_destroy"));
   CHECK_THAT(problem_in(case_dir("abi_mismatch")),
              Contains("libprt-basis-abi.so: plug-in ABI version 999") &&
                  Contains("this host reads ABI version 1"));
