@@ -238,8 +238,16 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
 
   clock = Stopwatch();
   const int terms = basis->approximation_terms();
-  data.compressed = terms > 0 ? keep_largest(result.transfer, terms)
-                              : compressor->encode(result.transfer, &data.mesh);
+  try {
+    data.compressed = terms > 0 ? keep_largest(result.transfer, terms)
+                                : compressor->encode(result.transfer, &data.mesh);
+  } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
+    throw Error(compressor_choice.where, "out of memory while compressing the " +
+                                             std::to_string(result.transfer.vertices()) + " x " +
+                                             std::to_string(result.transfer.dimension()) +
+                                             " transfer with compressor \"" +
+                                             compressor_choice.name + "\"");
+  }
   const double encode_seconds = clock.seconds();
   times.add("compress (" + compressor_choice.name + ")", encode_seconds);
   const CompressionReport report =

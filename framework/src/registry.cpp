@@ -192,7 +192,8 @@ void PluginRegistry::scan_file(const fs::path& file) {
       problems_.push_back({file, d.kind(), d.name(),
                            file.string() + ": duplicate " + to_string(d.kind()) +
                                " plug-in name \"" + d.name() + "\", also provided by " +
-                               other.file.string()});
+                               other.file.string(),
+                           true});
       return;
     }
   plugins_.push_back(std::move(d));
@@ -207,11 +208,17 @@ std::vector<std::string> PluginRegistry::names(PluginKind kind) const {
 
 const PluginDescriptor& PluginRegistry::find(PluginKind kind, const std::string& name,
                                              const SourceLocation& where) const {
-  // A skipped file that claims this name: its problem is the answer.
-  for (const auto& problem : problems_)
-    if (problem.kind == kind && problem.name == name) throw Error(where, problem.message);
+  auto problem_claiming = [&](bool duplicate) -> const PluginProblem* {
+    for (const auto& problem : problems_)
+      if (problem.kind == kind && problem.name == name && problem.duplicate == duplicate)
+        return &problem;
+    return nullptr;
+  };
+  if (const auto* ambiguous = problem_claiming(true)) throw Error(where, ambiguous->message);
   for (const auto& p : plugins_)
     if (p.kind() == kind && p.name() == name) return p;
+  // Only a skipped file claims this name: its problem is the answer.
+  if (const auto* skipped = problem_claiming(false)) throw Error(where, skipped->message);
   const auto available = names(kind);
   std::string list;
   for (const auto& n : available) list += (list.empty() ? "" : ", ") + n;

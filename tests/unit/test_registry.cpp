@@ -120,6 +120,17 @@ TEST_CASE("one bad file on the plug-in path does not hide the others", "[registr
   CHECK(r.problems().size() == 2);
   CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sh"});
   CHECK_NOTHROW(r.find(PluginKind::basis, "sh"));
+  // A stale, unreadable copy named like a valid plug-in does not shadow it.
+  const fs::path stale = fs::temp_directory_path() / "prt_registry_stale";
+  fs::create_directories(stale);
+  fs::permissions(stale, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                             fs::perms::others_read | fs::perms::others_exec);
+  std::ofstream(stale / "libprt-basis-sh.so") << "not an ELF file";
+  PluginRegistry with_stale({PRT_BUILD_PLUGIN_DIR, stale});
+  CHECK(with_stale.problems().size() == 1);
+  CHECK(with_stale.find(PluginKind::basis, "sh").file.parent_path() ==
+        fs::path(PRT_BUILD_PLUGIN_DIR));
+  fs::remove_all(stale);
 }
 
 TEST_CASE("PRT_PLUGIN_PATH adds directories after the build's", "[registry]") {

@@ -36,6 +36,7 @@ struct PluginProblem {
   PluginKind kind = PluginKind::basis;
   std::string name;
   std::string message;
+  bool duplicate = false;  // a valid plug-in whose name another file has too
 };
 
 class PluginRegistry {
@@ -43,8 +44,9 @@ class PluginRegistry {
   // Scans `directories` in order for files named libprt-*.so. A malformed
   // candidate (not a plug-in, wrong ABI or build key, missing symbol), a
   // duplicate name, a missing folder, or a folder or file that others than its
-  // owner or root may write is skipped and recorded in problems(); asking for
-  // a plug-in of that name then throws that problem's message.
+  // owner or root may write is skipped and recorded in problems(). Asking for
+  // a duplicated name throws; asking for a name that only a skipped file
+  // claims (by its record or its file name) throws that file's problem.
   explicit PluginRegistry(const std::vector<std::filesystem::path>& directories);
   ~PluginRegistry();
   PluginRegistry(const PluginRegistry&) = delete;
