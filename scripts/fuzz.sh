@@ -55,9 +55,13 @@ for target in $targets; do
   fi
   log="$out/$target.log"
   set +e
+  # The working corpus first (new inputs go there), then the seeds that exist.
+  dirs=("$corpus")
+  for dir in "$root/tests/fuzz/corpus/$target" "$seeds/$target"; do
+    [ -d "$dir" ] && dirs+=("$dir")
+  done
   "$out/fuzz_$target" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
-    -print_final_stats=1 -artifact_prefix="$artifacts" "$@" \
-    "$corpus" "$root/tests/fuzz/corpus/$target" "$seeds/$target" >"$log" 2>&1
+    -print_final_stats=1 -artifact_prefix="$artifacts" "$@" "${dirs[@]}" >"$log" 2>&1
   code=$?
   set -e
   # The harnesses' scratch folders (/tmp/prt-fuzz-PID) of processes that are gone.
