@@ -143,15 +143,8 @@ int main(int argc, char** argv) {
     if (*diff_cmd) return prt::cli::image_diff(diff_images[0], diff_images[1]);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);
-  } catch (const prt::Error& e) {
-    std::cerr << "prt: " << prt::error_line(e.what()) << "\n";
-    return 1;
-  } catch (const std::bad_alloc&) {
-    std::cerr << "prt: error: out of memory: the scene or file needs more memory than this "
-                 "machine has\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "prt: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "prt: " << prt::current_error_line() << "\n";
     return 1;
   }
   return 0;

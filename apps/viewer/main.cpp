@@ -117,15 +117,8 @@ int main(int argc, char** argv) {
       }
     }
     return 0;
-  } catch (const prt::Error& e) {
-    std::cerr << "prt-view: " << prt::error_line(e.what()) << "\n";
-    return 1;
-  } catch (const std::bad_alloc&) {
-    std::cerr << "prt-view: error: out of memory: the scene needs more memory than this "
-                 "machine has\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "prt-view: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "prt-view: " << prt::current_error_line() << "\n";
     return 1;
   }
 }

@@ -1,5 +1,6 @@
 #include "prt/error.hpp"
 
+#include <new>
 #include <sstream>
 
 namespace prt {
@@ -28,6 +29,18 @@ std::string error_line(const std::string& what) {
   if (colon != std::string::npos && colon > 0 && what.find_first_of(" \t\"") > colon)
     return what.substr(0, colon) + ": error: " + what.substr(colon + 2);
   return "error: " + what;
+}
+
+std::string current_error_line() {
+  try {
+    throw;
+  } catch (const std::bad_alloc&) {
+    return "error: out of memory: the scene or file needs more memory than this machine has";
+  } catch (const std::exception& e) {
+    return error_line(e.what());
+  } catch (...) {
+    return "error: unknown failure";
+  }
 }
 
 }  // namespace prt

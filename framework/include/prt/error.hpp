@@ -37,4 +37,8 @@ class __attribute__((visibility("default"))) Error : public std::runtime_error {
 // file, file:line or file:line:col), or "error: message" where there is none.
 std::string error_line(const std::string& what);
 
+// For a main's catch (...): the exception in flight as one such line (an
+// out-of-memory included, never a bare std:: text).
+std::string current_error_line();
+
 }  // namespace prt
