@@ -13,25 +13,25 @@ work="$root/out/transfer_table"
 mkdir -p "$work"
 
 glossy='diffuse = 0.4\nspecular = 0.6\nexponent = 12'
-# name | material lines | bounces | compressor lines
+# name | material lines | bounces | compressor lines | exit basis lines
 configs=(
   "diffuse 25|brdf = \"lambert\"|0|plugin = \"none\""
   "diffuse 25|brdf = \"lambert\"|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
   "diffuse 25, 2 bounces|brdf = \"lambert\"|2|plugin = \"none\""
   "diffuse 25, 2 bounces|brdf = \"lambert\"|2|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 16x25 LS|brdf = \"phong\"\\n$glossy\nexit_order = 4|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 24x25 LS|brdf = \"phong\"\\n$glossy\nexit_reduced = true|0|plugin = \"none\""
-  "phong 24x25 LS|brdf = \"phong\"\\n$glossy\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 25x25 zero|brdf = \"phong\"\\n$glossy\nprojection = \"zero\"|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "phong 25x25 LS|brdf = \"phong\"\\n$glossy|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "cook-torrance 24x25 LS|brdf = \"cook-torrance\"\\n$glossy\nroughness = 0.35\nfresnel = 0.5\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
-  "ward 24x25 LS|brdf = \"ward\"\\n$glossy\nanisotropic_roughness = [0.15, 0.45]\nexit_reduced = true|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8"
+  "phong 16x25 LS|brdf = \"phong\"\\n$glossy|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8|order = 4"
+  "phong 24x25 LS|brdf = \"phong\"\\n$glossy|0|plugin = \"none\"|reduced = true"
+  "phong 24x25 LS|brdf = \"phong\"\\n$glossy|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8|reduced = true"
+  "phong 25x25 zero|brdf = \"phong\"\\n$glossy\nprojection = \"zero\"|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8|projection = \"zero\""
+  "phong 25x25 LS|brdf = \"phong\"\\n$glossy|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8|"
+  "cook-torrance 24x25 LS|brdf = \"cook-torrance\"\\n$glossy\nroughness = 0.35\nfresnel = 0.5|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8|reduced = true"
+  "ward 24x25 LS|brdf = \"ward\"\\n$glossy\nanisotropic_roughness = [0.15, 0.45]|0|plugin = \"cpca\"\nclusters = 256\ncomponents = 8|reduced = true"
 )
 echo "| transfer | compression | bake s | encode s | file MB | relight ms/frame | RMS vs ground truth | relative |"
 echo "|---|---|---|---|---|---|---|---|"
 i=0
 for config in "${configs[@]}"; do
-  IFS='|' read -r name material bounces compressor <<<"$config"
+  IFS='|' read -r name material bounces compressor exit <<<"$config"
   i=$((i + 1))
   scene="$work/config$i.toml"
   printf '%b\n' "[mesh]
@@ -45,6 +45,9 @@ bounces = $bounces
 [basis]
 plugin = \"sh\"
 order = 5
+[exit]
+plugin = \"hsh\"
+$exit
 [compressor]
 $compressor
 [lighting]

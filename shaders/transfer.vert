@@ -2,19 +2,16 @@
 //   e_p = C[k][0] + sum_i w_pi C[k][i]
 // C (computed on the CPU when the light changes) holds, per cluster, (n' + 1)
 // groups of ROWS RGB texels; the weights come from a buffer indexed by the
-// vertex. Diffuse transfer (ROWS == 1) shades here; glossy transfer passes
-// one colour channel of e_p and the local view vector to the fragment stage.
+// vertex. Diffuse transfer (ROWS == 1) has e_p as its radiance; glossy
+// transfer has ROWS exit coefficients per colour, dotted with the exit basis's
+// values toward the camera (exit_values, ROWS per vertex, updated with the
+// view on the CPU by the exit plug-in, so any exit basis works).
 // The host prepends: #version, ROWS, COMPONENTS, SPARSE, GLOSSY.
 
 layout(location = 0) in vec3 position;
-layout(location = 1) in vec3 tangent;
-layout(location = 2) in vec3 bitangent;
-layout(location = 3) in vec3 normal;
 
 uniform mat4 view_projection;
-uniform vec3 eye;
 uniform vec3 albedo;
-uniform int channel;       // glossy: the colour channel of this pass
 uniform int only_cluster;  // per-cluster drawing: the group drawn in this pass, or -1
 
 uniform samplerBuffer constants;          // RGBA32F, rgb used
@@ -23,15 +20,11 @@ uniform isamplerBuffer group_of_cluster;   // R32I: cluster, or its supercluster
 uniform samplerBuffer weights;            // R32F, COMPONENTS per vertex
 uniform isamplerBuffer weight_index;       // R32I, sparse transfer only
 uniform samplerBuffer vertex_colour;      // RGBA32F, plain colour draws (COMPONENTS < 0)
+uniform samplerBuffer exit_values;        // R32F, glossy: ROWS per vertex
 
 invariant gl_Position;
 
-#if GLOSSY
-out float exit_radiance[ROWS];
-out vec3 local_view;
-#else
 out vec3 colour;
-#endif
 
 void main() {
   gl_Position = view_projection * vec4(position, 1.0);
@@ -56,13 +49,13 @@ void main() {
   w[0] = 1.0;
   for (int i = 0; i < COMPONENTS; ++i) w[i + 1] = texelFetch(weights, v * COMPONENTS + i).r;
 #if GLOSSY
+  vec3 e = vec3(0.0);
   for (int r = 0; r < ROWS; ++r) {
-    float sum = 0.0;
-    for (int i = 0; i <= COMPONENTS; ++i) sum += w[i] * texelFetch(constants, base + i * ROWS + r)[channel];
-    exit_radiance[r] = member * sum;
+    vec3 row = vec3(0.0);
+    for (int i = 0; i <= COMPONENTS; ++i) row += w[i] * texelFetch(constants, base + i * ROWS + r).rgb;
+    e += texelFetch(exit_values, v * ROWS + r).r * row;
   }
-  mat3 to_local = transpose(mat3(tangent, bitangent, normal));
-  local_view = to_local * normalize(eye - position);
+  colour = member * max(albedo * e, vec3(0.0));
 #else
   vec3 e = vec3(0.0);
   for (int i = 0; i <= COMPONENTS; ++i) e += w[i] * texelFetch(constants, base + i).rgb;

@@ -202,11 +202,11 @@ int bench(Context& context, const BenchArgs& args) {
   for (const auto& config : configs) {
     scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config), base.file,
                                       context.registry));
-    SceneSpec& s = scenes.back();
-    const auto basis = context.registry.create<Basis>(s.basis.name, s.basis.params, s.basis.where);
-    if (basis->approximation_terms() > 0 && s.compressor.name != "none")
-      throw Error("configuration \"" + label_of(config) + "\": basis \"" + s.basis.name +
-                  "\" keeps its largest coefficients and takes compressor \"none\" only");
+    try {  // every plug-in created and every parameter checked, before any ray
+      plan_bake(scenes.back(), context.registry);
+    } catch (const Error& e) {
+      throw Error("configuration \"" + label_of(config) + "\": " + e.what());
+    }
   }
 
   // Resume: configurations already in results.jsonl are skipped.
@@ -246,26 +246,23 @@ int bench(Context& context, const BenchArgs& args) {
     //    with the exact compressor over the stored visibility.
     const std::string projection_key = key_of(configs[i], shading_sections, true);
     if (!projections.count(projection_key)) {
-      SceneSpec exact = scene;
-      exact.compressor = {"none", {}, Params()};
-      exact.compressor.params.validate(
-          context.registry.find(PluginKind::compressor, "none").schema());
       RunOptions reuse{true, &traced};
+      reuse.compress = false;
       StageTimes times;
       clock = Stopwatch();
-      BakeData data = bake(exact, context.registry, reuse, times);
+      BakeData data = bake(scene, context.registry, reuse, times);
       projections.emplace(projection_key, std::pair{std::move(data), clock.seconds()});
     }
     auto& [exact_data, project_seconds] = projections.at(projection_key);
     // 3. Compression.
     BakeData data = exact_data;
-    auto compressor = context.registry.create<Compressor>(
-        scene.compressor.name, scene.compressor.params, scene.compressor.where);
+    const BakePlan plan = plan_bake(scene, context.registry);
     clock = Stopwatch();
-    if (scene.compressor.name != "none")  // "none" keeps the bake's form (sparse for Haar)
-      data.compressed = compressor->encode(data.transfer, &data.mesh);
+    // An exact compressor keeps the bake's form (sparse for bases that approximate).
+    if (!plan.compressor->exact())
+      data.compressed = compress_stage(plan, data.transfer, data.mesh, scene.compressor.where);
     const double encode_seconds = clock.seconds();
-    data.compressor = {scene.compressor.name, "", scene.compressor.params.describe()};
+    data.compressor = plan.compressor_record;
     const double se = squared_error(data.transfer.coefficients, data.compressed.decode());
     const fs::path bake_file = out / "bake.h5";
     write_bake(bake_file, data);
@@ -275,9 +272,7 @@ int bench(Context& context, const BenchArgs& args) {
     fs::remove(bake_file);
 
     // 4. Lights: the scene's and rotated copies; relight time, errors, images.
-    auto basis =
-        context.registry.create<Basis>(scene.basis.name, scene.basis.params, scene.basis.where);
-    basis->load(data.basis_state);
+    const Relighting relighting(scene, data, context.registry);
     Environment environment = scene.load_environment();
     const Eigen::Matrix3d scene_rotation = environment.rotation();
     const Camera camera = scene.make_camera(data.mesh);
@@ -287,14 +282,12 @@ int bench(Context& context, const BenchArgs& args) {
     double rms = 0, p99 = 0, max_error = 0, image_error = 0;
     auto cpu = context.registry.create<Renderer>(scene.renderer.name, scene.renderer.params,
                                                  scene.renderer.where);
-    const std::vector<Frame> frames =
-        data.transfer.exit.glossy() ? tangent_frames(data.mesh) : std::vector<Frame>();
     for (int light = 0; light < args.lights; ++light) {
       environment.set_rotation(rotation_about_up(360.0 * light / args.lights) * scene_rotation);
-      const Eigen::MatrixX3d l = scene.project_light(environment, *basis);
+      const Eigen::MatrixX3d l = relighting.light(environment);
       Relit relit;
       relight_seconds +=
-          median_seconds(3, [&] { relit = relight_view(data, data.compressed, l, camera); });
+          median_seconds(3, [&] { relit = relighting.relight(data.compressed, l, camera); });
       auto& truth_list = truths[truth_key];
       if (static_cast<int>(truth_list.size()) <= light) {
         SceneSpec rotated = scene;
@@ -308,7 +301,7 @@ int bench(Context& context, const BenchArgs& args) {
       const ErrorStats e = vertex_error(relit.vertex_radiance, truth.vertex_radiance);
       rms += e.rms / args.lights, p99 += e.p99 / args.lights;
       max_error = std::max(max_error, e.max);
-      RenderInput input = render_input(data, data.compressed, relit, l, camera);
+      RenderInput input = relighting.input(data.compressed, relit, l, camera);
       input.background = nullptr;
       const Image image = cpu->render(input);
       RenderInput truth_input;

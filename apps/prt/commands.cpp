@@ -6,6 +6,7 @@
 
 #include "prt/bake_file.hpp"
 #include "prt/compressor.hpp"
+#include "prt/environment.hpp"
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
@@ -51,6 +52,10 @@ int bake(Context& context, const BakeArgs& args) {
 
 void parse_parameter(const std::string& text, std::size_t index, Params& params);
 
+void print_error_budget(const SceneSpec& scene, const BakeData& data,
+                        const Eigen::MatrixX3f& truth, const Eigen::MatrixX3f& compressed,
+                        Context& context, StageTimes& times);
+
 int render(Context& context, const RenderArgs& args) {
   Stopwatch clock;
   SceneSpec scene = SceneSpec::load(args.scene, context.registry);
@@ -88,6 +93,8 @@ int render(Context& context, const RenderArgs& args) {
           " 99th percentile %.6g, max %.6g\n",
           static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms,
           e.p99, e.max);
+      print_error_budget(scene, data, truth.vertex_radiance, result.vertex_radiance, context,
+                         times);
     }
   }
   clock = Stopwatch();
@@ -101,6 +108,36 @@ int render(Context& context, const RenderArgs& args) {
     std::cout << "renderer " << name << ": " << value << "\n";
   print_times(times);
   return 0;
+}
+
+// Where the error comes from: the light basis's truncation of the light
+// (ground truth under the band-limited light against the full one), the
+// transfer's projection (exact PRT against the band-limited truth) and the
+// compression (compressed against exact PRT). RMS per vertex, as above.
+void print_error_budget(const SceneSpec& scene, const BakeData& data,
+                        const Eigen::MatrixX3f& truth, const Eigen::MatrixX3f& compressed,
+                        Context& context, StageTimes& times) {
+  const Relighting relighting(scene, data, context.registry);
+  const Environment environment = scene.load_environment();
+  const Eigen::MatrixX3d light = relighting.light(environment);
+  const Camera camera = scene.make_camera(data.mesh);
+  const Environment band_limited = environment.band_limited(relighting.basis(), light);
+  Stopwatch clock;
+  const Eigen::MatrixX3f limited_truth =
+      ground_truth_vertices(scene, data.mesh, band_limited, camera, {context.quiet});
+  times.add("ground truth under the band-limited light", clock.seconds());
+  const Eigen::MatrixX3f exact =
+      relighting.relight(exact_form(data.transfer), light, camera).vertex_radiance;
+  const double full = vertex_error(compressed, truth).rms;
+  std::printf("error budget (RMS per vertex):\n");
+  for (const auto& [what, error] :
+       {std::pair{"light truncation (band-limited vs full ground truth)",
+                  vertex_error(limited_truth, truth).rms},
+        {"transfer projection (exact PRT vs band-limited ground truth)",
+         vertex_error(exact, limited_truth).rms},
+        {"compression (compressed vs exact PRT)", vertex_error(compressed, exact).rms},
+        {"total (compressed PRT vs full ground truth)", full}})
+    std::printf("  %-62s %.6g\n", what, error);
 }
 
 // "key=value" from the command line, typed as TOML would type the value.

@@ -184,9 +184,12 @@ int stability(Context& context, const StabilityArgs& args) {
   cases.push_back({"values 1e-30", MatrixXfRow::Random(500, 25) * 1e-30f});
   cases.push_back({"values 1e+30", MatrixXfRow::Random(500, 25) * 1e30f});
   for (const char* name : {"pca", "cpca", "vq"}) {
+    // The conventional budget parameters, where the compressor has them.
     Params params;
-    if (std::string(name) != "pca") params.set("clusters", std::int64_t(4));
-    if (std::string(name) != "vq") params.set("components", std::int64_t(8));
+    for (const auto& spec : context.registry.find(PluginKind::compressor, name).schema().specs) {
+      if (std::string(spec.name) == "clusters") params.set("clusters", std::int64_t(4));
+      if (std::string(spec.name) == "components") params.set("components", std::int64_t(8));
+    }
     auto compressor = context.registry.create<Compressor>(name, params);
     for (const Case& c : cases) {
       TransferSignal signal;

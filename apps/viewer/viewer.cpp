@@ -7,27 +7,12 @@
 #include <iostream>
 
 #include "prt/bake_file.hpp"
-#include "prt/glossy.hpp"
 #include "prt/output_file.hpp"
 #include "prt/progress.hpp"
 
 namespace prt::view {
 
 namespace {
-
-// The uncompressed transfer in the one compressed form: one cluster, zero
-// mean, identity representatives, the transfer as weights.
-CompressedTransfer exact_form(const TransferSignal& t) {
-  CompressedTransfer c;
-  c.compressor = "exact";
-  c.dimension = t.dimension();
-  c.components = static_cast<int>(t.dimension());
-  c.cluster_of_vertex.assign(static_cast<std::size_t>(t.vertices()), 0);
-  c.means = MatrixXfRow::Zero(1, t.dimension());
-  c.representatives = {MatrixXfRow::Identity(t.dimension(), t.dimension())};
-  c.weights = t.coefficients;
-  return c;
-}
 
 // Blue (no error) -> cyan -> green -> yellow -> red (the largest error).
 Eigen::Vector3f heat(float t) {
@@ -53,23 +38,21 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
     data_ = bake(scene_, registry_, {options.quiet}, times);
     write_bake(bake_file, data_);
   }
-  check_bake_matches(data_, scene_);
-  basis_ = registry_.create<Basis>(scene_.basis.name, scene_.basis.params, scene_.basis.where);
-  basis_->load(data_.basis_state);
-  check_bake_dimension(data_, *basis_);
+  relighting_ = std::make_unique<Relighting>(scene_, data_, registry_);
   environment_ = scene_.load_environment();
   scene_rotation_ = environment_.rotation();
-  base_light_ = scene_.project_light(environment_, *basis_);
+  base_light_ = relighting_->light(environment_);
   encodings_.push_back({data_.compressor.name, data_.compressed});
   encodings_.push_back({"exact", exact_form(data_.transfer)});
   current_ = options.exact ? 1 : 0;
-  if (data_.transfer.exit.glossy()) frames_ = tangent_frames(data_.mesh);
   home_ = scene_.make_camera(data_.mesh);
   exposure_ = static_cast<float>(scene_.camera.get_real("exposure"));
   std::string method = options.method;
+  // The viewer always draws with OpenGL; a scene's renderer that has a
+  // drawing method (the OpenGL renderer's) chooses the starting one.
   if (method.empty())
-    method = scene_.renderer.name == "opengl" ? scene_.renderer.params.get_string("method")
-                                              : "single-pass";
+    method = scene_.renderer.params.has("method") ? scene_.renderer.params.get_string("method")
+                                                  : "single-pass";
   make_renderer(method);
 }
 
@@ -125,20 +108,19 @@ void Viewer::update_light() {
   Stopwatch clock;
   const Eigen::Matrix3d turn = rotation_about_up(light_degrees_);
   environment_.set_rotation(turn * scene_rotation_);
-  light_ = basis_->can_rotate() ? Eigen::MatrixX3d(basis_->rotation_matrix(turn) * base_light_)
-                                : scene_.project_light(environment_, *basis_);
+  const Basis& basis = relighting_->basis();
+  light_ = basis.can_rotate() ? Eigen::MatrixX3d(basis.rotation_matrix(turn) * base_light_)
+                              : relighting_->light(environment_);
   light_ms_ = 1000 * clock.seconds();
   light_dirty_ = false;
 }
 
 Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camera& cam) const {
-  const auto* frames = frames_.empty() ? nullptr : &frames_;
   const Eigen::MatrixX3f exact =
-      relight_view(data_, encodings_[1].transfer, light, cam, frames).vertex_radiance;
+      relighting_->relight(encodings_[1].transfer, light, cam).vertex_radiance;
   const Eigen::MatrixX3f shown =
-      current_ == 1
-          ? exact
-          : relight_view(data_, encodings_[current_].transfer, light, cam, frames).vertex_radiance;
+      current_ == 1 ? exact
+                    : relighting_->relight(encodings_[current_].transfer, light, cam).vertex_radiance;
   const float scale = std::max(1e-12f, exact.rowwise().norm().maxCoeff());
   Eigen::MatrixX3f colours(shown.rows(), 3);
   for (Eigen::Index p = 0; p < shown.rows(); ++p)
@@ -150,22 +132,18 @@ Image Viewer::render() {
   Stopwatch clock;
   update_light();
   const Camera cam = camera();
-  RenderInput input;
-  input.mesh = &data_.mesh;
-  input.transfer = &encodings_[current_].transfer;
-  input.light = light_;
-  input.albedo = data_.albedo;
-  input.camera = cam;
+  // The exit basis toward this camera (glossy); the sums themselves run on the GPU.
+  Relit relit;
+  relit.exit_values = relighting_->exit_values_toward(cam);
+  RenderInput input = relighting_->input(encodings_[current_].transfer, relit, light_, cam);
   input.background = background_ ? &environment_ : nullptr;
   Eigen::MatrixX3f colours;
   if (heatmap_) {
     colours = heat_colours(light_, cam);
     input.vertex_radiance = &colours;
+    input.exit_values = nullptr;
     input.albedo = Eigen::Vector3f::Ones();
     input.background = nullptr;
-  } else if (data_.transfer.exit.glossy()) {
-    input.exit_basis = &data_.transfer.exit;
-    input.frames = &frames_;
   }
   Image image = renderer_->render(input);
   const auto stats = renderer_->statistics();

@@ -51,7 +51,7 @@ class Viewer {
   PluginRegistry& registry_;
   SceneSpec scene_;
   BakeData data_;
-  std::shared_ptr<Basis> basis_;
+  std::unique_ptr<Relighting> relighting_;  // refers to scene_ and data_
   std::shared_ptr<Renderer> renderer_;
   std::string method_;
   Environment environment_;
@@ -61,7 +61,6 @@ class Viewer {
   bool light_dirty_ = true, heatmap_ = false, background_ = true;
   std::vector<Encoding> encodings_;
   std::size_t current_ = 0;
-  std::vector<Frame> frames_;
   Camera home_;
   double yaw_ = 0, pitch_ = 0, distance_scale_ = 1;
   float exposure_ = 1;

@@ -259,6 +259,7 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_text(root, "transport", data.transport);
       write_plugin(root, "basis", data.basis);
       write_plugin(root, "compressor", data.compressor);
+      if (data.transfer.glossy()) write_plugin(root, "exit_basis", data.exit);
       for (int c = 0; c < 3; ++c)
         write_number(root, "albedo_" + std::string(1, "rgb"[c]), data.albedo[c]);
 
@@ -273,9 +274,7 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_text(transfer, "material", data.material);
       write_number(transfer, "bounces", data.bounces);
       write_number(transfer, "subsurface", data.subsurface ? 1 : 0);
-      write_number(transfer, "exit_order", data.transfer.exit.order);
-      write_array(transfer, "exit_kept", data.transfer.exit.kept.data(),
-                  data.transfer.exit.kept.size(), 1);
+      write_number(transfer, "exit_rows", data.transfer.exit_rows);
       write_matrix(transfer, "coefficients", data.transfer.coefficients);
 
       const CompressedTransfer& c = data.compressed;
@@ -300,10 +299,14 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_array(compressed, "weight_index", c.weight_index.data(), c.sparse() ? c.vertices() : 0,
                   c.sparse() ? c.components : 0);
 
-      H5::Group state = create_group(h5, "basis_state");
-      for (const auto& [name, m] : data.basis_state.matrices) {
-        const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> row_major = m;
-        write_array(state, name, row_major.data(), m.rows(), m.cols());
+      for (const auto& [group, basis_state] :
+           {std::pair{"basis_state", &data.basis_state}, {"exit_state", &data.exit_state}}) {
+        H5::Group state = create_group(h5, group);
+        for (const auto& [name, m] : basis_state->matrices) {
+          const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> row_major =
+              m;
+          write_array(state, name, row_major.data(), m.rows(), m.cols());
+        }
       }
       H5::Group metrics = create_group(h5, "metrics");
       for (const auto& [name, value] : data.metrics) write_number(metrics, name, value);
@@ -354,13 +357,13 @@ BakeData read_bake(const fs::path& file) {
     data.material = read_text(transfer, "material");
     data.bounces = static_cast<int>(read_count(transfer, "bounces", 1000));
     data.subsurface = read_count(transfer, "subsurface", 1) != 0;
-    data.transfer.exit.order = static_cast<int>(read_count(transfer, "exit_order", kMaxExitOrder));
-    data.transfer.exit.kept = read_array<int>(transfer, "exit_kept", rows, cols);
-    const ExitBasis& exit = data.transfer.exit;
-    if ((data.transfer.kind == "glossy") != exit.glossy() || exit.order > kMaxExitOrder)
-      throw Error("transfer kind \"" + data.transfer.kind + "\" disagrees with its exit basis");
-    for (int i : exit.kept)
-      if (i < 0 || i >= exit.order * exit.order) throw Error("exit basis index out of range");
+    if (data.transfer.kind != "diffuse" && data.transfer.kind != "glossy")
+      throw Error("unknown transfer kind \"" + data.transfer.kind + "\"");
+    data.transfer.exit_rows = static_cast<int>(read_count(transfer, "exit_rows", 1 << 20));
+    if (data.transfer.glossy() ? data.transfer.exit_rows < 1 : data.transfer.exit_rows != 1)
+      throw Error("transfer kind \"" + data.transfer.kind + "\" with " +
+                  std::to_string(data.transfer.exit_rows) + " exit rows");
+    if (data.transfer.glossy()) data.exit = read_plugin(root, "exit_basis");
     data.transfer.coefficients = read_matrix(transfer, "coefficients");
     if (data.transfer.coefficients.rows() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
       throw Error("the transfer has " + std::to_string(data.transfer.coefficients.rows()) +
@@ -385,10 +388,10 @@ BakeData read_bake(const fs::path& file) {
     if (columns != c.dimension)
       throw Error("the transfer has " + std::to_string(columns) +
                   " columns but the compressed dimension is " + std::to_string(c.dimension));
-    if (columns % exit.rows() != 0)
+    if (columns % data.transfer.exit_rows != 0)
       throw Error("the transfer's " + std::to_string(columns) +
                   " columns are not a whole number of exit-basis rows (" +
-                  std::to_string(exit.rows()) + ")");
+                  std::to_string(data.transfer.exit_rows) + ")");
     if (static_cast<Eigen::Index>(counts.size()) != c.clusters() || total != stacked.rows() ||
         stacked.cols() != c.dimension || data.transfer.coefficients.rows() != c.vertices())
       throw Error("compressed transfer has inconsistent sizes");
@@ -400,13 +403,16 @@ BakeData read_bake(const fs::path& file) {
     }
     c.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
 
-    H5::Group state = h5.openGroup("basis_state");
-    for (hsize_t i = 0; i < state.getNumObjs(); ++i) {
-      const std::string name = state.getObjnameByIdx(i);
-      auto values = read_array<double>(state, name, rows, cols);
-      data.basis_state.matrices[name] =
-          Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-              values.data(), rows, cols);
+    for (const auto& [group, basis_state] :
+         {std::pair{"basis_state", &data.basis_state}, {"exit_state", &data.exit_state}}) {
+      H5::Group state = h5.openGroup(group);
+      for (hsize_t i = 0; i < state.getNumObjs(); ++i) {
+        const std::string name = state.getObjnameByIdx(i);
+        auto values = read_array<double>(state, name, rows, cols);
+        basis_state->matrices[name] =
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                values.data(), rows, cols);
+      }
     }
     H5::Group metrics = h5.openGroup("metrics");
     for (int i = 0; i < metrics.getNumAttrs(); ++i) {

@@ -64,26 +64,31 @@ std::string Brdf::describe() const {
   return text;
 }
 
-Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int exit_order, const std::vector<int>& exit_kept,
-                            int light_order, int resolution) {
+Eigen::MatrixXd brdf_incident_integrals(const Brdf& brdf, const Directions& exit_directions,
+                                       int incident_order, int resolution) {
   const DirectionSet h = hemisphere::upper_quadrature(resolution);
-  const Eigen::Index q = h.size();
-  const Eigen::MatrixXd exit_all = sh::evaluate(exit_order, h.directions);
-  Eigen::MatrixXd exit(q, static_cast<Eigen::Index>(exit_kept.size()));
-  for (std::size_t i = 0; i < exit_kept.size(); ++i) exit.col(i) = exit_all.col(exit_kept[i]);
-  // Light side: y_j(s) s_z w_s, so that F = rho * light is int rho y_j s_z ds.
-  Eigen::MatrixXd light = sh::evaluate(light_order, h.directions);
-  for (Eigen::Index k = 0; k < q; ++k) light.row(k) *= h.weights[k] * h.directions(k, 2);
-  // F(v, j) = int rho(v, s) y_j(s) s_z ds, one row of rho at a time.
-  Eigen::MatrixXd f(q, light.cols());
-  tbb::parallel_for(Eigen::Index(0), q, [&](Eigen::Index v) {
-    const Eigen::Vector3d out = h.directions.row(v).transpose();
-    Eigen::RowVectorXd rho(q);
-    for (Eigen::Index s = 0; s < q; ++s)
+  // Incident side: y_j(s) s_z w_s, so that F = rho * light is int rho y_j s_z ds.
+  Eigen::MatrixXd light = sh::evaluate(incident_order, h.directions);
+  for (Eigen::Index k = 0; k < h.size(); ++k) light.row(k) *= h.weights[k] * h.directions(k, 2);
+  Eigen::MatrixXd f(exit_directions.rows(), light.cols());
+  tbb::parallel_for(Eigen::Index(0), exit_directions.rows(), [&](Eigen::Index v) {
+    const Eigen::Vector3d out = exit_directions.row(v).transpose();
+    Eigen::RowVectorXd rho(h.size());
+    for (Eigen::Index s = 0; s < h.size(); ++s)
       rho[s] = brdf.evaluate(h.directions.row(s).transpose(), out);
     f.row(v) = rho * light;
   });
-  return exit.transpose() * h.weights.asDiagonal() * f;
+  return f;
+}
+
+Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int exit_order, const std::vector<int>& exit_kept,
+                            int light_order, int resolution) {
+  const DirectionSet h = hemisphere::upper_quadrature(resolution);
+  const Eigen::MatrixXd exit_all = sh::evaluate(exit_order, h.directions);
+  Eigen::MatrixXd exit(h.size(), static_cast<Eigen::Index>(exit_kept.size()));
+  for (std::size_t i = 0; i < exit_kept.size(); ++i) exit.col(i) = exit_all.col(exit_kept[i]);
+  return exit.transpose() * h.weights.asDiagonal() *
+         brdf_incident_integrals(brdf, h.directions, light_order, resolution);
 }
 
 }  // namespace prt

@@ -172,6 +172,23 @@ Eigen::MatrixX3d Environment::project(const Basis& basis) const {
   return light;
 }
 
+Environment Environment::band_limited(const Basis& basis, const Eigen::MatrixX3d& light) const {
+  const bool constant = width_ == 1 && height_ == 1;
+  const int w = constant ? 256 : width_, h = constant ? 128 : height_;
+  std::vector<float> rgb(static_cast<std::size_t>(w) * h * 3);
+  constexpr int kRows = 8;
+  tbb::parallel_for(0, (h + kRows - 1) / kRows, [&](int b) {
+    const int begin = b * kRows, end = std::min(h, begin + kRows);
+    const DirectionSet set = DirectionSet::equirect(w, h, begin, end);
+    const Eigen::MatrixX3d values = basis.evaluate(set.directions) * light;
+    for (Eigen::Index k = 0; k < set.size(); ++k)
+      for (int c = 0; c < 3; ++c)
+        rgb[(static_cast<std::size_t>(begin) * w + std::size_t(k)) * 3 + c] =
+            static_cast<float>(values(k, c));
+  });
+  return from_pixels(w, h, std::move(rgb));
+}
+
 void draw_environment(const Environment& environment, const Camera& camera, Image& image) {
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x) {

@@ -27,8 +27,11 @@ EnvironmentSampler::EnvironmentSampler(const Environment& env)
     double* cdf = &column_cdf_[static_cast<std::size_t>(y) * (width_ + 1)];
     for (int x = 0; x < width_; ++x) {
       const float* p = &rgb[(static_cast<std::size_t>(y) * width_ + x) * 3];
-      // A small floor keeps every direction samplable (the estimator stays unbiased).
-      const double weight = (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2] + 1e-6) * solid_angle;
+      // A small floor keeps every direction samplable (the estimator stays
+      // unbiased); the magnitude serves maps with negative texels too (a
+      // band-limited light's ringing).
+      const double weight =
+          (std::abs(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) + 1e-6) * solid_angle;
       texel_probability_[static_cast<std::size_t>(y) * width_ + x] = weight;
       cdf[x + 1] = cdf[x] + weight;
     }

@@ -32,32 +32,19 @@ std::string StageTimes::table() const {
   return out + line;
 }
 
+void RunOptions::message(const std::string& text) const {
+  if (log)
+    log(text);
+  else if (!quiet)
+    std::printf("%s\n", text.c_str());
+}
+
 namespace {
 
 std::string transport_description(const SceneSpec& scene, const DirectionSet& set) {
   return set.kind + " " + std::to_string(set.size()) + " directions, " +
          (scene.transport.get_bool("shadowed") ? "shadowed" : "unshadowed") +
          ", seed=" + std::to_string(scene.transport.get_int("seed"));
-}
-
-// The SH order of the light basis of glossy transfer.
-int sh_order_of(const Basis& basis) {
-  const int order = static_cast<int>(std::lround(std::sqrt(double(basis.size()))));
-  if (order * order != basis.size() || !basis.can_rotate())
-    throw Error("glossy transfer needs a rotating SH light basis");
-  return order;
-}
-
-// The subsurface term is view-independent exit radiance: diffuse transfer
-// adds it to the vector; glossy transfer adds it to the constant exit row
-// (y_00 = 1 / (2 sqrt(pi)), so a constant c has coefficient 2 sqrt(pi) c).
-void add_subsurface(const MatrixXfRow& scattered, TransferSignal& transfer) {
-  if (!transfer.exit.glossy()) {
-    transfer.coefficients += scattered;
-    return;
-  }
-  transfer.coefficients.leftCols(scattered.cols()) +=
-      static_cast<float>(2.0 * std::sqrt(M_PI)) * scattered;
 }
 
 // Memory this machine can give now (MemAvailable), in bytes.
@@ -76,13 +63,14 @@ double available_memory() {
 // transfer (twice: exact and decoded), kept visibility bits and bounce hits,
 // and the basis evaluated at every direction (unless it projects by a fast
 // transform).
-void require_memory(const SceneSpec& scene, const Mesh& mesh, const DirectionSet& set,
-                    const Basis& basis, bool keep_visibility, bool keep_hits) {
-  const double v = double(mesh.vertex_count()), d = double(set.size()), n = double(basis.size());
-  const double rows = scene.glossy() ? double(scene.exit_basis().rows()) : 1.0;
-  const double projection = basis.has_fast_projection(set) ? 0 : d * n * sizeof(double);
+void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& mesh,
+                    const DirectionSet& set, bool keep_visibility) {
+  const double v = double(mesh.vertex_count()), d = double(set.size()),
+               n = double(plan.basis->size());
+  const double rows = plan.glossy ? double(plan.exit->size()) : 1.0;
+  const double projection = plan.basis->has_fast_projection(set) ? 0 : d * n * sizeof(double);
   const double bytes = 2 * v * rows * n * sizeof(float) + projection +
-                       (keep_visibility ? v * d / 8 : 0) + (keep_hits ? v * d * 8 : 0);
+                       (keep_visibility ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0);
   const double available = available_memory();
   if (bytes > available) {
     char message[400];
@@ -94,6 +82,21 @@ void require_memory(const SceneSpec& scene, const Mesh& mesh, const DirectionSet
                   available / 1e9);
     throw Error(scene.basis.where, message);
   }
+}
+
+// "sphere" / "hemisphere" with the role each serves, for domain errors.
+std::string domain_error(const PluginChoice& choice, const char* section, Domain wanted) {
+  const bool sphere = wanted == Domain::sphere;
+  return "[" + std::string(section) + "] basis \"" + choice.name + "\" is defined over the " +
+         (sphere ? "hemisphere of a local frame" : "whole sphere") + ", but this role needs a " +
+         (sphere ? "sphere" : "hemisphere") +
+         " basis: the light basis ([basis]) carries source light and diffuse transfer over the "
+         "sphere; the exit basis ([exit], glossy only) carries exit radiance over each vertex's "
+         "upper hemisphere";
+}
+
+PluginRecord record_of(const PluginChoice& choice, PluginRegistry& registry, PluginKind kind) {
+  return {choice.name, registry.find(kind, choice.name).info.version, choice.params.describe()};
 }
 
 }  // namespace
@@ -112,31 +115,176 @@ void record(const CompressionReport& r, std::map<std::string, double>& metrics) 
   for (const auto& [name, value] : r.statistics) metrics[name] = value;
 }
 
+BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
+  BakePlan plan;
+  PluginChoice basis = scene.basis, compressor = scene.compressor;
+  plan.basis = registry.create<Basis>(basis.name, basis.params, basis.where);
+  plan.compressor = registry.create<Compressor>(compressor.name, compressor.params, compressor.where);
+  plan.basis_record = record_of(scene.basis, registry, PluginKind::basis);
+  plan.compressor_record = record_of(scene.compressor, registry, PluginKind::compressor);
+  if (plan.basis->domain() != Domain::sphere)
+    throw Error(basis.where, domain_error(basis, "basis", Domain::sphere));
+  scene.check_window(*plan.basis);
+  plan.sparse_terms = plan.basis->approximation_terms();
+  if (plan.sparse_terms > 0 && !plan.compressor->exact())
+    throw Error(compressor.where,
+                "basis \"" + basis.name +
+                    "\" approximates non-linearly (keeps its largest coefficients per vertex); "
+                    "that replaces compression, so use an exact compressor such as \"none\" "
+                    "(not \"" +
+                    compressor.name + "\")");
+  plan.glossy = scene.glossy();
+  plan.subsurface = scene.material.get_bool("subsurface");
+  plan.bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  plan.bounce_albedo = scene.bounce_albedo();
+  plan.shadowed = scene.transport.get_bool("shadowed");
+  plan.fit = plan.basis->can_fit();
+  if (plan.glossy) {
+    PluginChoice exit = scene.exit;
+    plan.exit = registry.create<Basis>(exit.name, exit.params, exit.where);
+    plan.exit_record = record_of(scene.exit, registry, PluginKind::basis);
+    if (plan.exit->domain() != Domain::hemisphere)
+      throw Error(exit.where, domain_error(exit, "exit", Domain::hemisphere));
+    if (plan.exit->can_fit())
+      throw Error(exit.where, "[exit] basis \"" + exit.name +
+                                  "\" is data-driven (fits to traced visibility); an exit basis "
+                                  "must be fixed before the bake");
+    plan.brdf = scene.brdf();
+    plan.incident_order = scene.incident_order(*plan.basis);
+    plan.least_squares = scene.material.get_string("projection") == "least-squares";
+    plan.cutoff = scene.material.get_real("cutoff");
+  }
+  plan.keep_visibility = plan.fit || plan.glossy;
+  return plan;
+}
+
+TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                            const RunOptions& options) {
+  TransportOptions transport;
+  transport.shadowed = plan.shadowed;
+  transport.keep_hits = plan.bounces > 0;
+  transport.keep_visibility = plan.keep_visibility;
+  if (options.traced) {  // a sweep traced these rays once for many configurations
+    TransportResult result;
+    result.visibility = options.traced->visibility;
+    result.hits = options.traced->hits;
+    if (result.visibility.vertices() != mesh.vertex_count() ||
+        result.visibility.directions() != static_cast<std::size_t>(set.size()) ||
+        (transport.keep_hits && result.hits.size() != mesh.vertex_count()))
+      throw Error("bake: the traced visibility does not match the scene's mesh and directions");
+    return result;
+  }
+  Progress progress("bake transfer", double(mesh.vertex_count()),
+                    transport.shadowed ? "rays" : "", options.quiet);
+  return transport.keep_visibility
+             ? diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress)
+             : diffuse_transfer(mesh, set, *plan.basis, transport, &progress);
+}
+
+namespace {
+
+void add_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                 TransportResult& result, const RunOptions& options,
+                 std::map<std::string, double>& metrics) {
+  Progress progress("inter-reflection", plan.bounces, "", options.quiet);
+  Interreflection light = interreflect(mesh, set, result.hits, result.transfer.coefficients,
+                                       plan.bounces, plan.bounce_albedo, &progress);
+  // How much the bounces add per vertex (transfer norm with / without - 1):
+  // near zero on convex parts, large in concave ones.
+  std::vector<double> gain(static_cast<std::size_t>(light.total.rows()));
+  for (Eigen::Index p = 0; p < light.total.rows(); ++p)
+    gain[p] =
+        light.total.row(p).norm() / std::max(1e-30f, result.transfer.coefficients.row(p).norm()) -
+        1.0;
+  std::sort(gain.begin(), gain.end());
+  for (const auto& [name, q] : {std::pair{"p50", 0.5}, {"p90", 0.9}, {"p99", 0.99}})
+    metrics[std::string("bounce_gain_") + name] =
+        gain.empty() ? 0.0 : gain[std::size_t(q * double(gain.size() - 1))];
+  metrics["bounce_gain_max"] = gain.empty() ? 0.0 : gain.back();
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "inter-reflection: transfer gain per vertex median %.1f%%, 90th %.1f%%, "
+                "99th %.1f%%, max %.1f%%",
+                100 * metrics["bounce_gain_p50"], 100 * metrics["bounce_gain_p90"],
+                100 * metrics["bounce_gain_p99"], 100 * metrics["bounce_gain_max"]);
+  options.message(line);
+  result.transfer.coefficients = std::move(light.total);
+  for (std::size_t b = 0; b < light.bounce_norms.size(); ++b)
+    metrics["bounce_" + std::to_string(b + 1) + "_norm"] = light.bounce_norms[b];
+  result.hits = HitLists();
+}
+
+}  // namespace
+
+TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                              const DirectionSet& set, TransportResult result,
+                              const RunOptions& options, StageTimes& times,
+                              std::map<std::string, double>& metrics) {
+  Stopwatch clock;
+  if (plan.fit) {
+    plan.basis->fit({&mesh, &set, &result.visibility});
+    times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
+  }
+  if (plan.keep_visibility && (!plan.glossy || plan.subsurface)) {
+    clock = Stopwatch();
+    result.transfer = project_visibility(mesh, set, result.visibility, *plan.basis);
+    times.add("project", clock.seconds());
+  }
+  if (plan.bounces > 0) {
+    clock = Stopwatch();
+    add_bounces(plan, mesh, set, result, options, metrics);
+    times.add("inter-reflection (" + std::to_string(plan.bounces) + " bounces)", clock.seconds());
+  }
+  MatrixXfRow scattered;
+  if (plan.subsurface) {
+    clock = Stopwatch();
+    scattered = subsurface_transfer(mesh, result.transfer.coefficients, scene.subsurface());
+    times.add("subsurface (hierarchical diffusion)", clock.seconds());
+  }
+  if (!plan.glossy) {
+    if (plan.subsurface) result.transfer.coefficients += scattered;
+    return std::move(result.transfer);
+  }
+  clock = Stopwatch();
+  const GlossyOperator glossy = GlossyOperator::make(plan.brdf, *plan.exit, plan.incident_order,
+                                                     plan.least_squares, plan.cutoff);
+  times.add("BRDF operator", clock.seconds());
+  clock = Stopwatch();
+  Progress progress("glossy matrices", double(mesh.vertex_count()), "", options.quiet);
+  TransferSignal transfer = glossy_transfer(mesh, set, result.visibility, *plan.basis, glossy,
+                                            tangent_frames(mesh), plan.glossy_method, &progress);
+  times.add("glossy matrices (" + std::to_string(glossy.rows()) + "x" +
+                std::to_string(plan.basis->size()) + ")",
+            clock.seconds());
+  if (plan.subsurface) {
+    // The subsurface term is view-independent exit radiance: the constant
+    // function's exit coefficients times the scattered transfer vector.
+    const Eigen::Index n_i = scattered.cols();
+    for (int r = 0; r < glossy.rows(); ++r)
+      transfer.coefficients.middleCols(r * n_i, n_i) +=
+          static_cast<float>(glossy.constant[r]) * scattered;
+  }
+  return transfer;
+}
+
+CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
+                                  const Mesh& mesh, const SourceLocation& where) {
+  try {
+    return plan.sparse_terms > 0 ? keep_largest(transfer, plan.sparse_terms)
+                                 : plan.compressor->encode(transfer, &mesh);
+  } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
+    throw Error(where, "out of memory while compressing the " +
+                           std::to_string(transfer.vertices()) + " x " +
+                           std::to_string(transfer.dimension()) + " transfer with compressor \"" +
+                           plan.compressor_record.name + "\"");
+  }
+}
+
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
               StageTimes& times) {
   Stopwatch clock;
-  PluginChoice basis_choice = scene.basis, compressor_choice = scene.compressor;
-  auto basis = registry.create<Basis>(basis_choice.name, basis_choice.params, basis_choice.where);
-  auto compressor = registry.create<Compressor>(compressor_choice.name, compressor_choice.params,
-                                                compressor_choice.where);
+  const BakePlan plan = plan_bake(scene, registry);
   times.add("load plug-ins", clock.seconds());
-  if (basis->domain() != Domain::sphere)
-    throw Error(basis_choice.where,
-                "basis \"" + basis_choice.name +
-                    "\" is defined over the hemisphere of a local frame (for exit radiance of "
-                    "glossy transfer); diffuse transfer is a function over the whole sphere: use "
-                    "a sphere basis such as \"sh\"");
-  if (scene.glossy() && basis_choice.name != "sh")
-    throw Error(basis_choice.where,
-                "glossy transfer rotates the light into each vertex's frame and projects it over "
-                "the hemisphere in spherical harmonics; use basis \"sh\" (not \"" +
-                    basis_choice.name + "\")");
-  if (basis->approximation_terms() > 0 && compressor_choice.name != "none")
-    throw Error(compressor_choice.where,
-                "basis \"" + basis_choice.name +
-                    "\" approximates non-linearly (keeps the largest coefficients); it cannot be "
-                    "combined with compressor \"" +
-                    compressor_choice.name + "\": use \"none\"");
 
   clock = Stopwatch();
   BakeData data;
@@ -147,129 +295,42 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const DirectionSet set = scene.directions();
   times.add("directions", clock.seconds());
 
-  const bool glossy = scene.glossy(), subsurface = scene.material.get_bool("subsurface");
-  const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
-  TransportOptions transport;
-  transport.shadowed = scene.transport.get_bool("shadowed");
-  transport.keep_hits = bounces > 0;
-  // Bases fitted to the visibility and glossy matrices need the bits kept;
-  // everything else projects while tracing.
-  transport.keep_visibility = basis->can_fit() || glossy;
-  require_memory(scene, data.mesh, set, *basis, transport.keep_visibility || options.traced,
-                 transport.keep_hits);
-  TransportResult result;
-  if (options.traced) {  // a sweep traced these rays once for many configurations
-    transport.keep_visibility = true;
-    result.visibility = options.traced->visibility;
-    result.hits = options.traced->hits;
-    if (result.visibility.vertices() != data.mesh.vertex_count() ||
-        result.visibility.directions() != static_cast<std::size_t>(set.size()) ||
-        (transport.keep_hits && result.hits.size() != data.mesh.vertex_count()))
-      throw Error("bake: the traced visibility does not match the scene's mesh and directions");
-  } else {
-    Progress progress("bake transfer", double(data.mesh.vertex_count()),
-                      transport.shadowed ? "rays" : "", options.quiet);
-    result =
-        transport.keep_visibility
-            ? diffuse_transfer(data.mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress)
-            : diffuse_transfer(data.mesh, set, *basis, transport, &progress);
-  }
-  times.add(transport.keep_visibility ? "trace" : "trace + project", result.trace_seconds);
-  if (basis->can_fit()) {
-    clock = Stopwatch();
-    basis->fit({&data.mesh, &set, &result.visibility});
-    times.add("fit basis (" + basis_choice.name + ")", clock.seconds());
-  }
-  if (transport.keep_visibility && (!glossy || subsurface)) {
-    clock = Stopwatch();
-    result.transfer = project_visibility(data.mesh, set, result.visibility, *basis);
-    times.add("project", clock.seconds());
-  }
-  if (bounces > 0) {
-    clock = Stopwatch();
-    Progress progress("inter-reflection", bounces, "", options.quiet);
-    Interreflection light = interreflect(data.mesh, set, result.hits, result.transfer.coefficients,
-                                         bounces, scene.bounce_albedo(), &progress);
-    // How much the bounces add per vertex (transfer norm with / without - 1):
-    // near zero on convex parts, large in concave ones.
-    std::vector<double> gain(static_cast<std::size_t>(light.total.rows()));
-    for (Eigen::Index p = 0; p < light.total.rows(); ++p)
-      gain[p] =
-          light.total.row(p).norm() / std::max(1e-30f, result.transfer.coefficients.row(p).norm()) -
-          1.0;
-    std::sort(gain.begin(), gain.end());
-    for (const auto& [name, q] : {std::pair{"p50", 0.5}, {"p90", 0.9}, {"p99", 0.99}})
-      data.metrics[std::string("bounce_gain_") + name] = gain[std::size_t(q * (gain.size() - 1))];
-    data.metrics["bounce_gain_max"] = gain.empty() ? 0.0 : gain.back();
-    if (!options.quiet)
-      std::printf(
-          "inter-reflection: transfer gain per vertex median %.1f%%, 90th %.1f%%, "
-          "99th %.1f%%, max %.1f%%\n",
-          100 * data.metrics["bounce_gain_p50"], 100 * data.metrics["bounce_gain_p90"],
-          100 * data.metrics["bounce_gain_p99"], 100 * data.metrics["bounce_gain_max"]);
-    result.transfer.coefficients = std::move(light.total);
-    for (std::size_t b = 0; b < light.bounce_norms.size(); ++b)
-      data.metrics["bounce_" + std::to_string(b + 1) + "_norm"] = light.bounce_norms[b];
-    result.hits = HitLists();
-    times.add("inter-reflection (" + std::to_string(bounces) + " bounces)", clock.seconds());
-  }
-  MatrixXfRow scattered;
-  if (subsurface) {
-    clock = Stopwatch();
-    scattered = subsurface_transfer(data.mesh, result.transfer.coefficients, scene.subsurface());
-    times.add("subsurface (hierarchical diffusion)", clock.seconds());
-  }
-  if (glossy) {
-    clock = Stopwatch();
-    const GlossyChain chain =
-        GlossyChain::make(scene.brdf(), scene.exit_basis(), sh_order_of(*basis),
-                          scene.material.get_string("projection") == "least-squares",
-                          scene.material.get_real("cutoff"));
-    times.add("BRDF matrix", clock.seconds());
-    clock = Stopwatch();
-    Progress progress("glossy matrices", double(data.mesh.vertex_count()), "", options.quiet);
-    result.transfer = glossy_transfer(data.mesh, set, result.visibility, *basis, chain, &progress);
-    times.add("glossy matrices (" + std::to_string(chain.exit.rows()) + "x" +
-                  std::to_string(basis->size()) + ")",
-              clock.seconds());
-  }
-  if (subsurface) add_subsurface(scattered, result.transfer);
-  result.visibility = VisibilityBits();  // not needed past here
+  require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
+  TransportResult traced = trace_stage(plan, data.mesh, set, options);
+  const auto rays_cast = traced.rays_cast;
+  times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
+  data.transfer = transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times,
+                                 data.metrics);
 
   clock = Stopwatch();
-  const int terms = basis->approximation_terms();
-  try {
-    data.compressed = terms > 0 ? keep_largest(result.transfer, terms)
-                                : compressor->encode(result.transfer, &data.mesh);
-  } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
-    throw Error(compressor_choice.where, "out of memory while compressing the " +
-                                             std::to_string(result.transfer.vertices()) + " x " +
-                                             std::to_string(result.transfer.dimension()) +
-                                             " transfer with compressor \"" +
-                                             compressor_choice.name + "\"");
-  }
+  data.compressed = options.compress || plan.sparse_terms > 0
+                        ? compress_stage(plan, data.transfer, data.mesh, scene.compressor.where)
+                        : exact_form(data.transfer);
   const double encode_seconds = clock.seconds();
-  times.add("compress (" + compressor_choice.name + ")", encode_seconds);
+  times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
   const CompressionReport report =
-      measure(result.transfer, data.compressed, &data.mesh, encode_seconds);
+      measure(data.transfer, data.compressed, &data.mesh, encode_seconds);
   record(report, data.metrics);
-  if (!options.quiet) std::printf("%s", report.text().c_str());
+  std::string text = report.text();
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  options.message(text);
 
-  data.transfer = std::move(result.transfer);
   data.scene_file = scene.file.string();
   data.scene_text = scene.text;
   data.transport = transport_description(scene, set);
-  const auto& basis_info = registry.find(PluginKind::basis, basis_choice.name);
-  const auto& compressor_info = registry.find(PluginKind::compressor, compressor_choice.name);
-  data.basis = {basis_choice.name, basis_info.info.version, basis_choice.params.describe()};
-  data.compressor = {compressor_choice.name, compressor_info.info.version,
-                     compressor_choice.params.describe()};
+  data.basis = plan.basis_record;
+  data.compressor = plan.compressor_record;
+  if (!options.compress) data.compressor = {"exact", "", ""};
   data.albedo = scene.albedo();
   data.material = scene.material_description();
-  data.bounces = bounces;
-  data.subsurface = subsurface;
-  data.basis_state = basis->save();
-  data.metrics["rays_cast"] = static_cast<double>(result.rays_cast);
+  data.bounces = plan.bounces;
+  data.subsurface = plan.subsurface;
+  data.basis_state = plan.basis->save();
+  if (plan.glossy) {
+    data.exit = plan.exit_record;
+    data.exit_state = plan.exit->save();
+  }
+  data.metrics["rays_cast"] = static_cast<double>(rays_cast);
   data.metrics["squared_error"] =
       squared_error(data.transfer.coefficients, data.compressed.decode());
   data.metrics["stored_floats"] = data.compressed.stored_floats();
@@ -288,65 +349,127 @@ TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options) {
   return diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
 }
 
+namespace {
+
+void check_plugin_matches(const PluginRecord& baked, const PluginChoice& wanted,
+                          const char* role) {
+  const std::string parameters = wanted.params.describe();
+  if (baked.name == wanted.name && baked.parameters == parameters) return;
+  auto first_line = [](const std::string& text) { return text.substr(0, text.find('\n')); };
+  throw Error(wanted.where, std::string("the bake file was made with ") + role + " \"" +
+                                baked.name + "\" (" + first_line(baked.parameters) +
+                                "), but the scene asks for \"" + wanted.name + "\" (" +
+                                first_line(parameters) + "); bake again");
+}
+
+}  // namespace
+
 void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
   const std::string material = scene.material_description();
   const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
   if (data.material != material || data.bounces != bounces ||
       data.subsurface != scene.material.get_bool("subsurface") ||
-      data.transfer.exit.kept != scene.exit_basis().kept)
+      data.transfer.glossy() != scene.glossy())
     throw Error(scene.material.location(),
                 "the bake file was made for material \"" + data.material + "\" with " +
                     std::to_string(data.bounces) + " bounces" +
                     (data.subsurface ? " and subsurface" : "") + ", but the scene asks for \"" +
-                    material + "\" with " + std::to_string(bounces) +
-                    " bounces (or another exit basis); bake again");
-  const std::string wanted = scene.basis.params.describe();
-  if (data.basis.name != scene.basis.name || data.basis.parameters != wanted)
-    throw Error(scene.basis.where,
-                "the bake file was made with basis \"" + data.basis.name + "\" (" +
-                    data.basis.parameters.substr(0, data.basis.parameters.find('\n')) +
-                    "), but the scene asks for \"" + scene.basis.name + "\" (" +
-                    wanted.substr(0, wanted.find('\n')) + "); bake again");
+                    material + "\" with " + std::to_string(bounces) + " bounces; bake again");
+  check_plugin_matches(data.basis, scene.basis, "basis");
+  if (scene.glossy()) check_plugin_matches(data.exit, scene.exit, "exit basis");
 }
 
 void check_bake_dimension(const BakeData& data, const Basis& basis) {
-  const Eigen::Index expected = Eigen::Index(basis.size()) * data.transfer.exit.rows();
+  const Eigen::Index expected = Eigen::Index(basis.size()) * data.transfer.exit_rows;
   if (data.transfer.dimension() != expected)
     throw Error(data.scene_file + ": the bake's transfer has " +
                 std::to_string(data.transfer.dimension()) + " columns, but basis \"" +
                 data.basis.name + "\" has " + std::to_string(basis.size()) + " coefficients" +
-                (data.transfer.exit.glossy()
-                     ? " x " + std::to_string(data.transfer.exit.rows()) + " exit rows"
+                (data.transfer.glossy()
+                     ? " x " + std::to_string(data.transfer.exit_rows) + " exit rows"
                      : std::string()) +
                 "; the bake file does not match its plug-ins (bake again)");
 }
 
+Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry)
+    : scene_(scene), data_(data) {
+  check_bake_matches(data, scene);
+  PluginChoice basis = scene.basis;
+  basis_ = registry.create<Basis>(basis.name, basis.params, basis.where);
+  basis_->load(data.basis_state);
+  check_bake_dimension(data, *basis_);
+  scene.check_window(*basis_);
+  if (data.transfer.glossy()) {
+    PluginChoice exit = scene.exit;
+    exit_ = registry.create<Basis>(exit.name, exit.params, exit.where);
+    exit_->load(data.exit_state);
+    if (exit_->size() != data.transfer.exit_rows)
+      throw Error(exit.where, "the bake's transfer has " +
+                                  std::to_string(data.transfer.exit_rows) +
+                                  " exit rows, but exit basis \"" + exit.name + "\" has " +
+                                  std::to_string(exit_->size()) + " functions; bake again");
+    frames_ = tangent_frames(data.mesh);
+  }
+}
+
+Eigen::MatrixX3d Relighting::light(const Environment& environment) const {
+  return scene_.project_light(environment, *basis_);
+}
+
+Relit Relighting::relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                          const Camera& camera) const {
+  Relit out;
+  out.exit_coefficients = exit_coefficients(transfer, light, data_.transfer.exit_rows);
+  if (exit_) {
+    out.exit_values = exit_values_toward(camera);
+    out.vertex_radiance = exit_radiance(out.exit_coefficients, out.exit_values);
+  } else {
+    out.vertex_radiance = out.exit_coefficients;
+  }
+  for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data_.albedo[c];
+  return out;
+}
+
+MatrixXfRow Relighting::exit_values_toward(const Camera& camera) const {
+  if (!exit_) return {};
+  return exit_values(*exit_, local_view_directions(data_.mesh, frames_, camera.position));
+}
+
+RenderInput Relighting::input(const CompressedTransfer& transfer, const Relit& relit,
+                              const Eigen::MatrixX3d& light, const Camera& camera) const {
+  RenderInput input;
+  input.mesh = &data_.mesh;
+  input.transfer = &transfer;
+  input.light = light;
+  input.albedo = data_.albedo;
+  input.camera = camera;
+  if (exit_) input.exit_values = &relit.exit_values;
+  return input;
+}
+
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
                 StageTimes& times) {
-  check_bake_matches(data, scene);
   Stopwatch clock;
-  PluginChoice basis_choice = scene.basis, renderer_choice = scene.renderer;
-  auto basis = registry.create<Basis>(basis_choice.name, basis_choice.params, basis_choice.where);
-  basis->load(data.basis_state);
-  check_bake_dimension(data, *basis);
+  const Relighting relighting(scene, data, registry);
+  PluginChoice renderer_choice = scene.renderer;
   auto renderer = registry.create<Renderer>(renderer_choice.name, renderer_choice.params,
                                             renderer_choice.where);
   const Environment environment = scene.load_environment();
   times.add("load lighting + plug-ins", clock.seconds());
 
   clock = Stopwatch();
-  const Eigen::MatrixX3d light = scene.project_light(environment, *basis);
+  const Eigen::MatrixX3d light = relighting.light(environment);
   const Camera camera = scene.make_camera(data.mesh);
   times.add("project light", clock.seconds());
 
   clock = Stopwatch();
   Rendered out;
-  const Relit relit = relight_view(data, data.compressed, light, camera);
+  const Relit relit = relighting.relight(data.compressed, light, camera);
   out.vertex_radiance = relit.vertex_radiance;
   times.add("relight vertices", clock.seconds());
 
   clock = Stopwatch();
-  RenderInput input = render_input(data, data.compressed, relit, light, camera);
+  RenderInput input = relighting.input(data.compressed, relit, light, camera);
   input.background = &environment;
   out.image = renderer->render(input);
   out.statistics = renderer->statistics();
@@ -354,82 +477,57 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   return out;
 }
 
-Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,
-                   const Eigen::MatrixX3d& light, const Camera& camera,
-                   const std::vector<Frame>* frames) {
-  Relit out;
-  const ExitBasis& exit = data.transfer.exit;
-  out.exit_coefficients = exit_coefficients(transfer, light, exit.rows());
-  if (exit.glossy()) {
-    out.frames = frames ? *frames : tangent_frames(data.mesh);
-    out.vertex_radiance = evaluate_exit(
-        out.exit_coefficients, exit, local_view_directions(data.mesh, out.frames, camera.position));
-  } else {
-    out.vertex_radiance = out.exit_coefficients;
+Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
+                                       const Environment& lighting, const Camera& camera,
+                                       const RunOptions& options) {
+  const int samples = static_cast<int>(scene.ground_truth.get_int("samples"));
+  const auto seed = static_cast<std::uint64_t>(scene.ground_truth.get_int("seed"));
+  // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
+  Reflectance reflectance;
+  std::vector<Frame> frames;
+  Eigen::MatrixXd views;
+  const Brdf brdf = scene.brdf();
+  if (brdf.glossy()) {
+    frames = tangent_frames(mesh);
+    views = local_view_directions(mesh, frames, camera.position);
+    reflectance = [&](std::size_t v, const Eigen::Vector3d& light) {
+      return M_PI * brdf.evaluate(frames[v] * light, views.row(Eigen::Index(v)).transpose());
+    };
   }
-  for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data.albedo[c];
-  return out;
-}
-
-RenderInput render_input(const BakeData& data, const CompressedTransfer& transfer,
-                         const Relit& relit, const Eigen::MatrixX3d& light, const Camera& camera) {
-  RenderInput input;
-  input.mesh = &data.mesh;
-  input.transfer = &transfer;
-  input.light = light;
-  input.albedo = data.albedo;
-  input.camera = camera;
-  if (data.transfer.exit.glossy()) {
-    input.exit_coefficients = &relit.exit_coefficients;
-    input.exit_basis = &data.transfer.exit;
-    input.frames = &relit.frames;
+  Eigen::MatrixX3f radiance;
+  {
+    Progress progress("ground truth", double(mesh.vertex_count()), "rays", options.quiet);
+    radiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress, reflectance);
   }
-  return input;
+  if (const int bounces = static_cast<int>(scene.transport.get_int("bounces")); bounces > 0) {
+    Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
+                      options.quiet);
+    radiance = ground_truth_bounces(mesh, radiance, bounces, scene.bounce_albedo(), samples, seed,
+                                   &progress);
+  }
+  const Eigen::Vector3f albedo = scene.albedo();
+  for (int c = 0; c < 3; ++c) radiance.col(c) *= albedo[c];
+  return radiance;
 }
 
 Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
-                             const RunOptions& options, StageTimes& times) {
+                             const RunOptions& options, StageTimes& times,
+                             const Environment* lighting) {
   PluginChoice renderer_choice = scene.renderer;
   auto renderer = registry.create<Renderer>(renderer_choice.name, renderer_choice.params,
                                             renderer_choice.where);
   const Environment environment = scene.load_environment();
   Stopwatch clock;
   Rendered out;
-  const int samples = static_cast<int>(scene.ground_truth.get_int("samples"));
-  const auto seed = static_cast<std::uint64_t>(scene.ground_truth.get_int("seed"));
   const Camera camera = scene.make_camera(mesh);
-  {
-    // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
-    Reflectance reflectance;
-    std::vector<Frame> frames;
-    std::vector<Eigen::Vector3d> views;
-    const Brdf brdf = scene.brdf();
-    if (brdf.glossy()) {
-      frames = tangent_frames(mesh);
-      views = local_view_directions(mesh, frames, camera.position);
-      reflectance = [&](std::size_t v, const Eigen::Vector3d& light) {
-        return M_PI * brdf.evaluate(frames[v] * light, views[v]);
-      };
-    }
-    Progress progress("ground truth", double(mesh.vertex_count()), "rays", options.quiet);
-    out.vertex_radiance =
-        ground_truth_radiance(mesh, environment, samples, seed, &progress, reflectance);
-  }
-  if (const int bounces = static_cast<int>(scene.transport.get_int("bounces")); bounces > 0) {
-    Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
-                      options.quiet);
-    out.vertex_radiance = ground_truth_bounces(mesh, out.vertex_radiance, bounces,
-                                               scene.bounce_albedo(), samples, seed, &progress);
-  }
-  const Eigen::Vector3f albedo = scene.albedo();
-  times.add("ground truth (Monte Carlo)", clock.seconds());
+  out.vertex_radiance =
+      ground_truth_vertices(scene, mesh, lighting ? *lighting : environment, camera, options);
+  times.add(lighting ? "ground truth under the band-limited light" : "ground truth (Monte Carlo)",
+            clock.seconds());
   clock = Stopwatch();
   RenderInput input;
   input.mesh = &mesh;
-  const Eigen::MatrixX3f unit_albedo = out.vertex_radiance;
-  for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= albedo[c];
-  input.vertex_radiance = &unit_albedo;
-  input.albedo = albedo;
+  input.vertex_radiance = &out.vertex_radiance;  // albedo included
   input.camera = camera;
   input.background = &environment;
   out.image = renderer->render(input);

@@ -46,6 +46,32 @@ void terminate_texts(PluginInfoRecord& info) {
   }
 }
 
+// "k1=v1;k2=v2" -> the first component that differs, in words ("" if none).
+std::string build_key_difference(const std::string& plugin, const std::string& host) {
+  auto parse = [](const std::string& key) {
+    std::vector<std::pair<std::string, std::string>> parts;
+    for (std::size_t start = 0; start <= key.size();) {
+      const std::size_t end = std::min(key.find(';', start), key.size());
+      const std::string part = key.substr(start, end - start);
+      const std::size_t equals = part.find('=');
+      parts.emplace_back(part.substr(0, equals),
+                         equals == std::string::npos ? "" : part.substr(equals + 1));
+      start = end + 1;
+    }
+    return parts;
+  };
+  const auto p = parse(plugin), h = parse(host);
+  for (const auto& [name, value] : h) {
+    const auto it = std::find_if(p.begin(), p.end(), [&](const auto& x) { return x.first == name; });
+    if (it == p.end())
+      return "has an old build key without \"" + name + "\" (host: " + value + ")";
+    if (it->second != value)
+      return "was built with " + name + " = " + it->second + ", but this host has " + name +
+             " = " + value;
+  }
+  return plugin == host ? "" : "has a build key this host does not know";
+}
+
 PluginDescriptor read_descriptor(const fs::path& file) {
   const std::string where = file.string();
   const elf::SymbolTable symbols = elf::dynamic_symbols(file);
@@ -67,10 +93,11 @@ PluginDescriptor read_descriptor(const fs::path& file) {
       d.info.kind != PluginKind::renderer)
     throw Error(where + ": plug-in \"" + d.name() + "\" declares an unknown kind " +
                 std::to_string(static_cast<unsigned>(d.info.kind)));
-  if (std::strcmp(d.info.build_key, host_build_key()) != 0)
-    throw Error(where + ": plug-in \"" + d.name() + "\" was built for \"" + d.info.build_key +
-                "\", but this host is \"" + host_build_key() +
-                "\"; rebuild the plug-in with the same compiler, Eigen and build type");
+  if (const std::string differs = build_key_difference(d.info.build_key, host_build_key());
+      !differs.empty())
+    throw Error(where + ": plug-in \"" + d.name() + "\" " + differs +
+                "; rebuild it against this framework with find_package(PRT) (full keys: plug-in \"" +
+                d.info.build_key + "\", host \"" + host_build_key() + "\")");
   for (const char* symbol : {PRT_CREATE_SYMBOL, PRT_DESTROY_SYMBOL})
     if (!symbols.has(symbol))
       throw Error(where + ": plug-in \"" + d.name() + "\" lacks the symbol " + symbol +

@@ -46,12 +46,11 @@ const ParamSchema& material_schema() {
              "ward: roughness along the tangent and the bitangent"),
        real("roughness", "0.3", 0.03, 10, "cook-torrance: Beckmann slope m"),
        real("fresnel", "0.04", 0, 1, "cook-torrance: Schlick reflectance at normal incidence"),
-       integer("exit_order", "5", 1, kMaxExitOrder,
-               "glossy: SH order of exit radiance over the local hemisphere (N_r = order^2)"),
-       boolean("exit_reduced", "false",
-               "glossy: drop the nearly redundant l=1,m=0 exit function (N_r = 24 at order 5)"),
+       integer("incident_order", "0", 0, kMaxIncidentOrder,
+               "glossy: SH order M the BRDF is band-limited to in its incident direction (0: "
+               "the light basis's band count when it has bands, else 8)"),
        choice("projection", "least-squares", "least-squares|zero",
-              "glossy: hemispherical projection of transferred and exit radiance"),
+              "glossy: hemispherical projection of the BRDF's incident side ([exit] has its own)"),
        real("cutoff", "1e-10", 0, 1,
             "glossy least squares: singular values of A below this x the largest are dropped"),
        boolean("subsurface", "false", "add Jensen-Buhler multiple scattering"),
@@ -111,9 +110,9 @@ const ParamSchema& ground_truth_schema() {
   return s;
 }
 
-const std::array<std::string, 10> kSections = {"mesh",       "material",    "transport", "basis",
-                                               "compressor", "lighting",    "renderer",  "camera",
-                                               "output",     "ground_truth"};
+const std::array<std::string, 11> kSections = {
+    "mesh",     "material", "transport", "basis",  "exit",        "compressor",
+    "lighting", "renderer", "camera",    "output", "ground_truth"};
 
 SourceLocation location_of(const toml::source_region& region, const fs::path& file) {
   return {file.string(), static_cast<int>(region.begin.line),
@@ -420,6 +419,14 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     resolve_paths(params, schema, scene);
     return params;
   };
+  // The exit basis was a set of [material] keys before it became a plug-in.
+  if (const toml::table* material = root["material"].as_table())
+    for (const char* old : {"exit_order", "exit_reduced"})
+      if (const toml::node* node = material->get(old))
+        throw Error(location_of(node->source(), file),
+                    std::string("section [material]: \"") + old +
+                        "\" is now a parameter of the exit basis: write [exit] plugin = \"hsh\", "
+                        "order = 5, reduced = true");
   scene.mesh = section("mesh", mesh_schema());
   scene.material = section("material", material_schema());
   scene.transport = section("transport", transport_schema());
@@ -450,10 +457,10 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                 "shadowed = true");
 
   scene.basis = read_plugin(root, "basis", "sh", PluginKind::basis, registry, scene);
-  if (scene.lighting.get_string("window") != "none" && scene.basis.name != "sh")
-    throw Error(scene.lighting.location("window"),
-                "section [lighting]: window damps SH bands; basis \"" + scene.basis.name +
-                    "\" has none (use window = \"none\")");
+  // The exit basis serves glossy materials; a lambert one still has it
+  // checked (a sweep may vary the BRDF over one scene file).
+  if (scene.glossy() || root["exit"].as_table())
+    scene.exit = read_plugin(root, "exit", "hsh", PluginKind::basis, registry, scene);
   scene.compressor =
       read_plugin(root, "compressor", "none", PluginKind::compressor, registry, scene);
   scene.renderer = read_plugin(root, "renderer", "cpu", PluginKind::renderer, registry, scene);
@@ -509,10 +516,13 @@ Eigen::MatrixX3d SceneSpec::project_light(const Environment& environment,
                                           const Basis& basis) const {
   Eigen::MatrixX3d light = environment.project(basis);
   const std::string kind = lighting.get_string("window");
-  if (kind != "none") {
-    const int order = static_cast<int>(std::lround(std::sqrt(double(basis.size()))));
-    light = sh::window(order, kind).asDiagonal() * light;
-  }
+  if (kind == "none") return light;
+  check_window(basis);
+  const std::vector<int> bands = basis.coefficient_bands();
+  const int order = *std::max_element(bands.begin(), bands.end()) + 1;
+  const Eigen::VectorXd per_band = sh::window(order, kind);  // indexed l^2 + l + m: take m = -l
+  for (std::size_t i = 0; i < bands.size(); ++i)
+    light.row(Eigen::Index(i)) *= per_band[bands[i] * bands[i]];
   return light;
 }
 
@@ -547,10 +557,21 @@ bool SceneSpec::glossy() const {
   return brdf().glossy();
 }
 
-ExitBasis SceneSpec::exit_basis() const {
-  if (!glossy()) return {};
-  return ExitBasis::hemisphere(static_cast<int>(material.get_int("exit_order")),
-                               material.get_bool("exit_reduced"));
+void SceneSpec::check_window(const Basis& light_basis) const {
+  // The window damps each frequency band; a basis without bands cannot be windowed.
+  if (lighting.get_string("window") == "none") return;
+  const std::vector<int> bands = light_basis.coefficient_bands();
+  if (bands.size() != static_cast<std::size_t>(light_basis.size()) || bands.empty())
+    throw Error(lighting.location("window"),
+                "section [lighting]: window damps frequency bands, and basis \"" + basis.name +
+                    "\" has none (it declares no coefficient_bands()); use window = \"none\"");
+}
+
+int SceneSpec::incident_order(const Basis& light_basis) const {
+  if (const auto order = material.get_int("incident_order"); order > 0) return int(order);
+  const std::vector<int> bands = light_basis.coefficient_bands();
+  if (bands.empty()) return 8;
+  return std::clamp(*std::max_element(bands.begin(), bands.end()) + 1, 1, kMaxIncidentOrder);
 }
 
 double SceneSpec::bounce_albedo() const {
@@ -561,7 +582,8 @@ std::string SceneSpec::material_description() const {
   std::string text = brdf().describe();
   if (glossy())
     text += " projection=" + material.get_string("projection") +
-            " cutoff=" + std::to_string(material.get_real("cutoff"));
+            " cutoff=" + std::to_string(material.get_real("cutoff")) +
+            " incident_order=" + std::to_string(material.get_int("incident_order"));
   if (material.get_bool("subsurface")) {
     const SubsurfaceMaterial m = subsurface();
     char more[200];

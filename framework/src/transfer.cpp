@@ -7,7 +7,6 @@
 #include <numeric>
 
 #include "prt/error.hpp"
-#include "prt/sh.hpp"
 
 namespace prt {
 
@@ -58,6 +57,18 @@ void CompressedTransfer::validate(Eigen::Index vertex_count) const {
   }
 }
 
+CompressedTransfer exact_form(const TransferSignal& t) {
+  CompressedTransfer c;
+  c.compressor = "exact";
+  c.dimension = t.dimension();
+  c.components = static_cast<int>(t.dimension());
+  c.cluster_of_vertex.assign(static_cast<std::size_t>(t.vertices()), 0);
+  c.means = MatrixXfRow::Zero(1, t.dimension());
+  c.representatives = {MatrixXfRow::Identity(t.dimension(), t.dimension())};
+  c.weights = t.coefficients;
+  return c;
+}
+
 CompressedTransfer keep_largest(const TransferSignal& signal, int terms) {
   const Eigen::Index n = signal.dimension(), v = signal.vertices();
   const int k = static_cast<int>(std::min<Eigen::Index>(std::max(terms, 1), n));
@@ -94,24 +105,6 @@ double CompressedTransfer::stored_floats() const {
   for (auto k : cluster_of_vertex) floats += components_of(k);
   for (Eigen::Index k = 0; k < clusters(); ++k) floats += double(components_of(k) + 1) * dimension;
   return floats;
-}
-
-ExitBasis ExitBasis::hemisphere(int order, bool reduced) {
-  ExitBasis b;
-  b.order = order;
-  for (int i = 0; i < order * order; ++i)
-    if (!(reduced && i == sh::index(1, 0))) b.kept.push_back(i);
-  return b;
-}
-
-void ExitBasis::evaluate(const Eigen::Vector3d& local, double* out) const {
-  if (!glossy()) {
-    out[0] = 1.0;
-    return;
-  }
-  double all[kMaxExitCoefficients];
-  sh::evaluate(order, local.x(), local.y(), local.z(), all);
-  for (std::size_t i = 0; i < kept.size(); ++i) out[i] = all[kept[i]];
 }
 
 namespace {
@@ -182,8 +175,25 @@ MatrixXfRow exit_coefficients(const CompressedTransfer& t, const Eigen::MatrixX3
   return out;
 }
 
-Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& light) {
-  return exit_coefficients(t, light, 1);
+Eigen::MatrixX3f exit_radiance(const MatrixXfRow& coefficients, const MatrixXfRow& values) {
+  const Eigen::Index rows = values.cols();
+  if (coefficients.cols() != 3 * rows || coefficients.rows() != values.rows())
+    throw Error("exit radiance: coefficients do not match the exit basis and vertices");
+  Eigen::MatrixX3f out(coefficients.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), coefficients.rows(), [&](Eigen::Index p) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (Eigen::Index i = 0; i < rows; ++i)
+      for (int c = 0; c < 3; ++c) sum[c] += double(values(p, i)) * coefficients(p, 3 * i + c);
+    out.row(p) = sum.cast<float>().transpose();
+  });
+  return out;
+}
+
+Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& light,
+                         const MatrixXfRow* exit_values) {
+  if (!exit_values) return exit_coefficients(t, light, 1);
+  return exit_radiance(exit_coefficients(t, light, static_cast<int>(exit_values->cols())),
+                       *exit_values);
 }
 
 double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation) {

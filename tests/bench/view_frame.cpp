@@ -69,17 +69,16 @@ int main(int argc, char** argv) {
     PluginRegistry registry(PluginRegistry::default_directories());
     SceneSpec scene = SceneSpec::load(scene_file, registry);
     const BakeData data = read_bake(scene.bake_path());
-    auto basis = registry.create<Basis>(scene.basis.name, scene.basis.params, scene.basis.where);
-    basis->load(data.basis_state);
-    const Eigen::MatrixX3d light = scene.project_light(scene.load_environment(), *basis);
+    const Relighting relighting(scene, data, registry);
+    const Eigen::MatrixX3d light = relighting.light(scene.load_environment());
     Params gl_params;
     gl_params.set("background", false);
     auto renderer = registry.create<Renderer>("opengl", gl_params);
     const Camera camera = scene.make_camera(data.mesh);
-    const Relit relit = relight_view(data, data.compressed, light, camera);
-    RenderInput prt_input = render_input(data, data.compressed, relit, light, camera);
+    const Relit relit = relighting.relight(data.compressed, light, camera);
+    RenderInput prt_input = relighting.input(data.compressed, relit, light, camera);
     RenderInput plain = prt_input;
-    plain.exit_basis = nullptr;
+    plain.exit_values = nullptr;
     plain.vertex_radiance = &relit.vertex_radiance;
 
     auto time_frames = [&](const RenderInput& input, std::vector<double>* relight = nullptr) {
@@ -109,7 +108,7 @@ int main(int argc, char** argv) {
     std::printf("GPU  overhead ratio %.2f\n", prt_frame / plain_frame);
 
     // CPU relighting of every vertex against reading its data once.
-    const int rows = data.transfer.exit.rows();
+    const int rows = data.transfer.exit_rows;
     std::vector<double> cpu;
     for (int f = 0; f < frames; ++f) {
       Stopwatch clock;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The OpenGL renderer and prt-view under Xvfb + Mesa (llvmpipe):
 #  - the OpenGL image of each encoding (exact, CPCA single-pass and
-#    per-cluster, Haar's sparse form, glossy CPCA) matches the CPU renderer's
+#    per-cluster, Haar's sparse form, glossy CPCA, glossy Haar) matches the CPU renderer's
 #    image of the same scene and camera: mean absolute difference below 0.5
 #    of 255 and under 0.5% of pixels off by more than 8 levels;
 #  - prt-view renders scripted frames and exits cleanly; its screenshot
@@ -54,11 +54,24 @@ k = 48' 'plugin = "none"'
 scene glossy 'brdf = "phong"
 diffuse = 0.4
 specular = 0.6
-exponent = 12
-exit_reduced = true' 'plugin = "sh"
-order = 5' 'plugin = "cpca"
+exponent = 12' 'plugin = "sh"
+order = 5
+[exit]
+plugin = "hsh"
+reduced = true' 'plugin = "cpca"
 clusters = 64
 components = 4'
+# Glossy transfer of a Haar light (any sphere basis serves as the light basis).
+scene glossy_haar 'brdf = "phong"
+diffuse = 0.4
+specular = 0.6
+exponent = 12' 'plugin = "haar"
+resolution = 8
+[exit]
+plugin = "hsh"
+order = 4' 'plugin = "pca"
+components = 8'
+sed -i 's/^rays = 512$/directions = "cubemap"\nrays = 384/' glossy_haar.toml
 
 check_match() {  # label, cpu.png, gl.png
   line=$("$prt" image-diff "$2" "$3")
@@ -67,7 +80,7 @@ check_match() {  # label, cpu.png, gl.png
     if (mad > 0.5 || frac > 0.5) { print "FAIL: images differ too much"; exit 1 } }'
 }
 
-for s in exact cpca haar glossy; do
+for s in exact cpca haar glossy glossy_haar; do
   "$prt" -q bake "$s.toml" >/dev/null
   "$prt" -q render "$s.toml" -o "cpu_$s.png" >/dev/null
   x "$prt" -q render "$s.toml" -r opengl -o "gl_$s.png" >/dev/null

@@ -66,6 +66,27 @@ Eigen::MatrixX3d smooth_light(const Eigen::Vector3d& d) {
   return l;
 }
 
+// The "hsh" plug-in as exit basis.
+std::shared_ptr<Basis> hsh(PluginRegistry& registry, int order, bool reduced,
+                           bool least_squares = true) {
+  Params params;
+  params.set("order", std::int64_t(order));
+  params.set("reduced", reduced);
+  params.set("projection", std::string(least_squares ? "least-squares" : "zero"));
+  return registry.create<Basis>("hsh", params);
+}
+
+std::shared_ptr<Basis> sh_basis(PluginRegistry& registry, int order) {
+  Params params;
+  params.set("order", std::int64_t(order));
+  return registry.create<Basis>("sh", params);
+}
+
+// Exit basis values at one local direction.
+Eigen::RowVectorXd exit_at(const Basis& exit, const Eigen::Vector3d& v) {
+  return exit.evaluate(v.transpose()).row(0);
+}
+
 // Exact exit radiance toward local view `v` at a vertex with frame F for the
 // band-limited light l (order-5 SH, channel 0): int_H L(s) rho(v, s) s_z ds.
 double exact_exit(const Brdf& brdf, const Frame& frame, const Eigen::VectorXd& l,
@@ -110,11 +131,12 @@ TEST_CASE("BRDFs are reciprocal, zero below the horizon and conserve energy", "[
 }
 
 TEST_CASE("BRDF matrices agree with Monte Carlo integration of the BRDF", "[glossy]") {
-  const ExitBasis exit = ExitBasis::hemisphere(4, false);
+  std::vector<int> all(16);
+  for (int i = 0; i < 16; ++i) all[i] = i;
   std::mt19937_64 rng(11);
   for (const char* name : {"lambert", "phong", "ward", "cook-torrance"}) {
     const Brdf b = model(name);
-    const Eigen::MatrixXd matrix = brdf_matrix(b, exit.order, exit.kept, 3);
+    const Eigen::MatrixXd matrix = brdf_matrix(b, 4, all, 3);
     REQUIRE(matrix.rows() == 16);
     REQUIRE(matrix.cols() == 9);
     // Uniform samples over H x H: pdf 1 / (2 pi)^2.
@@ -146,9 +168,7 @@ TEST_CASE("BRDF matrices agree with Monte Carlo integration of the BRDF", "[glos
 
 TEST_CASE("glossy transfer reproduces the exit radiance of an open vertex", "[glossy]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
-  Params params;
-  params.set("order", std::int64_t(5));
-  auto basis = registry.create<Basis>("sh", params);
+  auto basis = sh_basis(registry, 5);
   const DirectionSet set = DirectionSet::make("fibonacci", 20000, 1);
   const OpenVertices open = open_vertices({{0, 0, 1}, {0.3f, 0.8f, -0.2f}, {-1, 0.1f, 0.2f}}, set);
   const std::vector<Frame> frames = tangent_frames(open.mesh);
@@ -158,10 +178,10 @@ TEST_CASE("glossy transfer reproduces the exit radiance of an open vertex", "[gl
     const Brdf brdf = model(name);
     double error[2] = {0, 0}, energy = 0;
     for (const bool least_squares : {true, false}) {
-      const GlossyChain chain =
-          GlossyChain::make(brdf, ExitBasis::hemisphere(5, false), 5, least_squares, 1e-10);
-      const TransferSignal t =
-          glossy_transfer(open.mesh, set, open.visibility, *basis, chain, nullptr);
+      const auto exit = hsh(registry, 5, false, least_squares);
+      const GlossyOperator glossy = GlossyOperator::make(brdf, *exit, 5, least_squares, 1e-10);
+      const TransferSignal t = glossy_transfer(open.mesh, set, open.visibility, *basis, glossy,
+                                               frames, GlossyMethod::rotate_sh, nullptr);
       REQUIRE(t.coefficients.cols() == 25 * 25);
       for (std::size_t p = 0; p < open.mesh.vertex_count(); ++p) {
         const Eigen::MatrixXd m =
@@ -169,9 +189,7 @@ TEST_CASE("glossy transfer reproduces the exit radiance of an open vertex", "[gl
         const Eigen::VectorXd e = m * light.col(0);
         for (int i = 0; i < 20; ++i) {
           const Eigen::Vector3d v = uniform_upper(rng);
-          double y[25];
-          chain.exit.evaluate(v, y);
-          const double approx = Eigen::Map<const Eigen::VectorXd>(y, 25).dot(e);
+          const double approx = exit_at(*exit, v).dot(e);
           const double exact = exact_exit(brdf, frames[p], light.col(0), v, set);
           error[least_squares] += (approx - exact) * (approx - exact);
           if (least_squares) energy += exact * exact;
@@ -188,9 +206,7 @@ TEST_CASE("glossy transfer reproduces the exit radiance of an open vertex", "[gl
 
 TEST_CASE("white furnace: a Lambertian sphere of albedo 1 under light 1 returns 1", "[glossy]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
-  Params params;
-  params.set("order", std::int64_t(5));
-  auto basis = registry.create<Basis>("sh", params);
+  auto basis = sh_basis(registry, 5);
   const Mesh sphere = make_sphere(2);
   const DirectionSet set = DirectionSet::make("fibonacci", 4096, 1);
   TransportOptions options;
@@ -198,30 +214,22 @@ TEST_CASE("white furnace: a Lambertian sphere of albedo 1 under light 1 returns 
   const TransportResult traced =
       diffuse_transfer(sphere, set, Eigen::MatrixXd(set.size(), 0), options, nullptr);
   Brdf white;  // lambert, kd = 1
-  const GlossyChain chain =
-      GlossyChain::make(white, ExitBasis::hemisphere(5, true), 5, true, 1e-10);
-  const TransferSignal t = glossy_transfer(sphere, set, traced.visibility, *basis, chain, nullptr);
+  const auto exit = hsh(registry, 5, true);
+  const GlossyOperator glossy = GlossyOperator::make(white, *exit, 5, true, 1e-10);
+  const std::vector<Frame> frames = tangent_frames(sphere);
+  const TransferSignal t = glossy_transfer(sphere, set, traced.visibility, *basis, glossy, frames,
+                                           GlossyMethod::rotate_sh, nullptr);
   Eigen::MatrixX3d light = Eigen::MatrixX3d::Zero(25, 3);
   light.row(0).setConstant(2 * std::sqrt(M_PI));  // L = 1 everywhere
-  CompressedTransfer exact;
-  exact.dimension = t.dimension();
-  exact.cluster_of_vertex.assign(t.vertices(), 0);
-  exact.means = MatrixXfRow::Zero(1, t.dimension());
-  exact.representatives = {MatrixXfRow::Identity(t.dimension(), t.dimension())};
-  exact.components = static_cast<int>(t.dimension());
-  exact.weights = t.coefficients;
-  const MatrixXfRow e = exit_coefficients(exact, light, chain.exit.rows());
-  const std::vector<Frame> frames = tangent_frames(sphere);
-  const Eigen::MatrixX3f radiance =
-      evaluate_exit(e, chain.exit, local_view_directions(sphere, frames, {0.3f, 4.f, 2.f}));
+  const MatrixXfRow values =
+      exit_values(*exit, local_view_directions(sphere, frames, {0.3f, 4.f, 2.f}));
+  const Eigen::MatrixX3f radiance = relight(exact_form(t), light, &values);
   CHECK((radiance.array() - 1.f).abs().maxCoeff() < 2e-3f);
 }
 
 TEST_CASE("glossy Lambert transfer agrees with diffuse transfer under shadowing", "[glossy]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
-  Params params;
-  params.set("order", std::int64_t(5));
-  auto basis = registry.create<Basis>("sh", params);
+  auto basis = sh_basis(registry, 5);
   const Mesh scene = test::sphere_over_plane();
   const DirectionSet set = DirectionSet::make("fibonacci", 4096, 1);
   TransportOptions options;
@@ -234,16 +242,19 @@ TEST_CASE("glossy Lambert transfer agrees with diffuse transfer under shadowing"
   Brdf white;
   double errors[2];
   for (const bool least_squares : {true, false}) {
-    const GlossyChain chain =
-        GlossyChain::make(white, ExitBasis::hemisphere(5, true), 5, least_squares, 1e-10);
-    const TransferSignal t = glossy_transfer(scene, set, traced.visibility, *basis, chain, nullptr);
+    // The reduced basis exists for least squares only.
+    const auto exit = hsh(registry, 5, least_squares, least_squares);
+    const GlossyOperator glossy = GlossyOperator::make(white, *exit, 5, least_squares, 1e-10);
+    const TransferSignal t = glossy_transfer(scene, set, traced.visibility, *basis, glossy,
+                                             tangent_frames(scene), GlossyMethod::rotate_sh,
+                                             nullptr);
     double error = 0;
     for (Eigen::Index p = 0; p < t.vertices(); ++p) {
       const Eigen::MatrixXd m =
-          Eigen::Map<const MatrixXfRow>(t.coefficients.row(p).data(), 24, 25).cast<double>();
-      double y[24];
-      chain.exit.evaluate(Eigen::Vector3d(0.3, 0.2, 0.9).normalized(), y);
-      const double radiance = Eigen::Map<const Eigen::RowVectorXd>(y, 24) * m * light.col(0);
+          Eigen::Map<const MatrixXfRow>(t.coefficients.row(p).data(), exit->size(), 25)
+              .cast<double>();
+      const double radiance =
+          exit_at(*exit, Eigen::Vector3d(0.3, 0.2, 0.9).normalized()) * m * light.col(0);
       error += (radiance - expected[p]) * (radiance - expected[p]);
     }
     errors[least_squares] = std::sqrt(error / expected.squaredNorm());
@@ -265,12 +276,14 @@ brdf = "%s"
 diffuse = 0.2
 specular = 0.8
 exponent = 20
-exit_reduced = true
 [transport]
 rays = 1024
 [basis]
 plugin = "sh"
 order = 5
+[exit]
+plugin = "hsh"
+reduced = true
 [lighting]
 constant = [1, 1, 1]
 [camera]
@@ -327,12 +340,16 @@ TEST_CASE("a bake made with another projection or material is refused", "[glossy
   char text[1024];
   std::snprintf(text, sizeof text, kGlossyBox, "phong", 1.0);
   std::string changed = text;
-  changed.replace(changed.find("exit_reduced = true"), 19,
-                  "exit_reduced = true\nprojection = \"zero\"");
+  changed.replace(changed.find("exponent = 20"), 13, "exponent = 20\nprojection = \"zero\"");
   CHECK_THROWS_WITH(render(SceneSpec::parse(changed, "zero.toml", registry), data, registry, times),
                     Catch::Contains("bake again"));
   CHECK_THROWS_WITH(render(glossy_box(registry, "cook-torrance", 1.0), data, registry, times),
                     Catch::Contains("bake again"));
+  std::string other_exit = text;
+  other_exit.replace(other_exit.find("reduced = true"), 14, "reduced = false");
+  CHECK_THROWS_WITH(
+      render(SceneSpec::parse(other_exit, "exit.toml", registry), data, registry, times),
+      Catch::Contains("exit basis \"hsh\"") && Catch::Contains("bake again"));
   CHECK_NOTHROW(render(glossy_box(registry, "phong", -1.0), data, registry, times));
   Progress::set_enabled(true);
 }

@@ -14,7 +14,9 @@ namespace prt {
 
 // 2: glossy matrices, material, bounces and subsurface recorded.
 // 3: a checksummed PRT-BAKE user block; scene text as a dataset; UTF-8 text attributes.
-constexpr int kBakeFormatVersion = 3;
+// 4: the exit basis of glossy transfer is a plug-in: /exit_basis record and
+//    /exit_state group replace exit_order / exit_kept; /transfer exit_rows.
+constexpr int kBakeFormatVersion = 4;
 
 struct PluginRecord {
   std::string name, version, parameters;
@@ -23,6 +25,7 @@ struct PluginRecord {
 struct BakeData {
   std::string scene_file, scene_text;
   PluginRecord basis, compressor;
+  PluginRecord exit;  // glossy only: the hemisphere basis of exit radiance
   std::string transport;  // e.g. "fibonacci 1024 shadowed seed=1"
   Mesh mesh;
   Eigen::Vector3f albedo{1, 1, 1};
@@ -32,6 +35,7 @@ struct BakeData {
   TransferSignal transfer;
   CompressedTransfer compressed;
   BasisState basis_state;
+  BasisState exit_state;  // glossy only
   std::map<std::string, double> metrics;  // timings (s), squared error, ...
 };
 

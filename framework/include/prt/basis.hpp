@@ -4,6 +4,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "prt/direction_set.hpp"
 #include "prt/plugin.hpp"
@@ -57,6 +58,11 @@ class Basis : public PluginObject {
   // size() x size() matrix that maps coefficients of f to those of f(R^T .).
   virtual bool can_rotate() const { return false; }
   virtual Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& rotation) const;
+
+  // Capability: the frequency band of each coefficient (SH: l), so that a
+  // light can be windowed band by band ([lighting] window) and glossy transfer
+  // can band-limit the BRDF to the light's bandwidth. Empty: no bands.
+  virtual std::vector<int> coefficient_bands() const { return {}; }
 
   // A direction set on which the basis's own projection is exact (e.g. the
   // upper-hemisphere rule of a hemispherical basis, a basis's lattice), used by

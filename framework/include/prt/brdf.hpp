@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "prt/direction_set.hpp"
+
 namespace prt {
 
 class Params;
@@ -29,6 +31,13 @@ struct Brdf {
   double evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) const;
   std::string describe() const;
 };
+
+// The BRDF convolved with SH of `incident_order` over the local hemisphere,
+// at each exit direction v (rows of `exit_directions`):
+//   F(v, j) = int_H rho(s, v) y_j(s) s_z ds     (q x incident_order^2)
+// integrated by the Gauss product rule upper_quadrature(resolution).
+Eigen::MatrixXd brdf_incident_integrals(const Brdf& brdf, const Directions& exit_directions,
+                                       int incident_order, int resolution = 48);
 
 // The BRDF matrix of Sloan 2003 §3.1 in SH over the local hemisphere:
 //   B_ij = int_H int_H y_i(v) y_j(s) rho(v, s) s_z ds dv

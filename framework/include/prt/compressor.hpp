@@ -12,6 +12,10 @@ class Compressor : public PluginObject {
   // `mesh` (may be null) gives compressors that care the triangles, for
   // overdraw reduction and geometry-coherent clustering.
   virtual CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const = 0;
+  // Capability: the encoding reproduces the signal exactly (no compression),
+  // so it may be replaced by a basis's own sparse approximation and needs no
+  // comparison against the exact transfer.
+  virtual bool exact() const { return false; }
 };
 
 // What every encode reports (DESIGN §3): squared error, its per-vertex

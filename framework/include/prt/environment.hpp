@@ -41,6 +41,13 @@ class Environment {
   // capability when it has one, otherwise by re-sampling.
   Eigen::MatrixX3d project(const Basis& basis) const;
 
+  // The band-limited light: a map (same resolution; 256 x 128 for a
+  // constant) whose texels hold the basis's reconstruction b(d) . light at
+  // their centres, with no rotation or intensity of its own (both are in
+  // `light`). Ground truth under it isolates the light's truncation from the
+  // transfer's projection and compression.
+  Environment band_limited(const Basis& basis, const Eigen::MatrixX3d& light) const;
+
  private:
   Eigen::Vector3f texel(int x, int y) const;
   int width_ = 1, height_ = 1;

@@ -2,12 +2,16 @@
 // CLI, the tests and the benchmarks.
 #pragma once
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "prt/bake_file.hpp"
 #include "prt/compressor.hpp"
+#include "prt/frame.hpp"
+#include "prt/glossy.hpp"
 #include "prt/image.hpp"
 #include "prt/registry.hpp"
 #include "prt/renderer.hpp"
@@ -24,25 +28,71 @@ struct StageTimes {
 
 struct TransportResult;
 
+// How a run reports: progress bars (off when quiet) and one-line messages
+// (summaries a user reads), through a callback the app provides.
 struct RunOptions {
   bool quiet = false;  // no progress bars
   // Visibility bits (and hits, for bounces) traced before for the same mesh
   // and transport (trace_scene): bake() then casts no rays. Used by sweeps.
   const TransportResult* traced = nullptr;
+  // false: the bake keeps the exact transfer as its compressed form (or the
+  // basis's sparse approximation); a sweep compresses it later, many ways.
+  bool compress = true;
+  // Where messages go (default: standard output unless quiet).
+  std::function<void(const std::string&)> log;
+  void message(const std::string& text) const;
 };
+
+// Everything a bake will do, decided and validated from the scene before any
+// ray is traced: the plug-ins (created, so their parameters are checked),
+// what to keep, fit, project and compress.
+struct BakePlan {
+  std::shared_ptr<Basis> basis;  // light basis (a sphere basis)
+  std::shared_ptr<Basis> exit;   // glossy only: exit basis (a hemisphere basis)
+  std::shared_ptr<Compressor> compressor;
+  PluginRecord basis_record, exit_record, compressor_record;
+  bool glossy = false, subsurface = false, fit = false;
+  int bounces = 0;
+  double bounce_albedo = 1;
+  int sparse_terms = 0;  // > 0: the basis's own sparse approximation replaces compression
+  bool keep_visibility = false;  // fitting and glossy matrices need the bits
+  bool shadowed = true;
+  // Glossy: the BRDF and its incident band limit.
+  Brdf brdf;
+  int incident_order = 0;
+  bool least_squares = true;
+  double cutoff = 1e-10;
+  GlossyMethod glossy_method = GlossyMethod::rotate_sh;
+};
+BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry);
+
+// Stages of a bake; each takes plain values and returns one.
+// 1. Rays: visibility (and hits) over the scene's direction set; projects
+//    while tracing when nothing needs the bits.
+TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                            const RunOptions& options);
+// 2. Transfer: fit (data-driven bases), project, bounces, subsurface, glossy
+//    matrices. Consumes the visibility and hits; metrics gets its figures.
+TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                              const DirectionSet& set, TransportResult traced,
+                              const RunOptions& options, StageTimes& times,
+                              std::map<std::string, double>& metrics);
+// 3. Compression (or the basis's sparse approximation).
+CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
+                                  const Mesh& mesh, const SourceLocation& where);
 
 // Traces the scene's mesh over its direction set, keeping the visibility
 // bits, and the hits when the scene asks for bounces.
 TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options);
 
-// Mesh -> rays -> projection -> compression. Fills times per stage.
+// plan -> rays -> transfer -> compression, as BakeData. Fills times per stage.
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
               StageTimes& times);
 
 // Writes a compression report into bake-file metrics.
 void record(const CompressionReport& report, std::map<std::string, double>& metrics);
 
-// Checks that `data` was baked with the scene's basis and parameters.
+// Checks that `data` was baked with the scene's bases, material and parameters.
 void check_bake_matches(const BakeData& data, const SceneSpec& scene);
 // Throws unless the bake's transfer has one column per basis coefficient (per
 // exit-basis row for glossy transfer): a file's shape must fit its plug-ins.
@@ -55,28 +105,56 @@ struct Rendered {
 };
 
 // One relighting of a bake's transfer (its compressed form or another encoding
-// of it) for a light vector and camera: per-vertex exit coefficients, glossy
-// frames and the radiance each vertex sends to the camera (albedo included).
+// of it) for a light vector and camera: per-vertex exit coefficients, exit
+// basis values toward the camera (glossy) and the radiance each vertex sends
+// to the camera (albedo included).
 struct Relit {
   MatrixXfRow exit_coefficients;  // v x 3 N_r
-  std::vector<Frame> frames;      // glossy only
+  MatrixXfRow exit_values;        // glossy only: v x N_r
   Eigen::MatrixX3f vertex_radiance;
 };
-// `frames` (glossy): the mesh's tangent frames when the caller keeps them.
-Relit relight_view(const BakeData& data, const CompressedTransfer& transfer,
-                   const Eigen::MatrixX3d& light, const Camera& camera,
-                   const std::vector<Frame>* frames = nullptr);
-// The renderer's input for it; points into `data`, `transfer` and `relit`.
-RenderInput render_input(const BakeData& data, const CompressedTransfer& transfer,
-                         const Relit& relit, const Eigen::MatrixX3d& light, const Camera& camera);
+
+// What viewing a bake needs, made once: its light basis (fitted state loaded)
+// and, for glossy transfer, its exit basis and the vertices' frames. The one
+// relight path of render, bench, compare-bases and the viewer.
+class Relighting {
+ public:
+  // Checks the bake against the scene and its plug-ins.
+  Relighting(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry);
+  const Basis& basis() const { return *basis_; }
+  // The light vector of an environment in the light basis ([lighting] window applied).
+  Eigen::MatrixX3d light(const Environment& environment) const;
+  Relit relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                const Camera& camera) const;
+  // Glossy: the exit basis toward the camera at each vertex (v x N_r); empty
+  // for diffuse transfer.
+  MatrixXfRow exit_values_toward(const Camera& camera) const;
+  // The renderer's input; points into the bake, `transfer` and `relit`.
+  RenderInput input(const CompressedTransfer& transfer, const Relit& relit,
+                    const Eigen::MatrixX3d& light, const Camera& camera) const;
+
+ private:
+  const SceneSpec& scene_;
+  const BakeData& data_;
+  std::shared_ptr<Basis> basis_, exit_;
+  std::vector<Frame> frames_;
+};
 
 // Light projection -> per-cluster constants -> per-vertex sums -> image.
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
                 StageTimes& times);
 
-// Renders the Monte Carlo ground truth with the scene's renderer.
+// Monte Carlo ground truth per vertex (v x 3, albedo included) under
+// `lighting` (the scene's map, or its band-limited reconstruction), toward
+// the camera for glossy materials.
+Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
+                                       const Environment& lighting, const Camera& camera,
+                                       const RunOptions& options);
+// Renders the Monte Carlo ground truth with the scene's renderer, under the
+// scene's light or `lighting` when given.
 Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
-                             const RunOptions& options, StageTimes& times);
+                             const RunOptions& options, StageTimes& times,
+                             const Environment* lighting = nullptr);
 
 // Per-vertex error statistics of `approximation` against `reference` (v x 3).
 struct ErrorStats {

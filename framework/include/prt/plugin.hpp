@@ -24,17 +24,22 @@
 #else
 #define PRT_COMPILER "unknown"
 #endif
-#ifdef NDEBUG
-#define PRT_BUILD_MODE "release"
+#if defined(_GLIBCXX_DEBUG)
+#define PRT_STL_MODE "debug"
 #else
-#define PRT_BUILD_MODE "debug"
+#define PRT_STL_MODE "normal"
 #endif
-// Everything that must agree between host and plug-in for C++ objects and
-// Eigen matrices to cross the boundary safely.
-#define PRT_BUILD_KEY \
-  PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(_GLIBCXX_USE_CXX11_ABI) ";eigen=" PRT_STRINGIFY( \
-      EIGEN_WORLD_VERSION) "." PRT_STRINGIFY(EIGEN_MAJOR_VERSION) ";align=" PRT_STRINGIFY(  \
-      EIGEN_MAX_ALIGN_BYTES) ";" PRT_BUILD_MODE
+// Only what must agree between host and plug-in for C++ objects and Eigen
+// matrices to cross the boundary: the compiler family and major version, the
+// libstdc++ string ABI and debug containers, Eigen's version and its maximum
+// alignment. NDEBUG and optimisation do not change a layout, so Debug,
+// RelWithDebInfo and Release plug-ins load into any host. PRT::prt passes
+// consumers EIGEN_MAX_ALIGN_BYTES (the framework's value), so a plug-in built
+// without -march=native still matches a host built with it.
+#define PRT_BUILD_KEY                                                                          \
+  "compiler=" PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(                                         \
+      _GLIBCXX_USE_CXX11_ABI) ";stl=" PRT_STL_MODE ";eigen=" PRT_STRINGIFY(EIGEN_WORLD_VERSION) \
+      "." PRT_STRINGIFY(EIGEN_MAJOR_VERSION) ";align=" PRT_STRINGIFY(EIGEN_MAX_ALIGN_BYTES)
 
 #define PRT_PLUGIN_API __attribute__((visibility("default")))
 

@@ -6,7 +6,6 @@
 
 #include "prt/camera.hpp"
 #include "prt/environment.hpp"
-#include "prt/glossy.hpp"
 #include "prt/image.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
@@ -21,14 +20,12 @@ struct RenderInput {
   Eigen::MatrixX3d light;
   // ...or exit radiance given directly per vertex (v x 3), e.g. ground truth.
   const Eigen::MatrixX3f* vertex_radiance = nullptr;
-  // Glossy transfer (when exit_basis is set): the exit basis, the vertices'
-  // local frames and optionally the exit coefficients per vertex (v x 3 N_r,
-  // as exit_coefficients returns; renderers that compute them from transfer
-  // and light ignore them). The renderer evaluates y(v_p) . e_p per pixel
-  // with the local view vector.
-  const MatrixXfRow* exit_coefficients = nullptr;
-  const ExitBasis* exit_basis = nullptr;
-  const std::vector<Frame>* frames = nullptr;
+  // Glossy transfer: the exit basis evaluated toward the camera at each
+  // vertex (v x N_r, in the vertex's local frame). A vertex's stored vector
+  // is then an N_r x N_i matrix; its radiance is exit_values_p . (M_p l).
+  // Evaluating per vertex keeps every local-frame quantity at its vertex:
+  // nothing expressed in one vertex's frame is interpolated into another's.
+  const MatrixXfRow* exit_values = nullptr;
   Eigen::Vector3f albedo{1, 1, 1};
   Camera camera;
   const Environment* background = nullptr;  // drawn behind the mesh when set

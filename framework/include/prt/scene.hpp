@@ -31,6 +31,7 @@ struct SceneSpec {
 
   Params mesh, material, transport, lighting, camera, output, ground_truth;
   PluginChoice basis, compressor, renderer;
+  PluginChoice exit;  // [exit]: the hemisphere basis of glossy exit radiance (glossy only)
 
   // Parses and validates the whole scene, plug-in parameters included.
   // Throws prt::Error with file:line:column on the first problem.
@@ -57,7 +58,10 @@ struct SceneSpec {
   Eigen::Vector3f albedo() const;
   Brdf brdf() const;
   bool glossy() const;           // a glossy BRDF: bake matrices, not vectors
-  ExitBasis exit_basis() const;  // empty for diffuse
+  // Throws unless [lighting] window is "none" or the basis has frequency bands.
+  void check_window(const Basis& light_basis) const;
+  // The SH order M of the BRDF's incident side for this light basis.
+  int incident_order(const Basis& light_basis) const;
   // The scalar reflectance of inter-reflected light: diffuse x mean albedo
   // (transfer is monochrome; the RGB albedo tints the final radiance).
   double bounce_albedo() const;

@@ -11,35 +11,17 @@ namespace prt {
 
 using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-// The basis of exit radiance for glossy transfer (Sloan 2003 §3.2, §6.1): SH
-// of `order` over the upper hemisphere of each vertex's local frame, restricted
-// to the SH indices `kept` (all order^2, or one fewer when the nearly
-// redundant l = 1, m = 0 is dropped). Diffuse transfer has no exit basis and
-// one row.
-constexpr int kMaxExitOrder = 12;
-constexpr int kMaxExitCoefficients = kMaxExitOrder * kMaxExitOrder;
-
-struct ExitBasis {
-  int order = 0;
-  std::vector<int> kept;
-
-  static ExitBasis hemisphere(int order, bool reduced);
-  bool glossy() const { return !kept.empty(); }
-  int rows() const { return kept.empty() ? 1 : static_cast<int>(kept.size()); }
-  // rows() values at a unit direction of the local frame (z = normal).
-  void evaluate(const Eigen::Vector3d& local, double* out) const;
-};
-
 // v x n transfer, one row per vertex. For diffuse transfer n is the basis size
 // and the exit radiance is row . light (per colour channel of the light). For
 // glossy transfer each row is the N_r x N_i matrix M_p, row-major, mapping the
-// light vector to exit-radiance coefficients in `exit`. The material's RGB
-// albedo multiplies the result.
+// light vector to exit-radiance coefficients in the scene's exit basis. The
+// material's RGB albedo multiplies the result.
 struct TransferSignal {
   MatrixXfRow coefficients;
   std::string kind = "diffuse";  // "diffuse" (vectors) or "glossy" (matrices)
-  ExitBasis exit;
+  int exit_rows = 1;             // N_r: 1 for diffuse transfer
 
+  bool glossy() const { return kind == "glossy"; }
   Eigen::Index vertices() const { return coefficients.rows(); }
   Eigen::Index dimension() const { return coefficients.cols(); }
 };
@@ -84,13 +66,24 @@ struct CompressedTransfer {
   double stored_floats() const;
 };
 
+// The uncompressed transfer in the one compressed form: one cluster, zero
+// mean, identity representatives, the transfer itself as weights.
+CompressedTransfer exact_form(const TransferSignal& signal);
+
 // Non-linear approximation: keeps the `terms` largest-magnitude coefficients of
 // each vertex, stored sparsely (index + value).
 CompressedTransfer keep_largest(const TransferSignal& signal, int terms);
 
 // Per-vertex exit radiance (v x 3, linear RGB) for a light vector (n x 3):
-// per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki.
-Eigen::MatrixX3f relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light);
+// per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki;
+// for glossy transfer then y(v_p) . e_p with the exit basis's values toward
+// the camera (v x N_r). The one relight path of every renderer.
+Eigen::MatrixX3f relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                         const MatrixXfRow* exit_values = nullptr);
+
+// Exit radiance y(v_p) . e_p per vertex (v x 3) from exit coefficients
+// (v x 3 N_r, as exit_coefficients returns) and exit values (v x N_r).
+Eigen::MatrixX3f exit_radiance(const MatrixXfRow& coefficients, const MatrixXfRow& values);
 
 // The per-cluster constants of Sloan 2003 §6 (CPU side of rendering): for
 // each cluster k a (n'_k + 1) x 3 rows matrix, row 0 = M_k0 l, row i = M_ki l,

@@ -25,6 +25,11 @@ class SphericalHarmonics final : public Basis {
   Eigen::MatrixXd evaluate(const Directions& directions) const override {
     return sh::evaluate(order_, directions);
   }
+  std::vector<int> coefficient_bands() const override {
+    std::vector<int> bands;
+    for (int l = 0; l < order_; ++l) bands.insert(bands.end(), 2 * l + 1, l);
+    return bands;
+  }
   bool can_rotate() const override { return true; }
   Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& rotation) const override {
     return sh::rotation(order_, rotation);

@@ -15,15 +15,11 @@ class NoCompression final : public Compressor {
 
   explicit NoCompression(const Params&) {}
 
+  bool exact() const override { return true; }
+
   CompressedTransfer encode(const TransferSignal& signal, const Mesh*) const override {
-    CompressedTransfer c;
+    CompressedTransfer c = exact_form(signal);
     c.compressor = "none";
-    c.dimension = signal.dimension();
-    c.components = static_cast<int>(signal.dimension());
-    c.cluster_of_vertex.assign(signal.vertices(), 0);
-    c.weights = signal.coefficients;
-    c.means = MatrixXfRow::Zero(1, c.dimension);
-    c.representatives.push_back(MatrixXfRow::Identity(c.dimension, c.dimension));
     return c;
   }
 };

@@ -25,15 +25,11 @@ class CpuRenderer final : public Renderer {
     const Camera& camera = in.camera;
     Image image(camera.width, camera.height);
     if (background_ && in.background) draw_environment(*in.background, camera, image);
-    if (in.exit_basis && !in.vertex_radiance) {
-      draw_glossy(in, image);
-      return image;
-    }
     Eigen::MatrixX3f radiance;
     if (in.vertex_radiance)
       radiance = *in.vertex_radiance;
     else if (in.transfer)
-      radiance = relight(*in.transfer, in.light);
+      radiance = relight(*in.transfer, in.light, in.exit_values);
     else
       throw Error("cpu renderer: neither transfer nor vertex radiance given");
     if (radiance.rows() != static_cast<Eigen::Index>(in.mesh->vertex_count()))
@@ -45,39 +41,6 @@ class CpuRenderer final : public Renderer {
   }
 
  private:
-  // Sloan 2003 §6: e_p and the local view vector v_p are interpolated over
-  // each triangle; each pixel evaluates y(v_p) . e_p.
-  static void draw_glossy(const RenderInput& in, Image& image) {
-    const Mesh& mesh = *in.mesh;
-    if (!in.exit_basis || !in.frames) throw Error("cpu renderer: glossy input lacks its basis");
-    const ExitBasis& exit = *in.exit_basis;
-    const int rows = exit.rows();
-    if (!in.exit_coefficients && !in.transfer) throw Error("cpu renderer: no glossy transfer");
-    const MatrixXfRow e = in.exit_coefficients ? *in.exit_coefficients
-                                               : exit_coefficients(*in.transfer, in.light, rows);
-    if (e.rows() != Eigen::Index(mesh.vertex_count()) || e.cols() != 3 * rows ||
-        in.frames->size() != mesh.vertex_count())
-      throw Error("cpu renderer: glossy input does not match the mesh");
-    MatrixXfRow attributes(e.rows(), 3 * rows + 3);
-    attributes.leftCols(3 * rows) = e;
-    for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
-      attributes.row(Eigen::Index(v)).tail<3>() =
-          ((*in.frames)[v] * (in.camera.position - mesh.positions[v]).cast<double>().normalized())
-              .cast<float>()
-              .transpose();
-    const Eigen::Vector3f albedo = in.albedo;
-    rasterize(mesh, attributes, in.camera, image, [&](const float* a, float* rgb) {
-      double y[kMaxExitCoefficients];
-      exit.evaluate(
-          upper_hemisphere(Eigen::Vector3d(a[3 * rows], a[3 * rows + 1], a[3 * rows + 2])), y);
-      for (int c = 0; c < 3; ++c) {
-        double sum = 0;
-        for (int i = 0; i < rows; ++i) sum += y[i] * a[3 * i + c];
-        rgb[c] = std::max(0.f, albedo[c] * static_cast<float>(sum));
-      }
-    });
-  }
-
   bool background_;
 };
 

@@ -1,6 +1,6 @@
 // The OpenGL renderer (Sloan 2003 §6): per-cluster constants M_ki l on the
 // CPU, per-vertex weighted sums in the vertex shader, glossy y(v_p) . e_p per
-// fragment (one pass per colour channel). Two methods: one indexed pass with
+// vertex with the exit basis's values toward the camera (any exit basis). Two methods: one indexed pass with
 // the cluster index as a vertex attribute ("single-pass"), or the paper's
 // per-cluster draws with additive blending and a partition of unity
 // ("per-cluster"; superclusters when the compressor made them), whose
@@ -118,13 +118,13 @@ class OpenGLRenderer final : public Renderer {
   // transfer changes (the viewer switches encodings), not per frame.
   void upload_scene(const RenderInput& in) {
     const Mesh& mesh = *in.mesh;
-    const bool glossy = in.exit_basis != nullptr && !in.vertex_radiance;
-    if (glossy && !(in.frames && in.transfer))
-      throw Error("opengl renderer: glossy input needs the compressed transfer and the frames");
+    const bool glossy = in.exit_values != nullptr && !in.vertex_radiance;
     if (!in.transfer && !in.vertex_radiance)
       throw Error("opengl renderer: neither transfer nor vertex radiance given");
     const CompressedTransfer* t = in.vertex_radiance ? nullptr : in.transfer;
-    const int rows = glossy ? in.exit_basis->rows() : 1;
+    const int rows = glossy ? static_cast<int>(in.exit_values->cols()) : 1;
+    if (glossy && in.exit_values->rows() != static_cast<Eigen::Index>(mesh.vertex_count()))
+      throw Error("opengl renderer: exit values do not match the mesh's vertices");
     // Identity and shape of the data: a caller may reuse an address for new data.
     const Key key{&mesh,
                   mesh.vertex_count(),
@@ -143,29 +143,19 @@ class OpenGLRenderer final : public Renderer {
     glGenVertexArrays(1, &vao_);
     glBindVertexArray(vao_);
     const std::size_t v = mesh.vertex_count();
-    std::array<std::vector<float>, 4> attributes;
-    for (auto& a : attributes) a.resize(3 * v);
-    for (std::size_t p = 0; p < v; ++p) {
-      Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();
-      if (glossy) frame = (*in.frames)[p];
-      for (int c = 0; c < 3; ++c) {
-        attributes[0][3 * p + c] = mesh.positions[p][c];
-        for (int r = 0; r < 3; ++r) attributes[1 + r][3 * p + c] = float(frame(r, c));
-      }
-    }
-    glGenBuffers(4, vertex_buffers_);
-    for (int a = 0; a < 4; ++a) {
-      glBindBuffer(GL_ARRAY_BUFFER, vertex_buffers_[a]);
-      glBufferData(GL_ARRAY_BUFFER, attributes[a].size() * sizeof(float), attributes[a].data(),
-                   GL_STATIC_DRAW);
-      glVertexAttribPointer(a, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
-      glEnableVertexAttribArray(a);
-    }
+    std::vector<float> positions(3 * v);
+    for (std::size_t p = 0; p < v; ++p)
+      for (int c = 0; c < 3; ++c) positions[3 * p + c] = mesh.positions[p][c];
+    glGenBuffers(1, &vertex_buffer_);
+    glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer_);
+    glBufferData(GL_ARRAY_BUFFER, positions.size() * sizeof(float), positions.data(),
+                 GL_STATIC_DRAW);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+    glEnableVertexAttribArray(0);
     build_index_buffer(mesh, t);
 
     std::string defines = "#define ROWS " + std::to_string(rows) + "\n#define GLOSSY " +
-                          (glossy ? "1" : "0") + "\n#define ORDER " +
-                          std::to_string(glossy ? in.exit_basis->order : 1) + "\n";
+                          (glossy ? "1" : "0") + "\n";
     if (!t) {
       defines += "#define COMPONENTS -1\n#define SPARSE 0\n";
     } else {
@@ -179,21 +169,7 @@ class OpenGLRenderer final : public Renderer {
       weight_index_.upload(GL_R32I, t->weight_index.data(),
                            t->weight_index.size() * sizeof(std::int32_t));
     }
-    if (glossy) {
-      GLint limit = 0;
-      glGetIntegerv(GL_MAX_VERTEX_OUTPUT_COMPONENTS, &limit);
-      if (rows + 3 + 4 > limit)  // e_p, the view vector and gl_Position
-        throw Error("opengl renderer: " + std::to_string(rows) +
-                    " exit coefficients per vertex exceed this driver's " + std::to_string(limit) +
-                    " vertex output components; lower [material] exit_order or use renderer "
-                    "\"cpu\"");
-    }
     program_ = build_program("transfer", defines, kTransferVert, kTransferFrag);
-    if (glossy) {
-      glUseProgram(program_);
-      std::vector<GLint> kept(in.exit_basis->kept.begin(), in.exit_basis->kept.end());
-      glUniform1iv(glGetUniformLocation(program_, "kept"), rows, kept.data());
-    }
   }
 
   // One index buffer; per-cluster drawing orders it by group (cluster, or
@@ -258,7 +234,9 @@ class OpenGLRenderer final : public Renderer {
       return;
     }
     const CompressedTransfer& t = *in.transfer;
-    const int rows = in.exit_basis ? in.exit_basis->rows() : 1;
+    const int rows = in.exit_values ? static_cast<int>(in.exit_values->cols()) : 1;
+    if (in.exit_values)  // the exit basis toward the camera: changes with the view
+      exit_values_.upload(GL_R32F, in.exit_values->data(), in.exit_values->size() * sizeof(float));
     if (t.sparse()) {
       // [mean . l, l_0, l_1, ...]
       const Eigen::RowVector3f base = t.means.row(0) * in.light.cast<float>();
@@ -290,18 +268,16 @@ class OpenGLRenderer final : public Renderer {
     glBindVertexArray(vao_);
     const Eigen::Matrix4f vp = view_projection(in.camera, *in.mesh);
     glUniformMatrix4fv(glGetUniformLocation(program_, "view_projection"), 1, GL_FALSE, vp.data());
-    glUniform3fv(glGetUniformLocation(program_, "eye"), 1, in.camera.position.data());
     glUniform3fv(glGetUniformLocation(program_, "albedo"), 1, in.albedo.data());
     glUniform1i(glGetUniformLocation(program_, "only_cluster"), -1);
-    glUniform1i(glGetUniformLocation(program_, "clamp_negative"), per_cluster_ ? 0 : 1);
     constants_.bind(program_, "constants", 0);
     cluster_of_vertex_.bind(program_, "cluster_of_vertex", 1);
     weights_.bind(program_, "weights", 2);
     weight_index_.bind(program_, "weight_index", 3);
     vertex_colour_.bind(program_, "vertex_colour", 4);
     group_of_cluster_.bind(program_, "group_of_cluster", 5);
-    const bool glossy = in.exit_basis != nullptr && !in.vertex_radiance;
-    const bool layered = glossy || groups_.size() > 1;
+    exit_values_.bind(program_, "exit_values", 6);
+    const bool layered = groups_.size() > 1;
     if (layered) {
       // Depth first, so the colour passes shade only the visible surface.
       glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
@@ -315,17 +291,10 @@ class OpenGLRenderer final : public Renderer {
       glBlendFunc(GL_ONE, GL_ONE);
     }
     const GLint only_cluster = glGetUniformLocation(program_, "only_cluster");
-    const GLint channel = glGetUniformLocation(program_, "channel");
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     for (const Group& g : groups_) {
       glUniform1i(only_cluster, g.id);
-      for (int c = 0; c < (glossy ? 3 : 1); ++c) {
-        glUniform1i(channel, c);
-        if (glossy)
-          glColorMask(c == 0, c == 1, c == 2, GL_TRUE);
-        else
-          glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-        draw_range(g.first, g.count);
-      }
+      draw_range(g.first, g.count);
     }
     glDisable(GL_BLEND);
     glDepthMask(GL_TRUE);
@@ -354,7 +323,6 @@ class OpenGLRenderer final : public Renderer {
             &pixels[4 * (std::size_t(height_ - 1 - y) * width_ + x)];  // GL rows bottom-up
         if (p[3] <= 0.f) continue;  // no triangle here: keep the background
         float* out = image.at(x, y);
-        // Per-cluster glossy passes blend unclamped partial sums: clamp the total.
         for (int c = 0; c < 3; ++c) out[c] = std::max(0.f, p[c]);
       }
     return image;
@@ -362,14 +330,14 @@ class OpenGLRenderer final : public Renderer {
 
   void release() {
     if (vao_) glDeleteVertexArrays(1, &vao_);
-    if (vertex_buffers_[0]) glDeleteBuffers(4, vertex_buffers_);
+    if (vertex_buffer_) glDeleteBuffers(1, &vertex_buffer_);
     if (index_buffer_) glDeleteBuffers(1, &index_buffer_);
     if (program_) glDeleteProgram(program_);
     for (TextureBuffer* b : {&constants_, &cluster_of_vertex_, &group_of_cluster_, &weights_,
-                             &weight_index_, &vertex_colour_})
+                             &weight_index_, &vertex_colour_, &exit_values_})
       b->release();
     vao_ = index_buffer_ = program_ = 0;
-    vertex_buffers_[0] = 0;
+    vertex_buffer_ = 0;
   }
 
   struct Key {
@@ -395,9 +363,9 @@ class OpenGLRenderer final : public Renderer {
   std::unique_ptr<OffscreenContext> context_;
   int width_ = 0, height_ = 0;
   GLuint framebuffer_ = 0, renderbuffers_[2] = {0, 0};
-  GLuint vao_ = 0, vertex_buffers_[4] = {0, 0, 0, 0}, index_buffer_ = 0, program_ = 0;
+  GLuint vao_ = 0, vertex_buffer_ = 0, index_buffer_ = 0, program_ = 0;
   TextureBuffer constants_, cluster_of_vertex_, group_of_cluster_, weights_, weight_index_,
-      vertex_colour_;
+      vertex_colour_, exit_values_;
   std::vector<Group> groups_;
   Key key_;
   std::map<std::string, double> stats_;
