@@ -5,6 +5,7 @@
 // are appended to <out>/results.jsonl as each configuration finishes, so an
 // interrupted sweep resumes where it stopped; CSV, JSON and the report
 // (scripts/bench_report.py: plots, Pareto fronts, image strip) follow.
+#include <nlohmann/json.hpp>
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -129,12 +130,6 @@ std::string stem_of(const std::string& label) {
   return stem;
 }
 
-std::string json_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) out += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
-  return out;
-}
-
 double median_seconds(int runs, const std::function<void()>& work) {
   std::vector<double> t;
   for (int r = 0; r < runs; ++r) {
@@ -147,31 +142,18 @@ double median_seconds(int runs, const std::function<void()>& work) {
 }
 
 // The JSON lines as CSV: the keys of the first line are the columns.
-void write_csv(const std::vector<std::string>& lines, const fs::path& file) {
+// One CSV row per JSON record, columns in the records' key order (strings
+// quoted as JSON quotes them, which CSV readers accept).
+void write_csv(const std::vector<nlohmann::ordered_json>& records, const fs::path& file) {
   std::ofstream csv(file);
-  bool header = false;
-  for (const std::string& line : lines) {
-    std::vector<std::pair<std::string, std::string>> fields;
-    for (std::size_t at = line.find('"'); at != std::string::npos;) {
-      const auto key_end = line.find('"', at + 1);
-      const std::string key = line.substr(at + 1, key_end - at - 1);
-      auto value_begin = line.find_first_not_of(": ", key_end + 1);
-      std::size_t value_end;
-      if (line[value_begin] == '"') {
-        value_end = line.find('"', value_begin + 1) + 1;
-      } else {
-        value_end = line.find_first_of(",}", value_begin);
-      }
-      fields.emplace_back(key, line.substr(value_begin, value_end - value_begin));
-      at = line.find('"', value_end);
+  for (std::size_t r = 0; r < records.size(); ++r) {
+    std::string header, row;
+    for (const auto& [key, value] : records[r].items()) {
+      header += (header.empty() ? "" : ",") + key;
+      row += (row.empty() ? "" : ",") + value.dump();
     }
-    if (!header) {
-      for (std::size_t k = 0; k < fields.size(); ++k) csv << (k ? "," : "") << fields[k].first;
-      csv << "\n";
-      header = true;
-    }
-    for (std::size_t k = 0; k < fields.size(); ++k) csv << (k ? "," : "") << fields[k].second;
-    csv << "\n";
+    if (r == 0) csv << header << "\n";
+    csv << row << "\n";
   }
 }
 
@@ -214,9 +196,10 @@ int bench(Context& context, const BenchArgs& args) {
   std::set<std::string> done;
   if (std::ifstream in(results); in)
     for (std::string line; std::getline(in, line);) {
-      const auto at = line.find("\"label\": \"");
-      if (at != std::string::npos)
-        done.insert(line.substr(at + 10, line.find('"', at + 10) - at - 10));
+      // A line cut by a kill is not a finished configuration: it runs again.
+      const auto record = nlohmann::json::parse(line, nullptr, false);
+      if (record.is_object() && record.contains("label") && record["label"].is_string())
+        done.insert(record["label"].get<std::string>());
     }
   std::ofstream log(results, std::ios::app);
 
@@ -329,38 +312,41 @@ int bench(Context& context, const BenchArgs& args) {
       }
     }
     relight_seconds /= args.lights;
-    char line[2048];
-    std::snprintf(
-        line, sizeof line,
-        "{\"label\": \"%s\", \"image\": \"%s\", \"index\": %zu, \"trace_seconds\": %.6g, "
-        "\"project_seconds\": %.6g, "
-        "\"encode_seconds\": %.6g, \"bake_seconds\": %.6g, \"bytes\": %.0f, \"file_bytes\": %.0f, "
-        "\"bytes_per_vertex\": %.4g, \"relight_seconds\": %.6g, \"gpu_frame_seconds\": %.6g, "
-        "\"transfer_se\": %.6g, \"rms\": %.6g, \"p99\": %.6g, \"max\": %.6g, "
-        "\"image_error\": %.6g, \"lights\": %d}",
-        json_escape(label).c_str(), stem_of(label).c_str(), i, trace_seconds, project_seconds,
-        encode_seconds, trace_seconds + project_seconds + encode_seconds, bytes, file_bytes,
-        bytes / double(data.mesh.vertex_count()), relight_seconds, gpu_seconds, se, rms, p99,
-        max_error, image_error, args.lights);
+    nlohmann::ordered_json record;
+    record["label"] = label;
+    record["image"] = stem_of(label);
+    record["index"] = i;
+    record["trace_seconds"] = trace_seconds;
+    record["project_seconds"] = project_seconds;
+    record["encode_seconds"] = encode_seconds;
+    record["bake_seconds"] = trace_seconds + project_seconds + encode_seconds;
+    record["bytes"] = bytes;
+    record["file_bytes"] = file_bytes;
+    record["bytes_per_vertex"] = bytes / double(data.mesh.vertex_count());
+    record["relight_seconds"] = relight_seconds;
+    record["gpu_frame_seconds"] = gpu_seconds;
+    record["transfer_se"] = se;
+    record["rms"] = rms;
+    record["p99"] = p99;
+    record["max"] = max_error;
+    record["image_error"] = image_error;
+    record["lights"] = args.lights;
+    const std::string line = record.dump();
     log << line << "\n" << std::flush;
     progress.add(1);
   }
   log.close();
 
   // CSV and JSON of every configuration, in sweep order.
-  std::vector<std::string> lines;
+  std::vector<nlohmann::ordered_json> records;
   if (std::ifstream in(results); in)
-    for (std::string line; std::getline(in, line);)
-      if (!line.empty()) lines.push_back(line);
-  {
-    std::ofstream json(out / "results.json");
-    json << "[\n";
-    for (std::size_t k = 0; k < lines.size(); ++k)
-      json << "  " << lines[k] << (k + 1 < lines.size() ? ",\n" : "\n");
-    json << "]\n";
-  }
-  write_csv(lines, out / "results.csv");
-  std::cout << "results: " << (out / "results.json").string() << " (" << lines.size()
+    for (std::string line; std::getline(in, line);) {
+      auto record = nlohmann::ordered_json::parse(line, nullptr, false);
+      if (record.is_object()) records.push_back(std::move(record));
+    }
+  std::ofstream(out / "results.json") << nlohmann::ordered_json(records).dump(2) << "\n";
+  write_csv(records, out / "results.csv");
+  std::cout << "results: " << (out / "results.json").string() << " (" << records.size()
             << " configurations)\n";
   if (!args.no_report) {
     const std::string command =

@@ -1,10 +1,14 @@
 // prt compare-bases: one set of rays, several bases; per basis the L2 error of
-// the reconstructed per-vertex transport functions and the RMS shading error
-// against the ground truth under the scene's light.
+// the reconstructed per-vertex transport functions (diffuse) and the RMS
+// shading error against the ground truth under the scene's light, the same
+// quantity `prt render --compare` prints. Sphere bases take the light-basis
+// role; hemisphere bases the exit-basis role of a glossy scene.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -42,8 +46,78 @@ BasisSpec parse_spec(const std::string& text) {
 struct Row {
   std::string spec;
   int coefficients = 0;
-  double bytes = 0, transport_error = 0, shading_rms = 0, shading_relative = 0, seconds = 0;
+  double bytes = 0, shading_rms = 0, shading_relative = 0, seconds = 0;
+  double transport_error = std::numeric_limits<double>::quiet_NaN();  // diffuse only
 };
+
+// Relative L2 error of the reconstructed transport functions (diffuse):
+// sum_k w_k (T_pk - t^_pk)^2 over all vertices and directions.
+double transport_error(const Mesh& mesh, const DirectionSet& set, const TransportResult& traced,
+                       const BakeData& data, const Basis& basis) {
+  const Eigen::MatrixXd values = basis.evaluate(set.directions);  // s x n
+  const MatrixXfRow decoded = data.compressed.decode();
+  double error = 0, energy = 0;
+  std::mutex lock;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), 256), [&](const auto& range) {
+        Eigen::MatrixXd t;
+        transport_rows(mesh, set, traced.visibility, range.begin(), range.end(), t);
+        const Eigen::MatrixXd approx =
+            decoded.middleRows(range.begin(), range.size()).template cast<double>() *
+            values.transpose();
+        const double e =
+            ((t - approx).array().square().rowwise() * set.weights.transpose().array()).sum();
+        const double n = (t.array().square().rowwise() * set.weights.transpose().array()).sum();
+        std::lock_guard guard(lock);
+        error += e;
+        energy += n;
+      });
+  return std::sqrt(error / std::max(energy, 1e-300));
+}
+
+}  // namespace
+
+namespace {
+
+// The scene with one --bases entry in the role its domain serves: a sphere
+// basis replaces [basis] (the light basis); a hemisphere basis replaces [exit]
+// (the exit basis of glossy transfer). Everything is validated here, before
+// any ray: the entry's parameters, its domain, and the bake plan it makes.
+SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet& set,
+                    PluginRegistry& registry) {
+  const SourceLocation where = spec.params.location();
+  const auto& d = registry.find(PluginKind::basis, spec.name, where);
+  // A lattice basis's resolution follows the scene's cube map unless given.
+  if (d.schema().find("resolution") && !spec.params.has("resolution")) {
+    if (set.kind != "cubemap")
+      throw Error(where, "basis \"" + spec.name +
+                             "\" lives on a cube map: set [transport] directions = \"cubemap\" so "
+                             "one set of rays serves every basis");
+    spec.params.set("resolution",
+                    std::int64_t(std::lround(std::sqrt(double(set.size()) / 6.0))));
+  }
+  spec.params.validate(d.schema());
+  Params probe_params = spec.params;
+  const auto probe = registry.create<Basis>(spec.name, probe_params, where);
+  SceneSpec out = scene;
+  PluginChoice choice{spec.name, where, spec.params};
+  if (probe->domain() == Domain::sphere) {
+    out.basis = choice;
+  } else if (scene.glossy()) {
+    out.exit = choice;
+  } else {
+    throw Error(where, "basis \"" + spec.name +
+                           "\" is a hemisphere basis: it serves as the exit basis of glossy "
+                           "transfer, and this scene's material is lambert (compare it under a "
+                           "glossy [material] brdf, or list sphere bases)");
+  }
+  try {
+    plan_bake(out, registry);
+  } catch (const Error& e) {
+    throw Error(where, e.what());
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -52,116 +126,72 @@ int compare_bases(Context& context, const CompareArgs& args) {
   for (const std::string& table : {args.csv, args.json})
     if (!table.empty())
       check_output({table, FileKind::text, "table"}, scene.input_files(), args.force);
-  const Mesh mesh = scene.load_mesh();
   const DirectionSet set = scene.directions();
   std::vector<BasisSpec> specs;
   std::stringstream list(args.bases);
   for (std::string item; std::getline(list, item, ',');) specs.push_back(parse_spec(item));
-  // Validate every basis before any ray is cast; a lattice basis's resolution
-  // follows the scene's cube map unless given.
-  const int lattice =
-      set.kind == "cubemap" ? static_cast<int>(std::lround(std::sqrt(set.size() / 6.0))) : 0;
-  for (auto& spec : specs) {
-    const auto& d = context.registry.find(PluginKind::basis, spec.name, spec.params.location());
-    if (d.schema().find("resolution") && !spec.params.has("resolution")) {
-      if (!lattice)
-        throw Error(scene.transport.location("directions"),
-                    "basis \"" + spec.name +
-                        "\" lives on a cube map: set [transport] directions "
-                        "= \"cubemap\" so one set of rays serves every basis");
-      spec.params.set("resolution", std::int64_t(lattice));
-    }
-    spec.params.validate(d.schema());
-  }
+  std::vector<SceneSpec> scenes;
+  for (auto& spec : specs) scenes.push_back(scene_for(scene, spec, set, context.registry));
 
-  TransportOptions options;
-  options.shadowed = scene.transport.get_bool("shadowed");
-  options.keep_visibility = true;
-  TransportResult traced;
-  {
-    Progress progress("trace once", double(mesh.vertex_count()), "rays");
-    traced = diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), options, &progress);
-  }
+  const RunOptions quiet{true};
+  const TransportResult traced = trace_scene(scene, {context.quiet});
+  const Mesh mesh = scene.load_mesh();
   const Environment environment = scene.load_environment();
-  Eigen::MatrixX3f truth;
-  {
-    Progress progress("ground truth", double(mesh.vertex_count()), "rays");
-    truth = ground_truth_radiance(
-        mesh, environment, static_cast<int>(scene.ground_truth.get_int("samples")),
-        static_cast<std::uint64_t>(scene.ground_truth.get_int("seed")), &progress);
-  }
+  const Camera camera = scene.make_camera(mesh);
+  // The same truth and the same relighting as `prt render --compare`.
+  const Eigen::MatrixX3f truth =
+      ground_truth_vertices(scene, mesh, environment, camera, {context.quiet});
 
   std::vector<Row> rows;
-  for (auto& spec : specs) {
+  for (std::size_t i = 0; i < specs.size(); ++i) {
     Stopwatch clock;
-    auto basis = context.registry.create<Basis>(spec.name, spec.params, spec.params.location());
-    if (basis->domain() != Domain::sphere)
-      throw Error(spec.params.location(), "basis \"" + spec.name + "\" is not a sphere basis");
-    if (basis->can_fit()) basis->fit({&mesh, &set, &traced.visibility});
-    const TransferSignal exact = project_visibility(mesh, set, traced.visibility, *basis);
-    const int terms = basis->approximation_terms();
-    Params none_params;
-    const CompressedTransfer coded =
-        terms > 0 ? keep_largest(exact, terms)
-                  : context.registry.create<Compressor>("none", none_params)->encode(exact, &mesh);
+    RunOptions reuse = quiet;
+    reuse.traced = &traced;
+    reuse.compress = false;  // the basis alone (its own sparse approximation, if any)
+    StageTimes times;
+    const BakeData data = bake(scenes[i], context.registry, reuse, times);
+    const Relighting relighting(scenes[i], data, context.registry);
     Row row;
-    row.spec = spec.text;
+    row.spec = specs[i].text;
     row.seconds = clock.seconds();
-    row.coefficients = terms > 0 ? coded.components : basis->size();
-    row.bytes = 4 * coded.stored_floats();
-
-    // Transport error: sum_k w_k (T_pk - t^_pk)^2 over all vertices, relative.
-    const Eigen::MatrixXd values = basis->evaluate(set.directions);  // s x n
-    const MatrixXfRow decoded = coded.decode();
-    double error = 0, energy = 0;
-    std::mutex lock;
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), 256), [&](const auto& range) {
-          Eigen::MatrixXd t;
-          transport_rows(mesh, set, traced.visibility, range.begin(), range.end(), t);
-          const Eigen::MatrixXd approx =
-              decoded.middleRows(range.begin(), range.size()).template cast<double>() *
-              values.transpose();
-          const double e =
-              ((t - approx).array().square().rowwise() * set.weights.transpose().array()).sum();
-          const double n = (t.array().square().rowwise() * set.weights.transpose().array()).sum();
-          std::lock_guard guard(lock);
-          error += e;
-          energy += n;
-        });
-    row.transport_error = std::sqrt(error / std::max(energy, 1e-300));
-
-    Eigen::MatrixX3f radiance = relight(coded, environment.project(*basis));
+    row.coefficients = data.compressed.sparse() ? data.compressed.components
+                                                : relighting.basis().size();
+    row.bytes = 4 * data.compressed.stored_floats();
+    if (!data.transfer.glossy())
+      row.transport_error = transport_error(mesh, set, traced, data, relighting.basis());
+    const Eigen::MatrixX3f radiance =
+        relighting.relight(data.compressed, relighting.light(environment), camera).vertex_radiance;
     const ErrorStats shading = vertex_error(radiance, truth);
     row.shading_rms = shading.rms;
     row.shading_relative = shading.relative_rms;
     rows.push_back(row);
     std::fprintf(stderr, "%s: %d coefficients, transport error %.4f, shading RMS %.5g\n",
-                 spec.text.c_str(), row.coefficients, row.transport_error, row.shading_rms);
+                 row.spec.c_str(), row.coefficients, row.transport_error, row.shading_rms);
   }
 
-  std::ostringstream csv, json;
+  std::ostringstream csv;
+  nlohmann::ordered_json json = nlohmann::ordered_json::array();
   csv << "basis,coefficients,bytes,transport_l2_relative,shading_rms,shading_relative_rms,"
          "seconds\n";
-  json << "[";
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const Row& r = rows[i];
+  for (const Row& r : rows) {
+    const bool has_transport = std::isfinite(r.transport_error);
     char line[512];
-    std::snprintf(line, sizeof line, "\"%s\",%d,%.0f,%.6g,%.6g,%.6g,%.3f\n", r.spec.c_str(),
-                  r.coefficients, r.bytes, r.transport_error, r.shading_rms, r.shading_relative,
-                  r.seconds);
+    std::snprintf(line, sizeof line, "%s,%d,%.0f,%s,%.6g,%.6g,%.3f\n",
+                  nlohmann::json(r.spec).dump().c_str(), r.coefficients, r.bytes,
+                  has_transport ? std::to_string(r.transport_error).c_str() : "", r.shading_rms,
+                  r.shading_relative, r.seconds);
     csv << line;
-    std::snprintf(line, sizeof line,
-                  "%s\n {\"basis\": \"%s\", \"coefficients\": %d, \"bytes\": %.0f, "
-                  "\"transport_l2_relative\": %.6g, \"shading_rms\": %.6g, "
-                  "\"shading_relative_rms\": %.6g, \"seconds\": %.3f}",
-                  i ? "," : "", r.spec.c_str(), r.coefficients, r.bytes, r.transport_error,
-                  r.shading_rms, r.shading_relative, r.seconds);
-    json << line;
+    json.push_back({{"basis", r.spec},
+                    {"coefficients", r.coefficients},
+                    {"bytes", r.bytes},
+                    {"transport_l2_relative",
+                     has_transport ? nlohmann::ordered_json(r.transport_error) : nullptr},
+                    {"shading_rms", r.shading_rms},
+                    {"shading_relative_rms", r.shading_relative},
+                    {"seconds", r.seconds}});
   }
-  json << "\n]\n";
   if (!args.csv.empty()) write_text_file(args.csv, csv.str());
-  if (!args.json.empty()) write_text_file(args.json, json.str());
+  if (!args.json.empty()) write_text_file(args.json, json.dump(2) + "\n");
   std::printf("%-28s %6s %12s %14s %12s %10s\n", "basis", "coeffs", "bytes", "transport L2",
               "shading RMS", "relative");
   for (const auto& r : rows)

@@ -2,6 +2,7 @@
 // SH evaluation and rotation against order, the hemispherical Gram matrix,
 // PCA/CPCA on degenerate inputs, float storage of the compressed form, and SH
 // ringing (negative radiance) of a sun 10^5 times the sky, with windows.
+#include <nlohmann/json.hpp>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -23,16 +24,15 @@ namespace prt::cli {
 namespace {
 
 struct Report {
-  std::string markdown, json = "{";
+  std::string markdown;
+  nlohmann::ordered_json json = nlohmann::ordered_json::object();
   void section(const std::string& title, const std::string& header) {
     markdown += "\n## " + title + "\n\n" + header + "\n";
   }
   void row(const std::string& line) { markdown += line + "\n"; }
+  // Non-finite figures (a failed measurement) are written as null.
   void value(const std::string& key, double v) {
-    char text[96];
-    std::snprintf(text, sizeof text, "%s\"%s\": %.6g", json.size() > 1 ? ", " : "", key.c_str(),
-                  std::isfinite(v) ? v : -1.0);
-    json += text;
+    json[key] = std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
   }
 };
 
@@ -272,10 +272,9 @@ int stability(Context& context, const StabilityArgs& args) {
     }
     if (figure) write_text_file(args.figure_data, curve.str());
   }
-  report.json += "}";
   std::printf("%s", report.markdown.c_str());
   if (!args.json.empty()) {
-    write_text_file(args.json, report.json + "\n");
+    write_text_file(args.json, report.json.dump(2) + "\n");
     std::printf("\nJSON -> %s\n", args.json.c_str());
   }
   return 0;

@@ -1,5 +1,7 @@
 #include "prt/compressor.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cstdio>
 #include <set>
@@ -56,24 +58,21 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
 }
 
 std::string CompressionReport::json() const {
-  char buffer[768];
-  std::snprintf(buffer, sizeof buffer,
-                "{\"squared_error\": %.9g, \"vertex_squared_error\": {\"p50\": %.9g, \"p90\": "
-                "%.9g, \"p99\": %.9g, \"max\": %.9g}, \"stored_floats\": %.0f, \"stored_bytes\": "
-                "%.0f, \"encode_seconds\": %.6f, \"clusters\": %zu, \"overdraw\": %.6f, "
-                "\"supercluster_overdraw\": %.6f}",
-                squared_error, vertex_error_p50, vertex_error_p90, vertex_error_p99,
-                vertex_error_max, stored_floats, stored_bytes, encode_seconds, clusters, overdraw,
-                supercluster_overdraw);
-  std::string out = buffer;
-  out.pop_back();  // the closing brace; statistics follow
-  out += ", \"statistics\": {";
-  for (auto it = statistics.begin(); it != statistics.end(); ++it) {
-    std::snprintf(buffer, sizeof buffer, "%s\"%s\": %.9g", it == statistics.begin() ? "" : ", ",
-                  it->first.c_str(), it->second);
-    out += buffer;
-  }
-  return out + "}}";
+  nlohmann::ordered_json j;
+  j["squared_error"] = squared_error;
+  j["vertex_squared_error"] = {{"p50", vertex_error_p50},
+                               {"p90", vertex_error_p90},
+                               {"p99", vertex_error_p99},
+                               {"max", vertex_error_max}};
+  j["stored_floats"] = stored_floats;
+  j["stored_bytes"] = stored_bytes;
+  j["encode_seconds"] = encode_seconds;
+  j["clusters"] = clusters;
+  j["overdraw"] = overdraw;
+  j["supercluster_overdraw"] = supercluster_overdraw;
+  j["statistics"] = nlohmann::ordered_json::object();
+  for (const auto& [name, value] : statistics) j["statistics"][name] = value;
+  return j.dump();
 }
 
 std::string CompressionReport::text() const {

@@ -159,7 +159,7 @@ specular = 0.8
 exponent = 10
 [transport]
 directions = "cubemap"
-rays = 1536
+rays = 384
 [basis]
 %s
 [exit]
@@ -176,7 +176,7 @@ target = [0, -0.5, 0]
 samples = 256
 )";
   double sh_error = 0;
-  for (const char* basis : {"plugin = \"sh\"\norder = 6", "plugin = \"haar\"\nresolution = 16",
+  for (const char* basis : {"plugin = \"sh\"\norder = 6", "plugin = \"haar\"\nresolution = 8",
                             "plugin = \"eigen\"\nd = 24"}) {
     char text[1024];
     std::snprintf(text, sizeof text, scene, basis);
