@@ -155,7 +155,8 @@ const SourceLocation& Params::location(const std::string& key) const {
 }
 
 void Params::fail(const std::string& key, const std::string& message) const {
-  throw Error(location(key), message);
+  // The key leads, so a message read away from its scene still says which one.
+  throw Error(location(key), "parameter \"" + key + "\": " + message);
 }
 
 void Params::validate(const ParamSchema& schema) {

@@ -1,18 +1,49 @@
 #!/usr/bin/env bash
-# Installs the framework from the build tree into a scratch prefix, builds
-# examples/zonal_basis against it with find_package(PRT), and runs the
-# conformance tests that prt_add_plugin registered for it.
+# The SDK as documented: runs the shell blocks of docs/writing-a-plugin.md
+# marked "tested:" verbatim, in a scratch checkout that shares this build
+# (build -> the build tree; examples, scenes, data as in the source tree), with
+# HOME pointing at a scratch folder. No flag is added: what the docs say is
+# what works. Then checks what the commands should have produced, that a
+# Debug build of a plug-in loads into this (Release) host, and that the
+# installed binaries load code only from where they belong.
 set -euo pipefail
-build="$1"
-src="$2"
+build="$(realpath "$1")"
+src="$(realpath "$2")"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-cmake --install "$build" --prefix "$work/prefix" >/dev/null
-cmake -S "$src/examples/zonal_basis" -B "$work/zonal" -DCMAKE_PREFIX_PATH="$work/prefix" \
-  -DCMAKE_CXX_FLAGS="$(grep -q march=native "$build/CMakeCache.txt" && echo -march=native)" >/dev/null
-cmake --build "$work/zonal" >/dev/null
-ctest --test-dir "$work/zonal" --output-on-failure
-# The installed prt finds the example through PRT_PLUGIN_PATH, next to its own plug-ins.
-PRT_PLUGIN_PATH="$work/zonal/plugins" "$work/prefix/bin/prt" plugins | grep -E "^(basis|compressor|renderer) "
+mkdir -p "$work/home" "$work/checkout"
+ln -s "$build" "$work/checkout/build"
+cp -r "$src/examples" "$src/scenes" "$work/checkout/"
+ln -s "$src/data" "$work/checkout/data"
+
+# The marked blocks, in order.
+script="$work/documented.sh"
+awk '/<!-- tested:/ { want = 1; next }
+     want && /^```sh$/ { inside = 1; next }
+     inside && /^```$/ { inside = 0; want = 0; next }
+     inside { print }' "$src/docs/writing-a-plugin.md" >"$script"
+[ "$(grep -c 'cmake' "$script")" -ge 5 ] || { echo "FAIL: no documented commands found"; exit 1; }
+echo "--- documented commands:"
+cat "$script"
+echo "---"
+(cd "$work/checkout" && HOME="$work/home" bash -euo pipefail "$script") >"$work/out.txt" 2>&1 || {
+  cat "$work/out.txt"
+  echo "FAIL: the documented commands failed"
+  exit 1
+}
+grep -E "tests passed|Passed" "$work/out.txt"
+grep -q "^basis zonal " "$work/out.txt" || { echo "FAIL: prt plugins does not list zonal"; exit 1; }
+[ -f "$work/checkout/out/bunny_gautron.png" ] || { echo "FAIL: no glossy image"; exit 1; }
+if grep -q "warning" "$work/out.txt"; then grep warning "$work/out.txt"; echo "FAIL: warnings"; exit 1; fi
+
+# Debug and RelWithDebInfo plug-ins load into the Release host.
+for type in Debug RelWithDebInfo; do
+  cmake -S "$src/examples/zonal_basis" -B "$work/zonal-$type" -DCMAKE_BUILD_TYPE=$type \
+    -DCMAKE_PREFIX_PATH="$work/home/prt" >/dev/null
+  cmake --build "$work/zonal-$type" >/dev/null
+  ctest --test-dir "$work/zonal-$type" >/dev/null || { echo "FAIL: $type plug-in refused"; exit 1; }
+  echo "$type plug-in: conformance passed"
+done
+
 # The installed binaries and libraries load code only from where they belong.
-bash "$src/tests/integration/load_paths.sh" "$work/prefix"
+bash "$src/tests/integration/load_paths.sh" "$work/home/prt"

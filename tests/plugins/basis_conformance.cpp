@@ -1,14 +1,19 @@
 // Conformance checks run over every basis plug-in (one ctest entry each):
-// orthonormality if claimed, projection/reconstruction round trip, linearity,
-// rotation consistency if it rotates, save/load round trip, extreme inputs.
+// orthonormality if claimed, native quadrature against the domain's measure
+// and an independent rule, projection/reconstruction round trip, linearity,
+// every declared capability tested and every undeclared one absent, every
+// boolean and choice parameter varied, save/load round trip, extreme inputs.
 #include <Eigen/Geometry>
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <random>
+#include <sstream>
 
 #include "../common/scenes.hpp"
 #include "conformance.hpp"
 #include "prt/basis.hpp"
 #include "prt/mesh.hpp"
+#include "prt/error.hpp"
 #include "prt/quadrature.hpp"
 #include "prt/registry.hpp"
 #include "prt/transport.hpp"
@@ -89,9 +94,81 @@ TEST_CASE_METHOD(Fixture, "projection is linear and scales from 1e-6 to 1e6", "[
   CHECK(constant.cwiseAbs().maxCoeff() > 0);
 }
 
+namespace {
+
+double domain_measure(const Basis& b) {
+  return b.domain() == Domain::hemisphere ? 2 * M_PI : 4 * M_PI;
+}
+
+// An independent rule over the basis's domain: a 200k-point Fibonacci sphere
+// (equal weights), lower half weighted 0 for hemisphere bases.
+DirectionSet independent_rule(const Basis& b) {
+  DirectionSet set = DirectionSet::fibonacci(200000);
+  if (b.domain() == Domain::hemisphere)
+    for (Eigen::Index k = 0; k < set.size(); ++k)
+      if (set.directions(k, 2) < 0) set.weights[k] = 0;
+  return set;
+}
+
+// Integrals of every basis function over a rule, in blocks of points.
+Eigen::RowVectorXd integrals(const Basis& b, const DirectionSet& set) {
+  Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(b.size());
+  for (Eigen::Index start = 0; start < set.size(); start += 8192) {
+    const Eigen::Index count = std::min<Eigen::Index>(8192, set.size() - start);
+    sum += set.weights.segment(start, count).transpose() *
+           b.evaluate(set.directions.middleRows(start, count));
+  }
+  return sum;
+}
+
+}  // namespace
+
+TEST_CASE_METHOD(Fixture, "native quadrature weights integrate 1 to the domain's measure",
+                 "[conformance]") {
+  const auto native = basis->native_directions();
+  if (!native) return;  // the kit then uses its own exact sphere rule
+  INFO("weights sum to " << native->weights.sum() << "; the " <<
+       (basis->domain() == Domain::hemisphere ? "hemisphere" : "sphere") << " measures "
+                                                                    << domain_measure(*basis));
+  CHECK(std::abs(native->weights.sum() - domain_measure(*basis)) < 1e-9 * domain_measure(*basis));
+  CHECK(native->weights.minCoeff() >= 0);
+  CHECK(native->directions.rowwise().norm().isApprox(Eigen::VectorXd::Ones(native->size()), 1e-9));
+  if (basis->domain() == Domain::hemisphere) CHECK(native->directions.col(2).minCoeff() >= 0);
+}
+
+TEST_CASE_METHOD(Fixture, "the basis agrees with an independent quadrature", "[conformance]") {
+  // Integrals of the basis functions over the kit's rule and over the
+  // plug-in's own: a rule whose weights are off (even consistently with the
+  // functions) or a function defined outside its domain shows here.
+  const DirectionSet independent = independent_rule(*basis);
+  const Eigen::RowVectorXd expected = integrals(*basis, independent);
+  const Eigen::RowVectorXd own = integrals(*basis, set);
+  const double scale = std::max(expected.norm(), 1e-3 * std::sqrt(domain_measure(*basis)));
+  INFO("function integrals differ by " << (own - expected).norm() / scale << " (relative)");
+  CHECK((own - expected).norm() < 0.02 * scale);
+  if (basis->orthonormal() && basis->size() <= 100) {
+    // The Gram matrix on the independent rule (accurate to ~1e-3 for smooth bases).
+    Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(basis->size(), basis->size());
+    for (Eigen::Index start = 0; start < independent.size(); start += 8192) {
+      const Eigen::Index count = std::min<Eigen::Index>(8192, independent.size() - start);
+      const Eigen::MatrixXd y = basis->evaluate(independent.directions.middleRows(start, count));
+      gram += y.transpose() * independent.weights.segment(start, count).asDiagonal() * y;
+    }
+    const double off = (gram - Eigen::MatrixXd::Identity(basis->size(), basis->size()))
+                           .cwiseAbs()
+                           .maxCoeff();
+    INFO("independent Gram matrix is off the identity by " << off);
+    CHECK(off < 0.02);
+  }
+}
+
 TEST_CASE_METHOD(Fixture, "rotation is consistent with re-projection and composes",
                  "[conformance]") {
-  if (!basis->can_rotate()) return;
+  if (!basis->can_rotate()) {
+    // Not declared: asked anyway, it says so rather than returning something.
+    CHECK_THROWS_AS(basis->rotation_matrix(Eigen::Matrix3d::Identity()), Error);
+    return;
+  }
   const Eigen::Matrix3d a =
       Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Matrix3d b = Eigen::AngleAxisd(-1.9, Eigen::Vector3d::UnitY()).toRotationMatrix();
@@ -103,6 +180,44 @@ TEST_CASE_METHOD(Fixture, "rotation is consistent with re-projection and compose
   const Eigen::RowVectorXd samples = (basis->evaluate(back) * c).transpose();
   const Eigen::VectorXd reprojected = basis->project(samples, set).transpose();
   CHECK((ra * c - reprojected).norm() / c.norm() < 1e-9);
+  // A rotation of functions keeps their norms: an orthonormal basis's
+  // rotation matrix is orthogonal.
+  if (basis->orthonormal()) {
+    const int n = basis->size();
+    CHECK((ra.transpose() * ra - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
+  }
+}
+
+TEST_CASE_METHOD(Fixture, "declared capabilities hold, undeclared ones are absent",
+                 "[conformance]") {
+  const std::vector<int> bands = basis->coefficient_bands();
+  if (!bands.empty()) {
+    CHECK(bands.size() == static_cast<std::size_t>(basis->size()));
+    CHECK(*std::min_element(bands.begin(), bands.end()) >= 0);
+    CHECK(std::is_sorted(bands.begin(), bands.end()));
+    if (basis->can_rotate()) {  // a rotation never mixes bands
+      const Eigen::MatrixXd r = basis->rotation_matrix(
+          Eigen::AngleAxisd(1.1, Eigen::Vector3d(3, 1, 2).normalized()).toRotationMatrix());
+      for (int i = 0; i < basis->size(); ++i)
+        for (int j = 0; j < basis->size(); ++j)
+          if (bands[i] != bands[j]) CHECK(std::abs(r(i, j)) < 1e-12);
+    }
+  }
+  if (!basis->can_fit()) {  // fitting a basis that does not fit changes nothing
+    const Mesh scene = test::sphere_over_plane();
+    const DirectionSet lattice = DirectionSet::cubemap(4);
+    const TransportResult r = test::trace_visibility_only(scene, lattice);
+    const Eigen::MatrixXd before = basis->evaluate(set.directions);
+    basis->fit({&scene, &lattice, &r.visibility});
+    CHECK(basis->evaluate(set.directions) == before);
+  }
+  CHECK(basis->approximation_terms() >= 0);
+  CHECK(basis->approximation_terms() <= basis->size());
+  if (!basis->has_fast_projection(set)) {  // the default projection is the matrix's
+    const Eigen::MatrixXd f = random_coefficients(2, set.size(), 9);
+    CHECK((basis->project(f, set) - f * basis->projection_matrix(set)).norm() <=
+          1e-12 * f.norm() * basis->projection_matrix(set).norm());
+  }
 }
 
 TEST_CASE_METHOD(Fixture, "saved state restores an identical basis", "[conformance]") {
@@ -145,5 +260,77 @@ TEST_CASE_METHOD(Fixture, "every integer parameter works at its smallest and lar
         CHECK((back - c).norm() <= 1e-8 * c.norm());
       }
     }
+  }
+}
+
+namespace {
+
+// Every combination of the schema's boolean and choice values (at most 64;
+// other parameters at their defaults).
+std::vector<std::vector<std::pair<std::string, ParamValue>>> combinations(const ParamSchema& schema) {
+  std::vector<std::vector<std::pair<std::string, ParamValue>>> out{{}};
+  for (const auto& spec : schema.specs) {
+    std::vector<ParamValue> values;
+    if (spec.type == ParamType::boolean) values = {false, true};
+    if (spec.type == ParamType::string && spec.choices[0]) {
+      std::stringstream list(spec.choices);
+      for (std::string c; std::getline(list, c, '|');) values.push_back(c);
+    }
+    if (values.empty()) continue;
+    std::vector<std::vector<std::pair<std::string, ParamValue>>> next;
+    for (const auto& partial : out)
+      for (const auto& v : values) {
+        next.push_back(partial);
+        next.back().emplace_back(spec.name, v);
+      }
+    out = std::move(next);
+    if (out.size() > 64) out.resize(64);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE_METHOD(Fixture, "every boolean and choice parameter value gives a consistent basis",
+                 "[conformance][parameters]") {
+  const ParamSchema schema = registry.find(PluginKind::basis, conformance::plugin_name).schema();
+  for (const auto& combination : combinations(schema)) {
+    if (combination.empty()) continue;
+    std::string label;
+    Params p;
+    for (const auto& [key, value] : combination) {
+      p.set(key, value);
+      const bool* flag = std::get_if<bool>(&value);
+      const std::string* text = std::get_if<std::string>(&value);
+      label += key + "=" + (flag ? (*flag ? "true" : "false") : text ? *text : "?") + " ";
+    }
+    INFO("parameters: " << label);
+    std::shared_ptr<Basis> b;
+    try {
+      b = fitted(registry.create<Basis>(conformance::plugin_name, p));
+    } catch (const Error& e) {
+      // A refused combination must say which parameter (params.fail does).
+      bool named = false;
+      for (const auto& [key, value] : combination)
+        named = named || std::string(e.what()).find("\"" + key + "\"") != std::string::npos;
+      INFO("refused with: " << e.what());
+      CHECK(named);
+      continue;
+    }
+    const DirectionSet native = b->native_directions().value_or(gauss_product_sphere(64));
+    const Eigen::MatrixXd y = b->evaluate(native.directions);
+    REQUIRE(b->size() > 0);
+    CHECK(y.cols() == b->size());  // size() must follow every parameter
+    CHECK(y.allFinite());
+    if (y.cols() != b->size()) continue;
+    if (b->orthonormal()) {
+      const Eigen::MatrixXd gram = y.transpose() * native.weights.asDiagonal() * y;
+      CHECK((gram - Eigen::MatrixXd::Identity(b->size(), b->size())).cwiseAbs().maxCoeff() < 1e-9);
+    }
+    // Projection (by whichever method the parameters choose) gives one
+    // finite coefficient per function.
+    const Eigen::MatrixXd p_matrix = b->projection_matrix(native);
+    CHECK(p_matrix.cols() == b->size());
+    CHECK(p_matrix.allFinite());
   }
 }

@@ -1,0 +1,73 @@
+// Order-3 SH with a boolean "drop_constant" (9 or 8 functions), built once
+// correct and once per bug a researcher makes (tests/integration/
+// kit_catches_variants.sh): PRT_BUG_NORMALISATION (one function scaled),
+// PRT_BUG_WEIGHTS (native weights doubled and functions scaled to match, so
+// the basis looks orthonormal on its own rule), PRT_BUG_SIZE (size() ignores
+// the boolean), PRT_BUG_REFLECTION (the "rotation" also mirrors z).
+#include <array>
+#include <cmath>
+
+#include "prt/basis.hpp"
+#include "prt/plugin.hpp"
+#include "prt/quadrature.hpp"
+#include "prt/sh.hpp"
+
+namespace {
+
+class VariantBasis final : public prt::Basis {
+ public:
+  static constexpr const char* plugin_version = "0.0.1";
+  static constexpr const char* plugin_description = "test plug-in: SH order 3, maybe broken";
+  static constexpr auto parameters() {
+    return std::array{prt::schema::boolean("drop_constant", "false", "leave out y_00")};
+  }
+  explicit VariantBasis(const prt::Params& params) : drop_(params.get_bool("drop_constant")) {}
+
+  int size() const override {
+#ifdef PRT_BUG_SIZE
+    return 9;
+#else
+    return drop_ ? 8 : 9;
+#endif
+  }
+  bool orthonormal() const override { return true; }
+  Eigen::MatrixXd evaluate(const prt::Directions& d) const override {
+    Eigen::MatrixXd all = prt::sh::evaluate(3, d);
+#ifdef PRT_BUG_NORMALISATION
+    all.col(5) *= 1.05;
+#endif
+#ifdef PRT_BUG_WEIGHTS
+    all /= std::sqrt(2.0);
+#endif
+    return drop_ ? Eigen::MatrixXd(all.rightCols(8)) : all;
+  }
+  std::optional<prt::DirectionSet> native_directions() const override {
+    prt::DirectionSet set = prt::gauss_product_sphere(6);
+#ifdef PRT_BUG_WEIGHTS
+    set.weights *= 2.0;
+#endif
+    return set;
+  }
+  std::vector<int> coefficient_bands() const override {
+    std::vector<int> bands{0, 1, 1, 1, 2, 2, 2, 2, 2};
+    if (drop_) bands.erase(bands.begin());
+    return bands;
+  }
+  bool can_rotate() const override { return true; }
+  Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& r) const override {
+    Eigen::MatrixXd m = prt::sh::rotation(3, r);
+#ifdef PRT_BUG_REFLECTION
+    // Mirror z after rotating: (-1)^(l+m) per coefficient, a reflection.
+    for (int l = 0, i = 0; l < 3; ++l)
+      for (int k = -l; k <= l; ++k, ++i) m.row(i) *= ((l + k) % 2 == 0) ? 1.0 : -1.0;
+#endif
+    return drop_ ? Eigen::MatrixXd(m.bottomRightCorner(8, 8)) : m;
+  }
+
+ private:
+  bool drop_;
+};
+
+}  // namespace
+
+PRT_EXPORT_PLUGIN(VariantBasis, "variant")
