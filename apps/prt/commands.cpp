@@ -83,7 +83,7 @@ int render(Context& context, const RenderArgs& args) {
     clock = Stopwatch();
     const BakeData data = read_bake(bake_file);
     times.add("read bake file", clock.seconds());
-    result = render(scene, data, context.registry, times);
+    result = render(scene, data, context.registry, times, {context.quiet});
     if (args.compare) {
       const Rendered truth =
           render_ground_truth(scene, data.mesh, context.registry, {context.quiet}, times);

@@ -39,6 +39,33 @@ void RunOptions::message(const std::string& text) const {
     std::printf("%s\n", text.c_str());
 }
 
+void RunOptions::warn(const std::string& text) const {
+  if (log)
+    log("warning: " + text);
+  else
+    std::fprintf(stderr, "prt: warning: %s\n", text.c_str());
+}
+
+std::string under_resolved_light(const Eigen::MatrixX3d& light, const std::vector<int>& bands) {
+  if (bands.size() != static_cast<std::size_t>(light.rows()) || bands.empty()) return "";
+  const int top = *std::max_element(bands.begin(), bands.end());
+  if (top == 0) return "";
+  double band0 = 0, band_top = 0;
+  for (std::size_t i = 0; i < bands.size(); ++i) {
+    const double energy = light.row(Eigen::Index(i)).squaredNorm();
+    if (bands[i] == 0) band0 += energy;
+    if (bands[i] == top) band_top += energy;
+  }
+  if (!(band_top > 0.6 * band0)) return "";
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "the light's top band (l = %d) holds %.0f%% of band 0's energy: the light basis "
+                "is too small for this light, which rings, and a glossy lobe shows the rings as "
+                "dark seams and blotches; raise [basis] order",
+                top, 100 * band_top / std::max(band0, 1e-300));
+  return text;
+}
+
 namespace {
 
 std::string transport_description(const SceneSpec& scene, const DirectionSet& set) {
@@ -448,7 +475,7 @@ RenderInput Relighting::input(const CompressedTransfer& transfer, const Relit& r
 }
 
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
-                StageTimes& times) {
+                StageTimes& times, const RunOptions& options) {
   Stopwatch clock;
   const Relighting relighting(scene, data, registry);
   PluginChoice renderer_choice = scene.renderer;
@@ -461,6 +488,11 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   const Eigen::MatrixX3d light = relighting.light(environment);
   const Camera camera = scene.make_camera(data.mesh);
   times.add("project light", clock.seconds());
+  if (data.transfer.glossy())
+    if (const std::string warning =
+            under_resolved_light(light, relighting.basis().coefficient_bands());
+        !warning.empty())
+      options.warn(warning);
 
   clock = Stopwatch();
   Rendered out;

@@ -41,7 +41,15 @@ struct RunOptions {
   // Where messages go (default: standard output unless quiet).
   std::function<void(const std::string&)> log;
   void message(const std::string& text) const;
+  // A warning: through `log` too, else "prt: warning: ..." on standard error.
+  void warn(const std::string& text) const;
 };
+
+// For glossy transfer: a warning when the light vector's top frequency band
+// holds more than 60% of band 0's energy (the light basis cannot hold
+// the light: it rings, and the glossy lobe shows the rings); empty otherwise
+// or for bases without bands.
+std::string under_resolved_light(const Eigen::MatrixX3d& light, const std::vector<int>& bands);
 
 // Everything a bake will do, decided and validated from the scene before any
 // ray is traced: the plug-ins (created, so their parameters are checked),
@@ -142,7 +150,7 @@ class Relighting {
 
 // Light projection -> per-cluster constants -> per-vertex sums -> image.
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
-                StageTimes& times);
+                StageTimes& times, const RunOptions& options = {});
 
 // Monte Carlo ground truth per vertex (v x 3, albedo included) under
 // `lighting` (the scene's map, or its band-limited reconstruction), toward
