@@ -129,7 +129,7 @@ void print_error_budget(const SceneSpec& scene, const BakeData& data,
   const Eigen::MatrixX3f exact =
       relighting.relight(exact_form(data.transfer), light, camera).vertex_radiance;
   const double full = vertex_error(compressed, truth).rms;
-  std::printf("error budget (RMS per vertex):\n");
+  std::printf("error budget (per-vertex RMS):\n");
   for (const auto& [what, error] :
        {std::pair{"light truncation (band-limited vs full ground truth)",
                   vertex_error(limited_truth, truth).rms},
@@ -197,6 +197,15 @@ int compress(Context& context, const CompressArgs& args) {
   return 0;
 }
 
+// "sh 1.0.0 (order = 6)", every parameter on the one line ("a = 1, b = 2").
+std::string one_line(const PluginRecord& plugin) {
+  std::string parameters = plugin.parameters;
+  while (!parameters.empty() && parameters.back() == '\n') parameters.pop_back();
+  for (std::size_t at; (at = parameters.find('\n')) != std::string::npos;)
+    parameters.replace(at, 1, ", ");
+  return plugin.name + " " + plugin.version + (parameters.empty() ? "" : " (" + parameters + ")");
+}
+
 int info(const std::string& file) {
   const BakeData data = read_bake(file);
   const CompressedTransfer& c = data.compressed;
@@ -205,13 +214,11 @@ int info(const std::string& file) {
             << "mesh:         " << data.mesh.vertex_count() << " vertices, "
             << data.mesh.triangle_count() << " triangles\n"
             << "transport:    " << data.transport << "\n"
-            << "basis:        " << data.basis.name << " " << data.basis.version << " ("
-            << data.basis.parameters.substr(
-                   0, data.basis.parameters.size() ? data.basis.parameters.size() - 1 : 0)
-            << ")\n"
+            << "basis:        " << one_line(data.basis) << "\n"
+            << (data.transfer.glossy() ? "exit basis:   " + one_line(data.exit) + "\n" : "")
             << "transfer:     " << data.transfer.kind << ", "
             << describe_shape(data.transfer.vertices(), data.transfer.dimension()) << "\n"
-            << "compressor:   " << data.compressor.name << " " << data.compressor.version << ": "
+            << "compressor:   " << one_line(data.compressor) << ": "
             << c.clusters() << " cluster(s), " << c.components << " component(s), "
             << c.stored_floats() << " floats stored\n"
             << "albedo:       " << data.albedo.transpose() << "\n"

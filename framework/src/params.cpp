@@ -154,6 +154,11 @@ const SourceLocation& Params::location(const std::string& key) const {
   return it == entries_.end() ? section_ : it->second.where;
 }
 
+// "an integer", "a real": the article a type name takes.
+static std::string article(const std::string& noun) {
+  return noun.find_first_of("aeiou") == 0 ? "an " : "a ";
+}
+
 void Params::fail(const std::string& key, const std::string& message) const {
   // The key leads, so a message read away from its scene still says which one.
   throw Error(location(key), "parameter \"" + key + "\": " + message);
@@ -179,7 +184,8 @@ void Params::validate(const ParamSchema& schema) {
           what + " must be " +
               (spec->type == ParamType::reals ? std::string("a number or a list of ") +
                                                     std::to_string(spec->list_length) + " numbers"
-                                              : std::string("a ") + to_string(spec->type)) +
+                                              : article(to_string(spec->type)) +
+                                                    to_string(spec->type)) +
               ", got " + value_type_name(entry.value) + " " + describe_value(entry.value));
     };
     auto check_range = [&](double x) {

@@ -252,7 +252,10 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     plan.basis->fit({&mesh, &set, &result.visibility});
     times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
   }
-  if (plan.keep_visibility && (!plan.glossy || plan.subsurface)) {
+  // Projected from the bits when they were kept (or traced before by a sweep).
+  const bool have_bits = result.visibility.vertices() == mesh.vertex_count() &&
+                         result.visibility.vertices() > 0;
+  if (have_bits && (!plan.glossy || plan.subsurface)) {
     clock = Stopwatch();
     result.transfer = project_visibility(mesh, set, result.visibility, *plan.basis);
     times.add("project", clock.seconds());

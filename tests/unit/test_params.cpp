@@ -58,8 +58,8 @@ TEST_CASE("wrong types, ranges and choices are rejected with the location", "[pa
     REQUIRE_THROWS_WITH(p.validate(test_schema()),
                         Catch::Contains("scene.toml:3:5") && Catch::Contains(fragment));
   };
-  fails_with("order", std::string("ten"), "must be a integer");
-  fails_with("order", 2.5, "must be a integer");
+  fails_with("order", std::string("ten"), "must be an integer");
+  fails_with("order", 2.5, "must be an integer");
   fails_with("order", std::int64_t(31), "out of range [1, 30]");
   fails_with("order", std::int64_t(0), "out of range");
   fails_with("window", std::string("x"), "must be a real");

@@ -28,43 +28,81 @@ constexpr std::array<ParamSpecRecord, 10> clustering() {
                   "superclusters: constant registers; (n'+1) per cluster")};
 }
 
-inline clustering::LbgOptions lbg_options(const Params& p, const Mesh* mesh) {
+// A choice parameter as an enum: every value the schema lists maps to one
+// enumerator; anything else is refused naming the key (no silent default).
+template <class Enum>
+Enum choose(const Params& p, const std::string& key,
+            std::initializer_list<std::pair<const char*, Enum>> values) {
+  const std::string value = p.get_string(key);
+  for (const auto& [name, e] : values)
+    if (value == name) return e;
+  p.fail(key, "unknown value \"" + value + "\"");
+}
+
+// Read once, in the constructor, so a bad value is found before any ray.
+inline clustering::LbgOptions lbg_options(const Params& p) {
   clustering::LbgOptions o;
   o.clusters = static_cast<int>(p.get_int("clusters"));
-  o.init = p.get_string("init") == "kmeans++" ? clustering::Init::kmeans_plus_plus
-                                              : clustering::Init::hyperbox;
+  o.init = choose<clustering::Init>(
+      p, "init",
+      {{"kmeans++", clustering::Init::kmeans_plus_plus}, {"hyperbox", clustering::Init::hyperbox}});
   o.max_iterations = static_cast<int>(p.get_int("iterations"));
   o.tolerance = p.get_real("tolerance");
   o.seed = static_cast<std::uint64_t>(p.get_int("seed"));
   o.alpha = p.get_real("alpha");
+  return o;
+}
+
+// The options with the mesh of this encode (geometry-coherent clustering needs one).
+inline clustering::LbgOptions with_mesh(clustering::LbgOptions o, const Params& p,
+                                        const Mesh* mesh) {
   o.mesh = mesh;
   if (o.alpha > 0 && !mesh) p.fail("alpha", "geometry-coherent clustering needs a mesh");
   return o;
 }
 
+// The coherence passes a scene asks for, read once in the constructor.
+struct CoherenceOptions {
+  bool reclassify = false;
+  double error_budget = 0.05;
+  bool supercluster = false;
+  clustering::SuperclusterMethod method = clustering::SuperclusterMethod::greedy_merge;
+  int registers = 256;
+};
+
+inline CoherenceOptions coherence_options(const Params& p) {
+  CoherenceOptions o;
+  o.reclassify = p.get_bool("reclassify");
+  o.error_budget = p.get_real("error_budget");
+  enum class Grouping { none, greedy, chen };
+  const Grouping grouping = choose<Grouping>(
+      p, "supercluster",
+      {{"none", Grouping::none}, {"greedy", Grouping::greedy}, {"chen", Grouping::chen}});
+  o.supercluster = grouping != Grouping::none;
+  o.method = grouping == Grouping::chen ? clustering::SuperclusterMethod::chen_selection
+                                        : clustering::SuperclusterMethod::greedy_merge;
+  o.registers = static_cast<int>(p.get_int("registers"));
+  return o;
+}
+
 // Reclassification, then superclustering, as the scene asks.
-inline void improve_coherence(const Params& p, const MatrixXfRow& x, const Mesh* mesh,
-                              CompressedTransfer& compressed) {
-  const bool reclassify = p.get_bool("reclassify");
-  const std::string method = p.get_string("supercluster");
+inline void improve_coherence(const CoherenceOptions& o, const Params& p, const MatrixXfRow& x,
+                              const Mesh* mesh, CompressedTransfer& compressed) {
   if (!mesh) {
-    if (reclassify || method != "none")
-      p.fail(reclassify ? "reclassify" : "supercluster", "cluster coherence needs the mesh");
+    if (o.reclassify || o.supercluster)
+      p.fail(o.reclassify ? "reclassify" : "supercluster", "cluster coherence needs the mesh");
     return;
   }
-  if (reclassify || method != "none")
+  if (o.reclassify || o.supercluster)
     compressed.statistics["overdraw_before_coherence"] =
         average_overdraw(*mesh, compressed.cluster_of_vertex);
-  if (reclassify)
-    compressed.statistics["reclassified_vertices"] = static_cast<double>(
-        clustering::reclassify(x, *mesh, p.get_real("error_budget"), compressed));
-  if (method != "none") {
+  if (o.reclassify)
+    compressed.statistics["reclassified_vertices"] =
+        static_cast<double>(clustering::reclassify(x, *mesh, o.error_budget, compressed));
+  if (o.supercluster) {
     const int per_cluster = compressed.components + 1;  // RGB registers: c_0 .. c_n'
-    const int cap = std::max<int>(1, static_cast<int>(p.get_int("registers")) / per_cluster);
-    clustering::supercluster(*mesh, cap,
-                             method == "chen" ? clustering::SuperclusterMethod::chen_selection
-                                              : clustering::SuperclusterMethod::greedy_merge,
-                             compressed);
+    const int cap = std::max<int>(1, o.registers / per_cluster);
+    clustering::supercluster(*mesh, cap, o.method, compressed);
     compressed.statistics["superclusters"] =
         1.0 + *std::max_element(compressed.supercluster_of_cluster.begin(),
                                 compressed.supercluster_of_cluster.end());
@@ -72,12 +110,13 @@ inline void improve_coherence(const Params& p, const MatrixXfRow& x, const Mesh*
 }
 
 // The compressed form of clusters and their models, then the coherence passes.
-inline CompressedTransfer finish(const std::string& name, const Params& p, const MatrixXfRow& x,
+inline CompressedTransfer finish(const std::string& name, const CoherenceOptions& o,
+                                 const Params& p, const MatrixXfRow& x,
                                  const std::vector<std::int32_t>& labels,
                                  const std::vector<clustering::ClusterModel>& models,
                                  const Mesh* mesh) {
   CompressedTransfer c = clustering::assemble(x, labels, models, name);
-  improve_coherence(p, x, mesh, c);
+  improve_coherence(o, p, x, mesh, c);
   return c;
 }
 

@@ -21,27 +21,34 @@ class ClusteredPca final : public Compressor {
             integer("adaptive_iterations", "5", 1, 1000, "adaptive: redistribution passes")});
   }
 
-  explicit ClusteredPca(const Params& params) : params_(params) {}
+  // Every parameter is read here, so a bad one is refused before any ray.
+  explicit ClusteredPca(const Params& params)
+      : params_(params), coherence_(compressor_params::coherence_options(params)) {
+    options_.lbg = compressor_params::lbg_options(params);
+    options_.method = compressor_params::choose<clustering::Method>(
+        params, "method",
+        {{"static", clustering::Method::static_pca},
+         {"iterative", clustering::Method::iterative},
+         {"adaptive", clustering::Method::adaptive}});
+    options_.components = static_cast<int>(params.get_int("components"));
+    options_.iterations_per_component =
+        static_cast<int>(params.get_int("iterations_per_component"));
+    options_.adaptive_iterations = static_cast<int>(params.get_int("adaptive_iterations"));
+  }
 
   CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
     compressor_params::require_finite(signal);
-    clustering::CpcaOptions options;
-    options.lbg = compressor_params::lbg_options(params_, mesh);
-    const std::string method = params_.get_string("method");
-    options.method = method == "iterative"  ? clustering::Method::iterative
-                     : method == "adaptive" ? clustering::Method::adaptive
-                                            : clustering::Method::static_pca;
-    options.components = static_cast<int>(params_.get_int("components"));
-    options.iterations_per_component =
-        static_cast<int>(params_.get_int("iterations_per_component"));
-    options.adaptive_iterations = static_cast<int>(params_.get_int("adaptive_iterations"));
+    clustering::CpcaOptions options = options_;
+    options.lbg = compressor_params::with_mesh(options_.lbg, params_, mesh);
     const auto result = clustering::cpca(signal.coefficients, options);
-    return compressor_params::finish("cpca", params_, signal.coefficients, result.labels,
+    return compressor_params::finish("cpca", coherence_, params_, signal.coefficients, result.labels,
                                      result.models, mesh);
   }
 
  private:
-  Params params_;
+  Params params_;  // for located errors at encode time (a missing mesh)
+  compressor_params::CoherenceOptions coherence_;
+  clustering::CpcaOptions options_;
 };
 
 }  // namespace prt

@@ -11,21 +11,26 @@ class VectorQuantizer final : public Compressor {
       "vector quantisation by LBG (hyper-box or k-means++ start, null-cluster splitting)";
   static constexpr auto parameters() { return compressor_params::clustering(); }
 
-  explicit VectorQuantizer(const Params& params) : params_(params) {}
+  explicit VectorQuantizer(const Params& params)
+      : params_(params),
+        coherence_(compressor_params::coherence_options(params)),
+        lbg_(compressor_params::lbg_options(params)) {}
 
   CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
     compressor_params::require_finite(signal);
     const auto clusters =
-        clustering::lbg(signal.coefficients, compressor_params::lbg_options(params_, mesh));
+        clustering::lbg(signal.coefficients, compressor_params::with_mesh(lbg_, params_, mesh));
     std::vector<clustering::ClusterModel> models(clusters.means.rows());
     for (std::size_t k = 0; k < models.size(); ++k)
       models[k] = {clusters.means.row(k), clustering::RowMatrixXd(0, clusters.means.cols()), {}};
-    return compressor_params::finish("vq", params_, signal.coefficients, clusters.labels, models,
+    return compressor_params::finish("vq", coherence_, params_, signal.coefficients, clusters.labels, models,
                                      mesh);
   }
 
  private:
   Params params_;
+  compressor_params::CoherenceOptions coherence_;
+  clustering::LbgOptions lbg_;
 };
 
 }  // namespace prt

@@ -1,0 +1,84 @@
+// The bake as a plan and stages: everything is validated before a ray, and a
+// sweep's reuse of traced rays gives the same transfer as a fresh bake.
+#include <catch2/catch.hpp>
+#include <cstdio>
+
+#include "prt/pipeline.hpp"
+#include "prt/progress.hpp"
+#include "prt/registry.hpp"
+#include "prt/transport.hpp"
+
+using namespace prt;
+
+namespace {
+
+const char* kScene = R"(
+[mesh]
+generate = "open-box"
+detail = 1
+[material]
+brdf = "%s"
+[transport]
+directions = "cubemap"
+rays = 384
+[basis]
+%s
+[compressor]
+plugin = "cpca"
+clusters = 4
+components = 2
+[lighting]
+constant = [1, 1, 1]
+%s
+)";
+
+SceneSpec scene(PluginRegistry& registry, const char* brdf, const char* basis,
+                const char* lighting = "") {
+  char text[1024];
+  std::snprintf(text, sizeof text, kScene, brdf, basis, lighting);
+  return SceneSpec::parse(text, "pipeline.toml", registry);
+}
+
+}  // namespace
+
+TEST_CASE("a sweep's traced rays give the same transfer as a fresh bake", "[pipeline]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  for (const char* brdf : {"lambert", "phong"}) {
+    for (const char* basis : {"plugin = \"sh\"\norder = 4", "plugin = \"eigen\"\nd = 8"}) {
+      INFO(brdf << ", " << basis);
+      const SceneSpec s = scene(registry, brdf, basis);
+      StageTimes times;
+      const BakeData fresh = bake(s, registry, {true}, times);
+      const TransportResult traced = trace_scene(s, {true});
+      RunOptions reuse{true, &traced};
+      reuse.compress = false;
+      const BakeData swept = bake(s, registry, reuse, times);
+      REQUIRE(swept.transfer.dimension() == fresh.transfer.dimension());
+      REQUIRE(swept.transfer.vertices() == fresh.transfer.vertices());
+      CHECK((swept.transfer.coefficients - fresh.transfer.coefficients).cwiseAbs().maxCoeff() <
+            1e-6f * std::max(1.f, fresh.transfer.coefficients.cwiseAbs().maxCoeff()));
+      // Without compression the bake keeps the exact transfer.
+      CHECK(swept.compressed.decode() == swept.transfer.coefficients);
+      CHECK(fresh.compressed.clusters() == 4);
+    }
+  }
+  Progress::set_enabled(true);
+}
+
+TEST_CASE("the plan refuses what cannot work before any ray", "[pipeline]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  // A window needs frequency bands; Haar has none.
+  CHECK_THROWS_WITH(
+      plan_bake(scene(registry, "lambert", "plugin = \"haar\"\nresolution = 4", "window = \"hanning\""),
+                registry),
+      Catch::Contains("pipeline.toml:") && Catch::Contains("window") &&
+          Catch::Contains("coefficient_bands"));
+  // A non-linear approximation replaces compression: an exact compressor only.
+  CHECK_THROWS_WITH(
+      plan_bake(scene(registry, "lambert", "plugin = \"haar\"\nresolution = 4\nk = 8"), registry),
+      Catch::Contains("exact compressor") && Catch::Contains("cpca"));
+  CHECK_NOTHROW(plan_bake(scene(registry, "lambert", "plugin = \"sh\"\norder = 3",
+                                "window = \"hanning\""),
+                          registry));
+}
