@@ -142,27 +142,8 @@ void print_error_budget(const SceneSpec& scene, const BakeData& data,
 
 // "key=value" from the command line, typed as TOML would type the value.
 void parse_parameter(const std::string& text, std::size_t index, Params& params) {
-  const auto equals = text.find('=');
-  const SourceLocation where{"command line parameter " + std::to_string(index + 1)};
-  if (equals == std::string::npos || equals == 0)
-    throw Error(where, "expected key=value, got \"" + text + "\"");
-  const std::string key = text.substr(0, equals), value = text.substr(equals + 1);
-  char* end = nullptr;
-  if (value == "true" || value == "false") {
-    params.set(key, value == "true", where);
-    return;
-  }
-  const long long integer = std::strtoll(value.c_str(), &end, 10);
-  if (!value.empty() && *end == '\0') {
-    params.set(key, static_cast<std::int64_t>(integer), where);
-    return;
-  }
-  const double real = std::strtod(value.c_str(), &end);
-  if (!value.empty() && *end == '\0') {
-    params.set(key, real, where);
-    return;
-  }
-  params.set(key, value, where);
+  parse_assignment(text, SourceLocation{"command line parameter " + std::to_string(index + 1)},
+                   params);
 }
 
 int compress(Context& context, const CompressArgs& args) {

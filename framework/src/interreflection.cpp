@@ -1,4 +1,5 @@
 #include "prt/interreflection.hpp"
+#include "prt/ground_truth.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -116,24 +116,15 @@ const char* value_type_name(const ParamValue& value) {
 // Parses a schema's textual default into a value of the spec's type.
 ParamValue parse_default(const ParamSpecRecord& spec) {
   const std::string text = spec.default_value;
-  switch (spec.type) {
-    case ParamType::boolean:
-      return text == "true";
-    case ParamType::integer:
-      return static_cast<std::int64_t>(std::stoll(text));
-    case ParamType::real:
-      return std::stod(text);
-    case ParamType::reals: {
-      std::vector<double> values;
-      for (const auto& part : split(text, ',')) values.push_back(std::stod(part));
-      if (values.size() == 1 && spec.list_length > 1) values.resize(spec.list_length, values[0]);
-      return values;
-    }
-    case ParamType::string:
-    case ParamType::path:
-      return text;
-  }
-  return text;
+  if (spec.type == ParamType::string || spec.type == ParamType::path) return text;
+  // A list default is written "0.1,0.3" in the schema: the parser reads [0.1,0.3].
+  ParamValue value = parse_value(spec.type == ParamType::reals ? "[" + text + "]" : text);
+  if (auto* i = std::get_if<std::int64_t>(&value); i && spec.type == ParamType::real)
+    value = static_cast<double>(*i);
+  if (auto* list = std::get_if<std::vector<double>>(&value);
+      list && list->size() == 1 && spec.list_length > 1)
+    list->resize(spec.list_length, (*list)[0]);
+  return value;
 }
 
 std::string range_text(const ParamSpecRecord& spec) {

@@ -1,4 +1,5 @@
 #include "prt/pipeline.hpp"
+#include "prt/ground_truth.hpp"
 
 #include <unistd.h>
 

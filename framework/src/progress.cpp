@@ -9,7 +9,14 @@ namespace prt {
 
 namespace {
 std::atomic<bool> enabled{true};
+std::mutex sink_mutex;
+ProgressSink sink;  // null: draw_bar
 }  // namespace
+
+void Progress::set_sink(ProgressSink new_sink) {
+  std::lock_guard lock(sink_mutex);
+  sink = std::move(new_sink);
+}
 
 void Progress::set_enabled(bool on) {
   enabled = on;
@@ -57,21 +64,33 @@ void Progress::finish() {
 }
 
 void Progress::draw(bool final) {
-  const double elapsed =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  const double done = done_.load();
-  const double fraction = total_ > 0 ? std::min(1.0, done / total_) : 1.0;
-  const double rate = elapsed > 0 ? (unit_.empty() ? done : work_.load()) / elapsed : 0.0;
-  const double item_rate = elapsed > 0 ? done / elapsed : 0.0;
-  const double eta = (item_rate > 0 && fraction < 1) ? (total_ - done) / item_rate : 0.0;
+  ProgressReport r;
+  r.label = label_;
+  r.unit = unit_.empty() ? "items" : unit_;
+  r.elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  r.done = done_.load();
+  r.total = total_;
+  r.rate = r.elapsed > 0 ? (unit_.empty() ? r.done : work_.load()) / r.elapsed : 0.0;
+  const double item_rate = r.elapsed > 0 ? r.done / r.elapsed : 0.0;
+  r.eta = (item_rate > 0 && r.done < r.total) ? (r.total - r.done) / item_rate : 0.0;
+  r.final = final;
+  std::lock_guard lock(sink_mutex);
+  if (sink)
+    sink(r);
+  else
+    draw_bar(r);
+}
+
+void Progress::draw_bar(const ProgressReport& r) {
+  const double fraction = r.total > 0 ? std::min(1.0, r.done / r.total) : 1.0;
   const int width = 30, filled = static_cast<int>(std::lround(fraction * width));
   std::string bar(filled, '#');
   bar.resize(width, '.');
   const bool tty = isatty(2);
   std::fprintf(stderr, "%s%-22s [%s] %5.1f%%  %.3g %s/s  %s %.1fs%s", tty ? "\r" : "",
-               label_.c_str(), bar.c_str(), 100.0 * fraction, rate,
-               unit_.empty() ? "items" : unit_.c_str(), final ? "took" : "ETA",
-               final ? elapsed : eta, (final || !tty) ? "\n" : "");
+               r.label.c_str(), bar.c_str(), 100.0 * fraction, r.rate, r.unit.c_str(),
+               r.final ? "took" : "ETA", r.final ? r.elapsed : r.eta,
+               (r.final || !tty) ? "\n" : "");
   std::fflush(stderr);
 }
 

@@ -139,6 +139,33 @@ ParamValue to_value(const toml::node& node, const SourceLocation& where, const s
   throw Error(where, "parameter \"" + key + "\": tables and dates are not parameter values");
 }
 
+}  // namespace
+
+// Here, beside the scene parser, so that both type values with the same toml++.
+ParamValue parse_value(const std::string& text) {
+  if (text.find_first_of("\n\r") == std::string::npos) {
+    try {
+      const toml::table table = toml::parse("value = " + text);
+      if (table.size() == 1)
+        if (const toml::node* node = table.get("value"))
+          if (!node->is_table() && !node->is_date() && !node->is_time() && !node->is_date_time())
+            return to_value(*node, SourceLocation{}, "value");
+    } catch (const toml::parse_error&) {
+    } catch (const Error&) {  // a list of non-numbers, a broken parser assumption
+    }
+  }
+  return text;
+}
+
+void parse_assignment(const std::string& text, const SourceLocation& where, Params& params) {
+  const auto equals = text.find('=');
+  if (equals == std::string::npos || equals == 0)
+    throw Error(where, "expected key=value, got \"" + text + "\"");
+  params.set(text.substr(0, equals), parse_value(text.substr(equals + 1)), where);
+}
+
+namespace {
+
 Params read_table(const toml::table* table, const SourceLocation& section_where,
                   const fs::path& file, const std::string& skip_key = "") {
   Params params(section_where);
@@ -163,13 +190,14 @@ void resolve_paths(Params& params, const ParamSchema& schema, const SceneSpec& s
     std::error_code error;
     const auto status = fs::status(resolved, error);
     if (!fs::exists(status))
-      params.fail(spec.name, schema.owner + ": " + spec.name + " \"" + value +
-                                 "\" not found (looked for " + resolved.string() + ")");
+      throw Error(params.location(spec.name), schema.owner + ": " + spec.name + " \"" + value +
+                                                  "\" not found (looked for " +
+                                                  resolved.string() + ")");
     if (!fs::is_regular_file(status))
-      params.fail(spec.name, schema.owner + ": " + spec.name + " \"" + value + "\" (" +
-                                 resolved.string() + ") is " +
-                                 (fs::is_directory(status) ? "a directory" : "not a regular file") +
-                                 "; name a file");
+      throw Error(params.location(spec.name),
+                  schema.owner + ": " + spec.name + " \"" + value + "\" (" + resolved.string() +
+                      ") is " + (fs::is_directory(status) ? "a directory" : "not a regular file") +
+                      "; name a file");
     params.set(spec.name, resolved.string(), params.location(spec.name));
   }
 }

@@ -66,12 +66,12 @@ scene glossy_haar 'brdf = "phong"
 diffuse = 0.4
 specular = 0.6
 exponent = 12' 'plugin = "haar"
-resolution = 8
+resolution = 4
 [exit]
 plugin = "hsh"
-order = 4' 'plugin = "pca"
+order = 3' 'plugin = "pca"
 components = 8'
-sed -i 's/^rays = 512$/directions = "cubemap"\nrays = 384/' glossy_haar.toml
+sed -i 's/^rays = 512$/directions = "cubemap"\nrays = 96/' glossy_haar.toml
 
 check_match() {  # label, cpu.png, gl.png
   line=$("$prt" image-diff "$2" "$3")

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "prt/environment.hpp"
+#include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
 #include "prt/sh.hpp"
 #include "prt/subsurface.hpp"

@@ -1,6 +1,7 @@
 // The bake as a plan and stages: everything is validated before a ray, and a
 // sweep's reuse of traced rays gives the same transfer as a fresh bake.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cstdio>
 
 #include "prt/pipeline.hpp"
@@ -81,4 +82,26 @@ TEST_CASE("the plan refuses what cannot work before any ray", "[pipeline]") {
   CHECK_NOTHROW(plan_bake(scene(registry, "lambert", "plugin = \"sh\"\norder = 3",
                                 "window = \"hanning\""),
                           registry));
+}
+
+TEST_CASE("progress and messages reach the app's callbacks, not the terminal", "[pipeline]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  std::vector<ProgressReport> reports;
+  std::vector<std::string> messages;
+  Progress::set_enabled(true);
+  Progress::set_sink([&](const ProgressReport& r) { reports.push_back(r); });
+  RunOptions options;
+  options.log = [&](const std::string& text) { messages.push_back(text); };
+  StageTimes times;
+  const BakeData data = bake(scene(registry, "lambert", "plugin = \"sh\"\norder = 3"), registry,
+                             options, times);
+  Progress::set_sink(nullptr);
+  const auto final_bake = std::find_if(reports.begin(), reports.end(), [](const auto& r) {
+    return r.label == "bake transfer" && r.final;
+  });
+  REQUIRE(final_bake != reports.end());
+  CHECK(final_bake->done == double(data.mesh.vertex_count()));
+  CHECK(final_bake->unit == "rays");
+  REQUIRE(!messages.empty());
+  CHECK(messages.back().find("SE") != std::string::npos);
 }

@@ -4,6 +4,7 @@
 
 #include "../common/scenes.hpp"
 #include "prt/environment.hpp"
+#include "prt/ground_truth.hpp"
 #include "prt/mesh.hpp"
 #include "prt/sh.hpp"
 #include "prt/transport.hpp"

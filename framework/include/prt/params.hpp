@@ -72,4 +72,13 @@ std::size_t edit_distance(const std::string& a, const std::string& b);
 // The closest candidate within a small edit distance, or "" if none is close.
 std::string closest_match(const std::string& word, const std::vector<std::string>& candidates);
 
+// The one parser of parameter values: a value written as in a scene file
+// (true, 12, 0.5, [1, 2], "text") is typed exactly as the scene parser types
+// it; anything TOML does not read as one value (a bare word such as
+// per-cluster) is a string. Used for the command line, sweeps and schema
+// defaults alike.
+ParamValue parse_value(const std::string& text);
+// "key=value" (command line, --bases entries) into `params`, located at `where`.
+void parse_assignment(const std::string& text, const SourceLocation& where, Params& params);
+
 }  // namespace prt

@@ -2,13 +2,29 @@
 #pragma once
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <mutex>
 #include <string>
 
 namespace prt {
 
+// One progress update, as a sink receives it.
+struct ProgressReport {
+  std::string label, unit;   // unit: of the rate ("rays"), or "items"
+  double done = 0, total = 0;
+  double rate = 0;           // units per second
+  double elapsed = 0, eta = 0;  // seconds
+  bool final = false;        // the last report of this bar
+};
+using ProgressSink = std::function<void(const ProgressReport&)>;
+
 class Progress {
  public:
+  // Where every bar of the process reports: the app's callback, or (null,
+  // the default) a bar on standard error, redrawn in place on a terminal.
+  static void set_sink(ProgressSink sink);
+  static void draw_bar(const ProgressReport& report);
+
   // Counts `total` items; the rate shown is of `rate_unit` (e.g. "rays"), fed
   // by the second argument of add(), or of the items when rate_unit is empty.
   // Quiet bars print nothing.

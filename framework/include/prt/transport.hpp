@@ -136,29 +136,6 @@ TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& directio
 // yardstick of the bake benchmark.
 std::uint64_t trace_only(const Mesh& mesh, const DirectionSet& directions, Progress* progress);
 
-// Cosine-weighted directions about a unit normal: sample(u1, u2) maps the unit
-// square to the hemisphere with density cos / pi (Malley's method). Shared by
-// the ground truth's direct light and its bounces.
-class CosineHemisphere {
- public:
-  explicit CosineHemisphere(const Eigen::Vector3d& normal);
-  Eigen::Vector3d sample(double u1, double u2) const;
-
- private:
-  Eigen::Vector3d normal_, tangent_, bitangent_;
-};
-
-// Ground truth: per-vertex exit radiance (v x 3) for albedo 1, by Monte Carlo
-// over the environment with cosine-weighted stratified samples and ray-cast
-// visibility; no basis involved.
-// For glossy materials `reflectance` (optional) gives pi * rho(in, out) at a
-// vertex for a world light direction, which replaces albedo 1.
-class Environment;
-using Reflectance = std::function<double(std::size_t vertex, const Eigen::Vector3d& light)>;
-Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
-                                       int samples, std::uint64_t seed, Progress* progress,
-                                       const Reflectance& reflectance = nullptr);
-
 // True where a ray along `direction` meets the side of triangle `t` that its
 // vertex normals face (interpolated at u, v).
 bool front_face(const Mesh& mesh, std::uint32_t t, float u, float v,

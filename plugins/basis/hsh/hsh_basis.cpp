@@ -31,9 +31,9 @@ class HemisphericalHarmonics final : public Basis {
 
   explicit HemisphericalHarmonics(const Params& params)
       : order_(static_cast<int>(params.get_int("order"))),
-        projection_(params.get_string("projection")) {
+        projection_(projection_of(params)) {
     const bool reduced = params.get_bool("reduced");
-    if (reduced && projection_ != "least-squares")
+    if (reduced && projection_ != Projection::least_squares)
       params.fail("reduced", "the reduced basis needs projection = \"least-squares\"");
     if (reduced && order_ < 2) params.fail("reduced", "the reduced basis needs order >= 2");
     ls_ = hemisphere::least_squares(order_, params.get_real("cutoff"),
@@ -58,15 +58,15 @@ class HemisphericalHarmonics final : public Basis {
     for (Eigen::Index k = 0; k < set.size(); ++k)
       if (set.directions(k, 2) <= 0) upper[k] = 0;
     const Eigen::MatrixXd b = upper.asDiagonal() * evaluate(set.directions);  // zero-hemisphere
-    if (projection_ == "least-squares") return b * ls_.inverse;  // A symmetric: (A^-1 b^T)^T
-    if (projection_ == "zero") return b;
+    if (projection_ == Projection::least_squares) return b * ls_.inverse;  // A symmetric
+    if (projection_ == Projection::zero) return b;
     // Reflection: the extended function's projection is 2 b on one parity, 0 on the other.
     Eigen::MatrixXd p = b;
     for (int i = 0; i < size(); ++i) {
       const int index = ls_.kept[i];
       const int l = static_cast<int>(std::sqrt(double(index)));
       const bool odd_parity = ((l + std::abs(index - l * (l + 1))) % 2) == 1;
-      p.col(i) *= (odd_parity == (projection_ == "odd")) ? 2.0 : 0.0;
+      p.col(i) *= (odd_parity == (projection_ == Projection::odd)) ? 2.0 : 0.0;
     }
     return p;
   }
@@ -78,8 +78,18 @@ class HemisphericalHarmonics final : public Basis {
   BasisState save() const override { return {{{"gram_inverse", ls_.inverse}}}; }
 
  private:
+  enum class Projection { least_squares, zero, odd, even };
+  static Projection projection_of(const Params& params) {
+    const std::string name = params.get_string("projection");
+    if (name == "least-squares") return Projection::least_squares;
+    if (name == "zero") return Projection::zero;
+    if (name == "odd") return Projection::odd;
+    if (name == "even") return Projection::even;
+    params.fail("projection", "unknown value \"" + name + "\"");
+  }
+
   int order_;
-  std::string projection_;
+  Projection projection_;
   hemisphere::LeastSquares ls_;
 };
 
