@@ -5,7 +5,6 @@
 // are appended to <out>/results.jsonl as each configuration finishes, so an
 // interrupted sweep resumes where it stopped; CSV, JSON and the report
 // (scripts/bench_report.py: plots, Pareto fronts, image strip) follow.
-#include <nlohmann/json.hpp>
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 

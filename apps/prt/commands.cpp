@@ -52,9 +52,8 @@ int bake(Context& context, const BakeArgs& args) {
 
 void parse_parameter(const std::string& text, std::size_t index, Params& params);
 
-void print_error_budget(const SceneSpec& scene, const BakeData& data,
-                        const Eigen::MatrixX3f& truth, const Eigen::MatrixX3f& compressed,
-                        Context& context, StageTimes& times);
+void print_error_budget(const SceneSpec& scene, const BakeData& data, const Eigen::MatrixX3f& truth,
+                        const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times);
 
 int render(Context& context, const RenderArgs& args) {
   Stopwatch clock;
@@ -114,9 +113,8 @@ int render(Context& context, const RenderArgs& args) {
 // (ground truth under the band-limited light against the full one), the
 // transfer's projection (exact PRT against the band-limited truth) and the
 // compression (compressed against exact PRT). RMS per vertex, as above.
-void print_error_budget(const SceneSpec& scene, const BakeData& data,
-                        const Eigen::MatrixX3f& truth, const Eigen::MatrixX3f& compressed,
-                        Context& context, StageTimes& times) {
+void print_error_budget(const SceneSpec& scene, const BakeData& data, const Eigen::MatrixX3f& truth,
+                        const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times) {
   const Relighting relighting(scene, data, context.registry);
   const Environment environment = scene.load_environment();
   const Eigen::MatrixX3d light = relighting.light(environment);
@@ -199,9 +197,9 @@ int info(const std::string& file) {
             << (data.transfer.glossy() ? "exit basis:   " + one_line(data.exit) + "\n" : "")
             << "transfer:     " << data.transfer.kind << ", "
             << describe_shape(data.transfer.vertices(), data.transfer.dimension()) << "\n"
-            << "compressor:   " << one_line(data.compressor) << ": "
-            << c.clusters() << " cluster(s), " << c.components << " component(s), "
-            << c.stored_floats() << " floats stored\n"
+            << "compressor:   " << one_line(data.compressor) << ": " << c.clusters()
+            << " cluster(s), " << c.components << " component(s), " << c.stored_floats()
+            << " floats stored\n"
             << "albedo:       " << data.albedo.transpose() << "\n"
             << "metrics:\n";
   for (const auto& [name, value] : data.metrics)

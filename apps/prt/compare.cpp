@@ -7,12 +7,12 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-#include <limits>
-#include <nlohmann/json.hpp>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "commands.hpp"
@@ -93,8 +93,7 @@ SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet&
       throw Error(where, "basis \"" + spec.name +
                              "\" lives on a cube map: set [transport] directions = \"cubemap\" so "
                              "one set of rays serves every basis");
-    spec.params.set("resolution",
-                    std::int64_t(std::lround(std::sqrt(double(set.size()) / 6.0))));
+    spec.params.set("resolution", std::int64_t(std::lround(std::sqrt(double(set.size()) / 6.0))));
   }
   spec.params.validate(d.schema());
   Params probe_params = spec.params;
@@ -154,8 +153,8 @@ int compare_bases(Context& context, const CompareArgs& args) {
     Row row;
     row.spec = specs[i].text;
     row.seconds = clock.seconds();
-    row.coefficients = data.compressed.sparse() ? data.compressed.components
-                                                : relighting.basis().size();
+    row.coefficients =
+        data.compressed.sparse() ? data.compressed.components : relighting.basis().size();
     row.bytes = 4 * data.compressed.stored_floats();
     if (!data.transfer.glossy())
       row.transport_error = transport_error(mesh, set, traced, data, relighting.basis());

@@ -2,11 +2,11 @@
 // SH evaluation and rotation against order, the hemispherical Gram matrix,
 // PCA/CPCA on degenerate inputs, float storage of the compressed form, and SH
 // ringing (negative radiance) of a sun 10^5 times the sky, with windows.
-#include <nlohmann/json.hpp>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 

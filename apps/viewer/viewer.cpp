@@ -119,8 +119,9 @@ Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camer
   const Eigen::MatrixX3f exact =
       relighting_->relight(encodings_[1].transfer, light, cam).vertex_radiance;
   const Eigen::MatrixX3f shown =
-      current_ == 1 ? exact
-                    : relighting_->relight(encodings_[current_].transfer, light, cam).vertex_radiance;
+      current_ == 1
+          ? exact
+          : relighting_->relight(encodings_[current_].transfer, light, cam).vertex_radiance;
   const float scale = std::max(1e-12f, exact.rowwise().norm().maxCoeff());
   Eigen::MatrixX3f colours(shown.rows(), 3);
   for (Eigen::Index p = 0; p < shown.rows(); ++p)

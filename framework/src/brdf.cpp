@@ -65,7 +65,7 @@ std::string Brdf::describe() const {
 }
 
 Eigen::MatrixXd brdf_incident_integrals(const Brdf& brdf, const Directions& exit_directions,
-                                       int incident_order, int resolution) {
+                                        int incident_order, int resolution) {
   const DirectionSet h = hemisphere::upper_quadrature(resolution);
   // Incident side: y_j(s) s_z w_s, so that F = rho * light is int rho y_j s_z ds.
   Eigen::MatrixXd light = sh::evaluate(incident_order, h.directions);

@@ -1,9 +1,8 @@
 #include "prt/compressor.hpp"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <set>
 
 namespace prt {

@@ -26,12 +26,13 @@ GlossyOperator GlossyOperator::make(const Brdf& brdf, const Basis& exit_basis, i
   const Eigen::MatrixXd projection = exit_basis.projection_matrix(h);  // q x N_r
   if (projection.rows() != h.size() || projection.cols() != exit_basis.size() ||
       !projection.allFinite())
-    throw Error("glossy transfer: the exit basis gave a projection matrix of the wrong shape or "
-                "with NaN/Inf values");
+    throw Error(
+        "glossy transfer: the exit basis gave a projection matrix of the wrong shape or "
+        "with NaN/Inf values");
   GlossyOperator op;
   op.incident_order = incident_order;
-  op.matrix =
-      projection.transpose() * brdf_incident_integrals(brdf, h.directions, incident_order, resolution);
+  op.matrix = projection.transpose() *
+              brdf_incident_integrals(brdf, h.directions, incident_order, resolution);
   if (least_squares) op.matrix *= hemisphere::least_squares(incident_order, cutoff).inverse;
   op.constant = projection.colwise().sum().transpose();
   return op;
@@ -85,7 +86,8 @@ TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
           RowMatrix m(n_r, n_i);
           if (method == GlossyMethod::rotate_sh) {
             visible_incident.resize(count, incident.cols());
-            for (Eigen::Index j = 0; j < count; ++j) visible_incident.row(j) = incident.row(seen[j]);
+            for (Eigen::Index j = 0; j < count; ++j)
+              visible_incident.row(j) = incident.row(seen[j]);
             m.noalias() = glossy.matrix * (sh::rotation(order, frames[v]) *
                                            (visible_incident.transpose() * visible_light));
           } else {

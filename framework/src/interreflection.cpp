@@ -1,5 +1,4 @@
 #include "prt/interreflection.hpp"
-#include "prt/ground_truth.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -8,6 +7,7 @@
 #include <random>
 
 #include "prt/error.hpp"
+#include "prt/ground_truth.hpp"
 #include "prt/progress.hpp"
 
 namespace prt {

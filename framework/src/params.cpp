@@ -170,14 +170,13 @@ void Params::validate(const ParamSchema& schema) {
     }
     const std::string what = schema.owner + ": parameter \"" + key + "\"";
     auto wrong_type = [&] {
-      throw Error(
-          entry.where,
-          what + " must be " +
-              (spec->type == ParamType::reals ? std::string("a number or a list of ") +
-                                                    std::to_string(spec->list_length) + " numbers"
-                                              : article(to_string(spec->type)) +
-                                                    to_string(spec->type)) +
-              ", got " + value_type_name(entry.value) + " " + describe_value(entry.value));
+      throw Error(entry.where, what + " must be " +
+                                   (spec->type == ParamType::reals
+                                        ? std::string("a number or a list of ") +
+                                              std::to_string(spec->list_length) + " numbers"
+                                        : article(to_string(spec->type)) + to_string(spec->type)) +
+                                   ", got " + value_type_name(entry.value) + " " +
+                                   describe_value(entry.value));
     };
     auto check_range = [&](double x) {
       if (!std::isfinite(x) || x < spec->min || x > spec->max)

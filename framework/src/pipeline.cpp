@@ -1,5 +1,4 @@
 #include "prt/pipeline.hpp"
-#include "prt/ground_truth.hpp"
 
 #include <unistd.h>
 
@@ -12,6 +11,7 @@
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
+#include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
@@ -147,7 +147,8 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   BakePlan plan;
   PluginChoice basis = scene.basis, compressor = scene.compressor;
   plan.basis = registry.create<Basis>(basis.name, basis.params, basis.where);
-  plan.compressor = registry.create<Compressor>(compressor.name, compressor.params, compressor.where);
+  plan.compressor =
+      registry.create<Compressor>(compressor.name, compressor.params, compressor.where);
   plan.basis_record = record_of(scene.basis, registry, PluginKind::basis);
   plan.compressor_record = record_of(scene.compressor, registry, PluginKind::compressor);
   if (plan.basis->domain() != Domain::sphere)
@@ -202,8 +203,8 @@ TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const Direct
       throw Error("bake: the traced visibility does not match the scene's mesh and directions");
     return result;
   }
-  Progress progress("bake transfer", double(mesh.vertex_count()),
-                    transport.shadowed ? "rays" : "", options.quiet);
+  Progress progress("bake transfer", double(mesh.vertex_count()), transport.shadowed ? "rays" : "",
+                    options.quiet);
   return transport.keep_visibility
              ? diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress)
              : diffuse_transfer(mesh, set, *plan.basis, transport, &progress);
@@ -254,8 +255,8 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
   }
   // Projected from the bits when they were kept (or traced before by a sweep).
-  const bool have_bits = result.visibility.vertices() == mesh.vertex_count() &&
-                         result.visibility.vertices() > 0;
+  const bool have_bits =
+      result.visibility.vertices() == mesh.vertex_count() && result.visibility.vertices() > 0;
   if (have_bits && (!plan.glossy || plan.subsurface)) {
     clock = Stopwatch();
     result.transfer = project_visibility(mesh, set, result.visibility, *plan.basis);
@@ -330,8 +331,8 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   TransportResult traced = trace_stage(plan, data.mesh, set, options);
   const auto rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
-  data.transfer = transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times,
-                                 data.metrics);
+  data.transfer =
+      transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times, data.metrics);
 
   clock = Stopwatch();
   data.compressed = options.compress || plan.sparse_terms > 0
@@ -382,8 +383,7 @@ TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options) {
 
 namespace {
 
-void check_plugin_matches(const PluginRecord& baked, const PluginChoice& wanted,
-                          const char* role) {
+void check_plugin_matches(const PluginRecord& baked, const PluginChoice& wanted, const char* role) {
   const std::string parameters = wanted.params.describe();
   if (baked.name == wanted.name && baked.parameters == parameters) return;
   auto first_line = [](const std::string& text) { return text.substr(0, text.find('\n')); };
@@ -435,8 +435,7 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
     exit_ = registry.create<Basis>(exit.name, exit.params, exit.where);
     exit_->load(data.exit_state);
     if (exit_->size() != data.transfer.exit_rows)
-      throw Error(exit.where, "the bake's transfer has " +
-                                  std::to_string(data.transfer.exit_rows) +
+      throw Error(exit.where, "the bake's transfer has " + std::to_string(data.transfer.exit_rows) +
                                   " exit rows, but exit basis \"" + exit.name + "\" has " +
                                   std::to_string(exit_->size()) + " functions; bake again");
     frames_ = tangent_frames(data.mesh);
@@ -539,7 +538,7 @@ Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
     Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
                       options.quiet);
     radiance = ground_truth_bounces(mesh, radiance, bounces, scene.bounce_albedo(), samples, seed,
-                                   &progress);
+                                    &progress);
   }
   const Eigen::Vector3f albedo = scene.albedo();
   for (int c = 0; c < 3; ++c) radiance.col(c) *= albedo[c];

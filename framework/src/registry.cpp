@@ -62,12 +62,12 @@ std::string build_key_difference(const std::string& plugin, const std::string& h
   };
   const auto p = parse(plugin), h = parse(host);
   for (const auto& [name, value] : h) {
-    const auto it = std::find_if(p.begin(), p.end(), [&](const auto& x) { return x.first == name; });
-    if (it == p.end())
-      return "has an old build key without \"" + name + "\" (host: " + value + ")";
+    const auto it =
+        std::find_if(p.begin(), p.end(), [&](const auto& x) { return x.first == name; });
+    if (it == p.end()) return "has an old build key without \"" + name + "\" (host: " + value + ")";
     if (it->second != value)
-      return "was built with " + name + " = " + it->second + ", but this host has " + name +
-             " = " + value;
+      return "was built with " + name + " = " + it->second + ", but this host has " + name + " = " +
+             value;
   }
   return plugin == host ? "" : "has a build key this host does not know";
 }
@@ -95,9 +95,10 @@ PluginDescriptor read_descriptor(const fs::path& file) {
                 std::to_string(static_cast<unsigned>(d.info.kind)));
   if (const std::string differs = build_key_difference(d.info.build_key, host_build_key());
       !differs.empty())
-    throw Error(where + ": plug-in \"" + d.name() + "\" " + differs +
-                "; rebuild it against this framework with find_package(PRT) (full keys: plug-in \"" +
-                d.info.build_key + "\", host \"" + host_build_key() + "\")");
+    throw Error(
+        where + ": plug-in \"" + d.name() + "\" " + differs +
+        "; rebuild it against this framework with find_package(PRT) (full keys: plug-in \"" +
+        d.info.build_key + "\", host \"" + host_build_key() + "\")");
   for (const char* symbol : {PRT_CREATE_SYMBOL, PRT_DESTROY_SYMBOL})
     if (!symbols.has(symbol))
       throw Error(where + ": plug-in \"" + d.name() + "\" lacks the symbol " + symbol +

@@ -110,9 +110,9 @@ const ParamSchema& ground_truth_schema() {
   return s;
 }
 
-const std::array<std::string, 11> kSections = {
-    "mesh",     "material", "transport", "basis",  "exit",        "compressor",
-    "lighting", "renderer", "camera",    "output", "ground_truth"};
+const std::array<std::string, 11> kSections = {"mesh",   "material",   "transport",   "basis",
+                                               "exit",   "compressor", "lighting",    "renderer",
+                                               "camera", "output",     "ground_truth"};
 
 SourceLocation location_of(const toml::source_region& region, const fs::path& file) {
   return {file.string(), static_cast<int>(region.begin.line),
@@ -191,8 +191,8 @@ void resolve_paths(Params& params, const ParamSchema& schema, const SceneSpec& s
     const auto status = fs::status(resolved, error);
     if (!fs::exists(status))
       throw Error(params.location(spec.name), schema.owner + ": " + spec.name + " \"" + value +
-                                                  "\" not found (looked for " +
-                                                  resolved.string() + ")");
+                                                  "\" not found (looked for " + resolved.string() +
+                                                  ")");
     if (!fs::is_regular_file(status))
       throw Error(params.location(spec.name),
                   schema.owner + ": " + spec.name + " \"" + value + "\" (" + resolved.string() +

@@ -37,8 +37,11 @@ class ConstantBasis final : public prt::Basis {
 constexpr prt::PluginInfoRecord make_info() {
 #ifdef PRT_TEST_FOREIGN_ALIGN  // the host's key but for Eigen's alignment
   auto r = prt::make_plugin_info<ConstantBasis>(
-      "constant", "compiler=" PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(
-                      _GLIBCXX_USE_CXX11_ABI) ";stl=" PRT_STL_MODE ";eigen=" PRT_STRINGIFY(EIGEN_WORLD_VERSION) "." PRT_STRINGIFY(EIGEN_MAJOR_VERSION) ";align=8");
+      "constant",
+      "compiler=" PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(
+          _GLIBCXX_USE_CXX11_ABI) ";stl=" PRT_STL_MODE
+                                  ";eigen=" PRT_STRINGIFY(EIGEN_WORLD_VERSION) "." PRT_STRINGIFY(
+                                      EIGEN_MAJOR_VERSION) ";align=8");
 #elif defined(PRT_TEST_BUILD_KEY)
   auto r = prt::make_plugin_info<ConstantBasis>("constant", PRT_TEST_BUILD_KEY);
 #else

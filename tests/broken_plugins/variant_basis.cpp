@@ -30,7 +30,9 @@ class VariantBasis final : public prt::Basis {
     return drop_ ? 8 : 9;
 #endif
   }
-  bool orthonormal() const override { return true; }
+  bool orthonormal() const override {
+    return true;
+  }
   Eigen::MatrixXd evaluate(const prt::Directions& d) const override {
     Eigen::MatrixXd all = prt::sh::evaluate(3, d);
 #ifdef PRT_BUG_NORMALISATION
@@ -53,7 +55,9 @@ class VariantBasis final : public prt::Basis {
     if (drop_) bands.erase(bands.begin());
     return bands;
   }
-  bool can_rotate() const override { return true; }
+  bool can_rotate() const override {
+    return true;
+  }
   Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& r) const override {
     Eigen::MatrixXd m = prt::sh::rotation(3, r);
 #ifdef PRT_BUG_REFLECTION

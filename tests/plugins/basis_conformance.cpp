@@ -4,16 +4,16 @@
 // every declared capability tested and every undeclared one absent, every
 // boolean and choice parameter varied, save/load round trip, extreme inputs.
 #include <Eigen/Geometry>
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <random>
 #include <sstream>
 
 #include "../common/scenes.hpp"
 #include "conformance.hpp"
 #include "prt/basis.hpp"
-#include "prt/mesh.hpp"
 #include "prt/error.hpp"
+#include "prt/mesh.hpp"
 #include "prt/quadrature.hpp"
 #include "prt/registry.hpp"
 #include "prt/transport.hpp"
@@ -127,9 +127,9 @@ TEST_CASE_METHOD(Fixture, "native quadrature weights integrate 1 to the domain's
                  "[conformance]") {
   const auto native = basis->native_directions();
   if (!native) return;  // the kit then uses its own exact sphere rule
-  INFO("weights sum to " << native->weights.sum() << "; the " <<
-       (basis->domain() == Domain::hemisphere ? "hemisphere" : "sphere") << " measures "
-                                                                    << domain_measure(*basis));
+  INFO("weights sum to " << native->weights.sum() << "; the "
+                         << (basis->domain() == Domain::hemisphere ? "hemisphere" : "sphere")
+                         << " measures " << domain_measure(*basis));
   CHECK(std::abs(native->weights.sum() - domain_measure(*basis)) < 1e-9 * domain_measure(*basis));
   CHECK(native->weights.minCoeff() >= 0);
   CHECK(native->directions.rowwise().norm().isApprox(Eigen::VectorXd::Ones(native->size()), 1e-9));
@@ -154,9 +154,8 @@ TEST_CASE_METHOD(Fixture, "the basis agrees with an independent quadrature", "[c
       const Eigen::MatrixXd y = basis->evaluate(independent.directions.middleRows(start, count));
       gram += y.transpose() * independent.weights.segment(start, count).asDiagonal() * y;
     }
-    const double off = (gram - Eigen::MatrixXd::Identity(basis->size(), basis->size()))
-                           .cwiseAbs()
-                           .maxCoeff();
+    const double off =
+        (gram - Eigen::MatrixXd::Identity(basis->size(), basis->size())).cwiseAbs().maxCoeff();
     INFO("independent Gram matrix is off the identity by " << off);
     CHECK(off < 0.02);
   }
@@ -267,7 +266,8 @@ namespace {
 
 // Every combination of the schema's boolean and choice values (at most 64;
 // other parameters at their defaults).
-std::vector<std::vector<std::pair<std::string, ParamValue>>> combinations(const ParamSchema& schema) {
+std::vector<std::vector<std::pair<std::string, ParamValue>>> combinations(
+    const ParamSchema& schema) {
   std::vector<std::vector<std::pair<std::string, ParamValue>>> out{{}};
   for (const auto& spec : schema.specs) {
     std::vector<ParamValue> values;

@@ -245,9 +245,9 @@ TEST_CASE("glossy Lambert transfer agrees with diffuse transfer under shadowing"
     // The reduced basis exists for least squares only.
     const auto exit = hsh(registry, 5, least_squares, least_squares);
     const GlossyOperator glossy = GlossyOperator::make(white, *exit, 5, least_squares, 1e-10);
-    const TransferSignal t = glossy_transfer(scene, set, traced.visibility, *basis, glossy,
-                                             tangent_frames(scene), GlossyMethod::rotate_sh,
-                                             nullptr);
+    const TransferSignal t =
+        glossy_transfer(scene, set, traced.visibility, *basis, glossy, tangent_frames(scene),
+                        GlossyMethod::rotate_sh, nullptr);
     double error = 0;
     for (Eigen::Index p = 0; p < t.vertices(); ++p) {
       const Eigen::MatrixXd m =

@@ -63,8 +63,8 @@ TEST_CASE("the SH-rotation fast path and direct evaluation agree", "[glossy]") {
     const Traced t = trace_sphere("fibonacci", 2048);
     const auto light = make_basis(registry, "sh", {{"order", std::int64_t(5)}});
     const auto frames = tangent_frames(t.mesh);
-    const TransferSignal fast = glossy_transfer(t.mesh, t.set, t.result.visibility, *light,
-                                                glossy, frames, GlossyMethod::rotate_sh, nullptr);
+    const TransferSignal fast = glossy_transfer(t.mesh, t.set, t.result.visibility, *light, glossy,
+                                                frames, GlossyMethod::rotate_sh, nullptr);
     const TransferSignal general = glossy_transfer(t.mesh, t.set, t.result.visibility, *light,
                                                    glossy, frames, GlossyMethod::evaluate, nullptr);
     INFO("relative difference " << relative_difference(fast.coefficients, general.coefficients));
@@ -76,8 +76,8 @@ TEST_CASE("the SH-rotation fast path and direct evaluation agree", "[glossy]") {
     const Traced t = trace_sphere("cubemap", 6 * 8 * 8);
     const auto light = make_basis(registry, "haar", {{"resolution", std::int64_t(8)}});
     const auto frames = tangent_frames(t.mesh);
-    const TransferSignal fast = glossy_transfer(t.mesh, t.set, t.result.visibility, *light,
-                                                glossy, frames, GlossyMethod::rotate_sh, nullptr);
+    const TransferSignal fast = glossy_transfer(t.mesh, t.set, t.result.visibility, *light, glossy,
+                                                frames, GlossyMethod::rotate_sh, nullptr);
     const TransferSignal general = glossy_transfer(t.mesh, t.set, t.result.visibility, *light,
                                                    glossy, frames, GlossyMethod::evaluate, nullptr);
     CHECK(relative_difference(fast.coefficients, general.coefficients) < 1e-6);
@@ -88,7 +88,8 @@ TEST_CASE("the SH-rotation fast path and direct evaluation agree", "[glossy]") {
 TEST_CASE("with SH light and hsh exit the operator is Sloan's A_r^-1 B A_i^-1", "[glossy]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
   for (const bool reduced : {false, true}) {
-    const auto exit = make_basis(registry, "hsh", {{"order", std::int64_t(5)}, {"reduced", reduced}});
+    const auto exit =
+        make_basis(registry, "hsh", {{"order", std::int64_t(5)}, {"reduced", reduced}});
     const GlossyOperator glossy = GlossyOperator::make(phong(), *exit, 5, true, 1e-10);
     const hemisphere::LeastSquares exit_ls =
         hemisphere::least_squares(5, 1e-10, reduced ? sh::index(1, 0) : -1);
@@ -137,9 +138,9 @@ constant = [1, 1, 1]
                     Catch::Contains("roles.toml:11:10") && Catch::Contains("[exit] basis \"sh\"") &&
                         Catch::Contains("needs a hemisphere basis") &&
                         Catch::Contains("light basis ([basis])"));
-  CHECK_THROWS_WITH(plan_bake(parse("phong", "hsh", "hsh"), registry),
-                    Catch::Contains("[basis] basis \"hsh\"") &&
-                        Catch::Contains("needs a sphere basis"));
+  CHECK_THROWS_WITH(
+      plan_bake(parse("phong", "hsh", "hsh"), registry),
+      Catch::Contains("[basis] basis \"hsh\"") && Catch::Contains("needs a sphere basis"));
   // A lambert material ignores a valid [exit] (a sweep may vary the BRDF).
   CHECK(plan_bake(parse("lambert", "sh", "hsh"), registry).exit == nullptr);
   CHECK_NOTHROW(plan_bake(parse("phong", "sh", "hsh"), registry));

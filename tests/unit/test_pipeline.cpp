@@ -1,7 +1,7 @@
 // The bake as a plan and stages: everything is validated before a ray, and a
 // sweep's reuse of traced rays gives the same transfer as a fresh bake.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cstdio>
 
 #include "prt/pipeline.hpp"
@@ -70,18 +70,17 @@ TEST_CASE("a sweep's traced rays give the same transfer as a fresh bake", "[pipe
 TEST_CASE("the plan refuses what cannot work before any ray", "[pipeline]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
   // A window needs frequency bands; Haar has none.
-  CHECK_THROWS_WITH(
-      plan_bake(scene(registry, "lambert", "plugin = \"haar\"\nresolution = 4", "window = \"hanning\""),
-                registry),
-      Catch::Contains("pipeline.toml:") && Catch::Contains("window") &&
-          Catch::Contains("coefficient_bands"));
+  CHECK_THROWS_WITH(plan_bake(scene(registry, "lambert", "plugin = \"haar\"\nresolution = 4",
+                                    "window = \"hanning\""),
+                              registry),
+                    Catch::Contains("pipeline.toml:") && Catch::Contains("window") &&
+                        Catch::Contains("coefficient_bands"));
   // A non-linear approximation replaces compression: an exact compressor only.
   CHECK_THROWS_WITH(
       plan_bake(scene(registry, "lambert", "plugin = \"haar\"\nresolution = 4\nk = 8"), registry),
       Catch::Contains("exact compressor") && Catch::Contains("cpca"));
-  CHECK_NOTHROW(plan_bake(scene(registry, "lambert", "plugin = \"sh\"\norder = 3",
-                                "window = \"hanning\""),
-                          registry));
+  CHECK_NOTHROW(plan_bake(
+      scene(registry, "lambert", "plugin = \"sh\"\norder = 3", "window = \"hanning\""), registry));
 }
 
 TEST_CASE("progress and messages reach the app's callbacks, not the terminal", "[pipeline]") {
@@ -93,8 +92,8 @@ TEST_CASE("progress and messages reach the app's callbacks, not the terminal", "
   RunOptions options;
   options.log = [&](const std::string& text) { messages.push_back(text); };
   StageTimes times;
-  const BakeData data = bake(scene(registry, "lambert", "plugin = \"sh\"\norder = 3"), registry,
-                             options, times);
+  const BakeData data =
+      bake(scene(registry, "lambert", "plugin = \"sh\"\norder = 3"), registry, options, times);
   Progress::set_sink(nullptr);
   const auto final_bake = std::find_if(reports.begin(), reports.end(), [](const auto& r) {
     return r.label == "bake transfer" && r.final;

@@ -94,9 +94,9 @@ TEST_CASE("each plug-in failure gives one clear error naming the file", "[regist
              Contains("libprt-basis-key.so") &&
                  Contains("was built with align = 8, but this host has align = 64") &&
                  Contains(host_build_key()));
-  CHECK_THAT(problem_in(case_dir("old_key")),
-             Contains("libprt-basis-oldkey.so") && Contains("old build key") &&
-                 Contains("\"gcc-4-foreign\""));
+  CHECK_THAT(problem_in(case_dir("old_key")), Contains("libprt-basis-oldkey.so") &&
+                                                  Contains("old build key") &&
+                                                  Contains("\"gcc-4-foreign\""));
   CHECK_THAT(problem_in(case_dir("duplicate")),
              Contains("duplicate basis plug-in name \"constant\"") &&
                  Contains("libprt-basis-dup-a.so") && Contains("libprt-basis-dup-b.so"));

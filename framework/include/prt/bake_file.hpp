@@ -25,7 +25,7 @@ struct PluginRecord {
 struct BakeData {
   std::string scene_file, scene_text;
   PluginRecord basis, compressor;
-  PluginRecord exit;  // glossy only: the hemisphere basis of exit radiance
+  PluginRecord exit;      // glossy only: the hemisphere basis of exit radiance
   std::string transport;  // e.g. "fibonacci 1024 shadowed seed=1"
   Mesh mesh;
   Eigen::Vector3f albedo{1, 1, 1};
@@ -35,7 +35,7 @@ struct BakeData {
   TransferSignal transfer;
   CompressedTransfer compressed;
   BasisState basis_state;
-  BasisState exit_state;  // glossy only
+  BasisState exit_state;                  // glossy only
   std::map<std::string, double> metrics;  // timings (s), squared error, ...
 };
 

@@ -37,7 +37,7 @@ struct Brdf {
 //   F(v, j) = int_H rho(s, v) y_j(s) s_z ds     (q x incident_order^2)
 // integrated by the Gauss product rule upper_quadrature(resolution).
 Eigen::MatrixXd brdf_incident_integrals(const Brdf& brdf, const Directions& exit_directions,
-                                       int incident_order, int resolution = 48);
+                                        int incident_order, int resolution = 48);
 
 // The BRDF matrix of Sloan 2003 §3.1 in SH over the local hemisphere:
 //   B_ij = int_H int_H y_i(v) y_j(s) rho(v, s) s_z ds dv

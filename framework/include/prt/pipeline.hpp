@@ -62,7 +62,7 @@ struct BakePlan {
   bool glossy = false, subsurface = false, fit = false;
   int bounces = 0;
   double bounce_albedo = 1;
-  int sparse_terms = 0;  // > 0: the basis's own sparse approximation replaces compression
+  int sparse_terms = 0;          // > 0: the basis's own sparse approximation replaces compression
   bool keep_visibility = false;  // fitting and glossy matrices need the bits
   bool shadowed = true;
   // Glossy: the BRDF and its incident band limit.

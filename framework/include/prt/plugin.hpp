@@ -36,10 +36,11 @@
 // RelWithDebInfo and Release plug-ins load into any host. PRT::prt passes
 // consumers EIGEN_MAX_ALIGN_BYTES (the framework's value), so a plug-in built
 // without -march=native still matches a host built with it.
-#define PRT_BUILD_KEY                                                                          \
-  "compiler=" PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(                                         \
-      _GLIBCXX_USE_CXX11_ABI) ";stl=" PRT_STL_MODE ";eigen=" PRT_STRINGIFY(EIGEN_WORLD_VERSION) \
-      "." PRT_STRINGIFY(EIGEN_MAJOR_VERSION) ";align=" PRT_STRINGIFY(EIGEN_MAX_ALIGN_BYTES)
+#define PRT_BUILD_KEY                                                                         \
+  "compiler=" PRT_COMPILER ";cxx11abi=" PRT_STRINGIFY(                                        \
+      _GLIBCXX_USE_CXX11_ABI) ";stl=" PRT_STL_MODE                                            \
+                              ";eigen=" PRT_STRINGIFY(EIGEN_WORLD_VERSION) "." PRT_STRINGIFY( \
+                                  EIGEN_MAJOR_VERSION) ";align=" PRT_STRINGIFY(EIGEN_MAX_ALIGN_BYTES)
 
 #define PRT_PLUGIN_API __attribute__((visibility("default")))
 

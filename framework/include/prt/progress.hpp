@@ -10,11 +10,11 @@ namespace prt {
 
 // One progress update, as a sink receives it.
 struct ProgressReport {
-  std::string label, unit;   // unit: of the rate ("rays"), or "items"
+  std::string label, unit;  // unit: of the rate ("rays"), or "items"
   double done = 0, total = 0;
-  double rate = 0;           // units per second
+  double rate = 0;              // units per second
   double elapsed = 0, eta = 0;  // seconds
-  bool final = false;        // the last report of this bar
+  bool final = false;           // the last report of this bar
 };
 using ProgressSink = std::function<void(const ProgressReport&)>;
 

@@ -57,7 +57,7 @@ struct SceneSpec {
   // RGB factor applied to the transfer's radiance: albedo (x diffuse for lambert).
   Eigen::Vector3f albedo() const;
   Brdf brdf() const;
-  bool glossy() const;           // a glossy BRDF: bake matrices, not vectors
+  bool glossy() const;  // a glossy BRDF: bake matrices, not vectors
   // Throws unless [lighting] window is "none" or the basis has frequency bands.
   void check_window(const Basis& light_basis) const;
   // The SH order M of the BRDF's incident side for this light basis.

@@ -35,8 +35,7 @@ class HaarCubeMap final : public Basis {
         k_(static_cast<int>(params.get_int("k"))),
         lattice_(DirectionSet::cubemap(resolution_)) {
     if (resolution_ & (resolution_ - 1))
-      params.fail("resolution", "must be a power of 2, got " +
-                                    std::to_string(resolution_));
+      params.fail("resolution", "must be a power of 2, got " + std::to_string(resolution_));
     root_weights_ = lattice_.weights.cwiseSqrt();
   }
 

@@ -30,8 +30,7 @@ class HemisphericalHarmonics final : public Basis {
   }
 
   explicit HemisphericalHarmonics(const Params& params)
-      : order_(static_cast<int>(params.get_int("order"))),
-        projection_(projection_of(params)) {
+      : order_(static_cast<int>(params.get_int("order"))), projection_(projection_of(params)) {
     const bool reduced = params.get_bool("reduced");
     if (reduced && projection_ != Projection::least_squares)
       params.fail("reduced", "the reduced basis needs projection = \"least-squares\"");
@@ -58,7 +57,7 @@ class HemisphericalHarmonics final : public Basis {
     for (Eigen::Index k = 0; k < set.size(); ++k)
       if (set.directions(k, 2) <= 0) upper[k] = 0;
     const Eigen::MatrixXd b = upper.asDiagonal() * evaluate(set.directions);  // zero-hemisphere
-    if (projection_ == Projection::least_squares) return b * ls_.inverse;  // A symmetric
+    if (projection_ == Projection::least_squares) return b * ls_.inverse;     // A symmetric
     if (projection_ == Projection::zero) return b;
     // Reflection: the extended function's projection is 2 b on one parity, 0 on the other.
     Eigen::MatrixXd p = b;

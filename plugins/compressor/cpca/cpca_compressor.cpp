@@ -25,11 +25,11 @@ class ClusteredPca final : public Compressor {
   explicit ClusteredPca(const Params& params)
       : params_(params), coherence_(compressor_params::coherence_options(params)) {
     options_.lbg = compressor_params::lbg_options(params);
-    options_.method = compressor_params::choose<clustering::Method>(
-        params, "method",
-        {{"static", clustering::Method::static_pca},
-         {"iterative", clustering::Method::iterative},
-         {"adaptive", clustering::Method::adaptive}});
+    options_.method =
+        compressor_params::choose<clustering::Method>(params, "method",
+                                                      {{"static", clustering::Method::static_pca},
+                                                       {"iterative", clustering::Method::iterative},
+                                                       {"adaptive", clustering::Method::adaptive}});
     options_.components = static_cast<int>(params.get_int("components"));
     options_.iterations_per_component =
         static_cast<int>(params.get_int("iterations_per_component"));
@@ -41,8 +41,8 @@ class ClusteredPca final : public Compressor {
     clustering::CpcaOptions options = options_;
     options.lbg = compressor_params::with_mesh(options_.lbg, params_, mesh);
     const auto result = clustering::cpca(signal.coefficients, options);
-    return compressor_params::finish("cpca", coherence_, params_, signal.coefficients, result.labels,
-                                     result.models, mesh);
+    return compressor_params::finish("cpca", coherence_, params_, signal.coefficients,
+                                     result.labels, result.models, mesh);
   }
 
  private:

@@ -23,8 +23,8 @@ class VectorQuantizer final : public Compressor {
     std::vector<clustering::ClusterModel> models(clusters.means.rows());
     for (std::size_t k = 0; k < models.size(); ++k)
       models[k] = {clusters.means.row(k), clustering::RowMatrixXd(0, clusters.means.cols()), {}};
-    return compressor_params::finish("vq", coherence_, params_, signal.coefficients, clusters.labels, models,
-                                     mesh);
+    return compressor_params::finish("vq", coherence_, params_, signal.coefficients,
+                                     clusters.labels, models, mesh);
   }
 
  private:

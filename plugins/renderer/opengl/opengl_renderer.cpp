@@ -1,8 +1,8 @@
 // The OpenGL renderer (Sloan 2003 §6): per-cluster constants M_ki l on the
 // CPU, per-vertex weighted sums in the vertex shader, glossy y(v_p) . e_p per
-// vertex with the exit basis's values toward the camera (any exit basis). Two methods: one indexed pass with
-// the cluster index as a vertex attribute ("single-pass"), or the paper's
-// per-cluster draws with additive blending and a partition of unity
+// vertex with the exit basis's values toward the camera (any exit basis). Two methods: one indexed
+// pass with the cluster index as a vertex attribute ("single-pass"), or the paper's per-cluster
+// draws with additive blending and a partition of unity
 // ("per-cluster"; superclusters when the compressor made them), whose
 // overdraw is counted.
 #include <array>
@@ -154,8 +154,8 @@ class OpenGLRenderer final : public Renderer {
     glEnableVertexAttribArray(0);
     build_index_buffer(mesh, t);
 
-    std::string defines = "#define ROWS " + std::to_string(rows) + "\n#define GLOSSY " +
-                          (glossy ? "1" : "0") + "\n";
+    std::string defines =
+        "#define ROWS " + std::to_string(rows) + "\n#define GLOSSY " + (glossy ? "1" : "0") + "\n";
     if (!t) {
       defines += "#define COMPONENTS -1\n#define SPARSE 0\n";
     } else {
