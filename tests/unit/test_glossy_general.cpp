@@ -3,6 +3,7 @@
 // and the roles of sphere and hemisphere bases.
 #include <catch2/catch.hpp>
 #include <cstdio>
+#include <tuple>
 
 #include "prt/basis.hpp"
 #include "prt/glossy.hpp"
@@ -59,29 +60,25 @@ TEST_CASE("the SH-rotation fast path and direct evaluation agree", "[glossy]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
   const auto exit = make_basis(registry, "hsh", {{"order", std::int64_t(4)}});
   const GlossyOperator glossy = GlossyOperator::make(phong(), *exit, 5, true, 1e-10);
-  SECTION("SH light") {
-    const Traced t = trace_sphere("fibonacci", 2048);
-    const auto light = make_basis(registry, "sh", {{"order", std::int64_t(5)}});
+  // SH light on a Fibonacci set; Haar light on its cube map.
+  for (const auto& [light, directions, rays] :
+       {std::tuple{make_basis(registry, "sh", {{"order", std::int64_t(5)}}), "fibonacci", 2048},
+        std::tuple{make_basis(registry, "haar", {{"resolution", std::int64_t(8)}}), "cubemap",
+                   6 * 8 * 8}}) {
+    const Traced t = trace_sphere(directions, rays);
     const auto frames = tangent_frames(t.mesh);
-    const TransferSignal fast = glossy_transfer(t.mesh, t.set, t.result.visibility, *light, glossy,
-                                                frames, GlossyMethod::rotate_sh, nullptr);
-    const TransferSignal general = glossy_transfer(t.mesh, t.set, t.result.visibility, *light,
-                                                   glossy, frames, GlossyMethod::evaluate, nullptr);
-    INFO("relative difference " << relative_difference(fast.coefficients, general.coefficients));
-    CHECK(relative_difference(fast.coefficients, general.coefficients) < 1e-6);
-    CHECK(fast.exit_rows == exit->size());
-    CHECK(fast.dimension() == exit->size() * light->size());
-  }
-  SECTION("Haar light on its cube map") {
-    const Traced t = trace_sphere("cubemap", 6 * 8 * 8);
-    const auto light = make_basis(registry, "haar", {{"resolution", std::int64_t(8)}});
-    const auto frames = tangent_frames(t.mesh);
-    const TransferSignal fast = glossy_transfer(t.mesh, t.set, t.result.visibility, *light, glossy,
-                                                frames, GlossyMethod::rotate_sh, nullptr);
-    const TransferSignal general = glossy_transfer(t.mesh, t.set, t.result.visibility, *light,
-                                                   glossy, frames, GlossyMethod::evaluate, nullptr);
+    auto transfer = [&](GlossyMethod method) {
+      return glossy_transfer(t.mesh, t.set, t.result.visibility, *light, glossy, frames, method,
+                             nullptr);
+    };
+    const TransferSignal fast = transfer(GlossyMethod::rotate_sh);
+    const TransferSignal general = transfer(GlossyMethod::evaluate);
+    INFO(directions << ": relative difference "
+                    << relative_difference(fast.coefficients, general.coefficients));
     CHECK(relative_difference(fast.coefficients, general.coefficients) < 1e-6);
     CHECK(fast.coefficients.allFinite());
+    CHECK(fast.exit_rows == exit->size());
+    CHECK(fast.dimension() == exit->size() * light->size());
   }
 }
 
