@@ -84,7 +84,7 @@ namespace {
 // (the exit basis of glossy transfer). Everything is validated here, before
 // any ray: the entry's parameters, its domain, and the bake plan it makes.
 SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet& set,
-                    PluginRegistry& registry) {
+                    PluginRegistry& registry, bool& exit_role) {
   const SourceLocation where = spec.params.location();
   const auto& d = registry.find(PluginKind::basis, spec.name, where);
   // A lattice basis's resolution follows the scene's cube map unless given.
@@ -100,7 +100,8 @@ SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet&
   const auto probe = registry.create<Basis>(spec.name, probe_params, where);
   SceneSpec out = scene;
   PluginChoice choice{spec.name, where, spec.params};
-  if (probe->domain() == Domain::sphere) {
+  exit_role = probe->domain() != Domain::sphere;
+  if (!exit_role) {
     out.basis = choice;
   } else if (scene.glossy()) {
     out.exit = choice;
@@ -130,7 +131,12 @@ int compare_bases(Context& context, const CompareArgs& args) {
   std::stringstream list(args.bases);
   for (std::string item; std::getline(list, item, ',');) specs.push_back(parse_spec(item));
   std::vector<SceneSpec> scenes;
-  for (auto& spec : specs) scenes.push_back(scene_for(scene, spec, set, context.registry));
+  std::vector<char> exit_role(specs.size());
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    bool role = false;
+    scenes.push_back(scene_for(scene, specs[i], set, context.registry, role));
+    exit_role[i] = role;
+  }
 
   const RunOptions quiet{true};
   const TransportResult traced = trace_scene(scene, {context.quiet});
@@ -164,8 +170,11 @@ int compare_bases(Context& context, const CompareArgs& args) {
     row.shading_rms = shading.rms;
     row.shading_relative = shading.relative_rms;
     rows.push_back(row);
-    std::fprintf(stderr, "%s: %d coefficients, transport error %.4f, shading RMS %.5g\n",
-                 row.spec.c_str(), row.coefficients, row.transport_error, row.shading_rms);
+    std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g\n", row.spec.c_str(),
+                 row.coefficients, exit_role[i] ? "exit functions" : "coefficients",
+                 std::isfinite(row.transport_error) ? std::to_string(row.transport_error).c_str()
+                                                    : "- (glossy)",
+                 row.shading_rms);
   }
 
   std::ostringstream csv;
@@ -194,8 +203,9 @@ int compare_bases(Context& context, const CompareArgs& args) {
   std::printf("%-28s %6s %12s %14s %12s %10s\n", "basis", "coeffs", "bytes", "transport L2",
               "shading RMS", "relative");
   for (const auto& r : rows)
-    std::printf("%-28s %6d %12.0f %14.4f %12.5g %10.4f\n", r.spec.c_str(), r.coefficients, r.bytes,
-                r.transport_error, r.shading_rms, r.shading_relative);
+    std::printf("%-28s %6d %12.0f %14s %12.5g %10.4f\n", r.spec.c_str(), r.coefficients, r.bytes,
+                std::isfinite(r.transport_error) ? std::to_string(r.transport_error).c_str() : "-",
+                r.shading_rms, r.shading_relative);
   return 0;
 }
 

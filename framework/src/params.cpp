@@ -159,7 +159,8 @@ void Params::validate(const ParamSchema& schema) {
   std::vector<std::string> valid;
   for (const auto& spec : schema.specs) valid.push_back(spec.name);
 
-  for (auto& [key, entry] : entries_) {
+  // Type, range and choice of one value (given, or the schema's default).
+  auto check = [&](const std::string& key, ParamEntry& entry) {
     const ParamSpecRecord* spec = schema.find(key);
     if (!spec) {
       std::string message =
@@ -225,7 +226,8 @@ void Params::validate(const ParamSchema& schema) {
         break;
       }
     }
-  }
+  };
+  for (auto& [key, entry] : entries_) check(key, entry);
 
   for (const auto& spec : schema.specs) {
     if (entries_.count(spec.name)) continue;
@@ -233,8 +235,18 @@ void Params::validate(const ParamSchema& schema) {
       throw Error(section_, schema.owner + ": missing required parameter \"" +
                                 std::string(spec.name) + "\" (" + spec.help + ")");
     if (spec.default_value[0] != '\0' || spec.type == ParamType::string ||
-        spec.type == ParamType::path)
-      entries_[spec.name] = ParamEntry{parse_default(spec), section_, false};
+        spec.type == ParamType::path) {
+      ParamEntry entry{parse_default(spec), section_, false};
+      if (spec.default_value[0] != '\0') {  // an empty string default means "not given"
+        try {
+          check(spec.name, entry);
+        } catch (const Error& e) {
+          throw Error(std::string(e.what()) + " (this is the schema's own default: a bug in " +
+                      schema.owner + ")");
+        }
+      }
+      entries_[spec.name] = std::move(entry);
+    }
   }
 }
 
