@@ -209,6 +209,9 @@ int bench(Context& context, const BenchArgs& args) {
   std::map<std::string, TransportResult> traces;
   std::map<std::string, std::pair<BakeData, double>> projections;  // transfer, seconds
   std::map<std::string, std::vector<Rendered>> truths;
+  // Ground truth under each light's band-limited reconstruction, per light
+  // basis setting: the error budget's middle term.
+  std::map<std::string, std::vector<Eigen::MatrixX3f>> limited_truths;
 
   Progress progress("bench", double(configs.size()), "", context.quiet);
   for (std::size_t i = 0; i < configs.size(); ++i) {
@@ -263,6 +266,9 @@ int bench(Context& context, const BenchArgs& args) {
         key_of(configs[i], {"mesh", "material", "lighting", "camera", "ground_truth", "transport"});
     double relight_seconds = 0, gpu_seconds = 0;
     double rms = 0, p99 = 0, max_error = 0, image_error = 0;
+    double truncation_rms = 0, projection_rms = 0, compression_rms = 0;  // the error budget
+    const std::string limited_key =
+        truth_key + " " + key_of(configs[i], {"basis", "exit", "transport", "material"});
     auto cpu = context.registry.create<Renderer>(scene.renderer.name, scene.renderer.params,
                                                  scene.renderer.where);
     for (int light = 0; light < args.lights; ++light) {
@@ -283,6 +289,16 @@ int bench(Context& context, const BenchArgs& args) {
       const Rendered& truth = truth_list[light];
       const ErrorStats e = vertex_error(relit.vertex_radiance, truth.vertex_radiance);
       rms += e.rms / args.lights, p99 += e.p99 / args.lights;
+      // Error budget: light truncation, transfer projection, compression.
+      auto& limited_list = limited_truths[limited_key];
+      if (static_cast<int>(limited_list.size()) <= light)
+        limited_list.push_back(ground_truth_vertices(
+            scene, data.mesh, environment.band_limited(relighting.basis(), l), camera, quiet));
+      const Eigen::MatrixX3f exact =
+          relighting.relight(exact_form(data.transfer), l, camera).vertex_radiance;
+      truncation_rms += vertex_error(limited_list[light], truth.vertex_radiance).rms / args.lights;
+      projection_rms += vertex_error(exact, limited_list[light]).rms / args.lights;
+      compression_rms += vertex_error(relit.vertex_radiance, exact).rms / args.lights;
       max_error = std::max(max_error, e.max);
       RenderInput input = relighting.input(data.compressed, relit, l, camera);
       input.background = nullptr;
@@ -327,6 +343,9 @@ int bench(Context& context, const BenchArgs& args) {
     record["gpu_frame_seconds"] = gpu_seconds;
     record["transfer_se"] = se;
     record["rms"] = rms;
+    record["light_truncation_rms"] = truncation_rms;
+    record["projection_rms"] = projection_rms;
+    record["compression_rms"] = compression_rms;
     record["p99"] = p99;
     record["max"] = max_error;
     record["image_error"] = image_error;
