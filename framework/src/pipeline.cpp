@@ -154,6 +154,11 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   if (plan.basis->domain() != Domain::sphere)
     throw Error(basis.where, domain_error(basis, "basis", Domain::sphere));
   scene.check_window(*plan.basis);
+  try {  // the direction set is cheap to make; its rays come later
+    plan.basis->check_directions(scene.directions());
+  } catch (const Error& e) {
+    throw Error(scene.transport.location("directions"), e.what());
+  }
   plan.sparse_terms = plan.basis->approximation_terms();
   if (plan.sparse_terms > 0 && !plan.compressor->exact())
     throw Error(compressor.where,

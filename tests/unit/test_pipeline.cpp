@@ -79,6 +79,12 @@ TEST_CASE("the plan refuses what cannot work before any ray", "[pipeline]") {
   CHECK_THROWS_WITH(
       plan_bake(scene(registry, "lambert", "plugin = \"haar\"\nresolution = 4\nk = 8"), registry),
       Catch::Contains("exact compressor") && Catch::Contains("cpca"));
+  // A basis that needs a cube map says so before the rays, at [transport].
+  std::string fibonacci =
+      "\n[mesh]\ngenerate = \"sphere\"\n[transport]\nrays = 96\n[basis]\n"
+      "plugin = \"eigen\"\nd = 4\n[lighting]\nconstant = [1, 1, 1]\n";
+  CHECK_THROWS_WITH(plan_bake(SceneSpec::parse(fibonacci, "eigen.toml", registry), registry),
+                    Catch::Contains("eigen.toml:") && Catch::Contains("cube-map direction set"));
   CHECK_NOTHROW(plan_bake(
       scene(registry, "lambert", "plugin = \"sh\"\norder = 3", "window = \"hanning\""), registry));
 }

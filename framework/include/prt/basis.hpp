@@ -73,6 +73,11 @@ class Basis : public PluginObject {
   // coefficients per vertex, stored sparsely (0: none).
   virtual int approximation_terms() const { return 0; }
 
+  // Throws (one clear message) if the basis cannot serve a bake over this
+  // direction set, e.g. a fit that needs a cube-map lattice. The bake plan
+  // asks before any ray is traced. Default: any set.
+  virtual void check_directions(const DirectionSet&) const {}
+
   // Capability: fitting to data (data-driven bases such as eigentransport).
   virtual bool can_fit() const { return false; }
   virtual void fit(const FitData&) {}

@@ -69,9 +69,8 @@ class Eigentransport final : public Basis {
     return DirectionSet::cubemap(resolution_);
   }
 
-  void fit(const FitData& data) override {
-    const DirectionSet& set = *data.directions;
-    const Mesh& mesh = *data.mesh;
+  // Asked by the bake plan before any ray, and again when fitting.
+  void check_directions(const DirectionSet& set) const override {
     const auto s = set.size();
     const int r = static_cast<int>(std::lround(std::sqrt(s / 6.0)));
     if (set.kind != "cubemap" || 6 * r * r != s)
@@ -79,6 +78,14 @@ class Eigentransport final : public Basis {
           "basis \"eigen\": fitting needs a cube-map direction set ([transport] "
           "directions = \"cubemap\"), got " +
           set.kind);
+  }
+
+  void fit(const FitData& data) override {
+    const DirectionSet& set = *data.directions;
+    const Mesh& mesh = *data.mesh;
+    check_directions(set);
+    const auto s = set.size();
+    const int r = static_cast<int>(std::lround(std::sqrt(s / 6.0)));
     resolution_ = r;
     root_weights_ = set.weights.cwiseSqrt();
     const Eigen::Index v = static_cast<Eigen::Index>(mesh.vertex_count());
