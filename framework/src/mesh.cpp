@@ -14,6 +14,7 @@
 
 #include "mesh_file_check.hpp"
 #include "prt/error.hpp"
+#include "prt/log.hpp"
 
 namespace prt {
 
@@ -180,8 +181,8 @@ Mesh load_mesh(const std::filesystem::path& file) {
                 " of its " + std::to_string(declared.faces) +
                 " faces could not be read (vertex indices out of range or negative?)");
   if (const auto complex = count_lines_containing(log, "complex"))
-    std::cerr << "warning: " << source << ": " << complex
-              << " non-manifold face(s); OpenMesh duplicated their vertices\n";
+    log_warning(source + ": " + std::to_string(complex) +
+                " non-manifold face(s); OpenMesh duplicated their vertices");
   for (auto fh : om.faces()) {
     std::array<std::uint32_t, 3> t{};
     int k = 0;
@@ -212,8 +213,8 @@ Mesh load_mesh(const std::filesystem::path& file) {
   if (mesh.normals.empty()) mesh.compute_normals();
   mesh.validate(source);
   if (mesh.skipped_degenerate_faces > 0)
-    std::cerr << "warning: " << source << ": skipped " << mesh.skipped_degenerate_faces
-              << " degenerate face(s)\n";
+    log_warning(source + ": skipped " + std::to_string(mesh.skipped_degenerate_faces) +
+                " degenerate face(s)");
   return mesh;
 }
 

@@ -13,6 +13,7 @@
 #include "prt/glossy.hpp"
 #include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
+#include "prt/log.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
 #include "prt/subsurface.hpp"
@@ -37,14 +38,14 @@ void RunOptions::message(const std::string& text) const {
   if (log)
     log(text);
   else if (!quiet)
-    std::printf("%s\n", text.c_str());
+    log_info(text);
 }
 
 void RunOptions::warn(const std::string& text) const {
   if (log)
     log("warning: " + text);
   else
-    std::fprintf(stderr, "prt: warning: %s\n", text.c_str());
+    log_warning(text);
 }
 
 std::string under_resolved_light(const Eigen::MatrixX3d& light, const std::vector<int>& bands) {

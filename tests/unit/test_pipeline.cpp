@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cstdio>
 
+#include "prt/log.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/registry.hpp"
@@ -109,4 +110,16 @@ TEST_CASE("progress and messages reach the app's callbacks, not the terminal", "
   CHECK(final_bake->unit == "rays");
   REQUIRE(!messages.empty());
   CHECK(messages.back().find("SE") != std::string::npos);
+}
+
+TEST_CASE("library warnings reach the app's log sink", "[pipeline]") {
+  std::vector<std::pair<LogLevel, std::string>> lines;
+  set_log_sink([&](LogLevel level, const std::string& text) { lines.emplace_back(level, text); });
+  RunOptions options;
+  options.warn("a test warning");
+  options.message("a test message");
+  set_log_sink(nullptr);
+  REQUIRE(lines.size() == 2);
+  CHECK(lines[0] == std::pair{LogLevel::warning, std::string("a test warning")});
+  CHECK(lines[1] == std::pair{LogLevel::info, std::string("a test message")});
 }

@@ -38,10 +38,10 @@ struct RunOptions {
   // false: the bake keeps the exact transfer as its compressed form (or the
   // basis's sparse approximation); a sweep compresses it later, many ways.
   bool compress = true;
-  // Where messages go (default: standard output unless quiet).
+  // Where this run's messages go; unset: the process's log sink (prt/log.hpp),
+  // info only when not quiet.
   std::function<void(const std::string&)> log;
   void message(const std::string& text) const;
-  // A warning: through `log` too, else "prt: warning: ..." on standard error.
   void warn(const std::string& text) const;
 };
 
