@@ -5,15 +5,24 @@
 #include <cmath>
 #include <cstdio>
 
+#include "prt/error.hpp"
 #include "prt/hemisphere.hpp"
 #include "prt/params.hpp"
 #include "prt/sh.hpp"
 
 namespace prt {
 
+BrdfModel brdf_model(const std::string& name) {
+  if (name == "lambert") return BrdfModel::lambert;
+  if (name == "phong") return BrdfModel::phong;
+  if (name == "ward") return BrdfModel::ward;
+  if (name == "cook-torrance") return BrdfModel::cook_torrance;
+  throw Error("unknown BRDF \"" + name + "\"; valid: lambert, phong, ward, cook-torrance");
+}
+
 Brdf Brdf::from_material(const Params& material) {
   Brdf b;
-  b.model = material.get_string("brdf");
+  b.model = brdf_model(material.get_string("brdf"));
   b.kd = material.get_real("diffuse");
   b.ks = b.glossy() ? material.get_real("specular") : 0.0;
   b.exponent = material.get_real("exponent");
@@ -30,14 +39,14 @@ double Brdf::evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) con
   if (cos_in <= 0 || cos_out <= 0) return 0.0;
   double value = kd / M_PI;
   if (ks == 0) return value;
-  if (model == "phong") {
+  if (model == BrdfModel::phong) {
     const Eigen::Vector3d mirror(-in.x(), -in.y(), in.z());
     const double c = mirror.dot(out);
     if (c > 0) value += ks * (exponent + 2) / (2 * M_PI) * std::pow(c, exponent);
     return value;
   }
   const Eigen::Vector3d h = (in + out).normalized();
-  if (model == "ward") {
+  if (model == BrdfModel::ward) {
     const double e = (h.x() * h.x() / (alpha_x * alpha_x) + h.y() * h.y() / (alpha_y * alpha_y)) /
                      (h.z() * h.z());
     return value + ks * std::exp(-e) / (4 * M_PI * alpha_x * alpha_y * std::sqrt(cos_in * cos_out));
@@ -53,14 +62,21 @@ double Brdf::evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) con
 
 std::string Brdf::describe() const {
   char text[256];
-  if (model == "phong")
-    std::snprintf(text, sizeof text, "phong kd=%g ks=%g exponent=%g", kd, ks, exponent);
-  else if (model == "ward")
-    std::snprintf(text, sizeof text, "ward kd=%g ks=%g alpha=(%g, %g)", kd, ks, alpha_x, alpha_y);
-  else if (model == "cook-torrance")
-    std::snprintf(text, sizeof text, "cook-torrance kd=%g ks=%g m=%g f0=%g", kd, ks, roughness, f0);
-  else
-    std::snprintf(text, sizeof text, "lambert kd=%g", kd);
+  switch (model) {
+    case BrdfModel::phong:
+      std::snprintf(text, sizeof text, "phong kd=%g ks=%g exponent=%g", kd, ks, exponent);
+      break;
+    case BrdfModel::ward:
+      std::snprintf(text, sizeof text, "ward kd=%g ks=%g alpha=(%g, %g)", kd, ks, alpha_x, alpha_y);
+      break;
+    case BrdfModel::cook_torrance:
+      std::snprintf(text, sizeof text, "cook-torrance kd=%g ks=%g m=%g f0=%g", kd, ks, roughness,
+                    f0);
+      break;
+    case BrdfModel::lambert:
+      std::snprintf(text, sizeof text, "lambert kd=%g", kd);
+      break;
+  }
   return text;
 }
 

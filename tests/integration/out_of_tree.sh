@@ -33,7 +33,9 @@ echo "---"
 }
 grep -E "tests passed|Passed" "$work/out.txt"
 grep -q "^basis zonal " "$work/out.txt" || { echo "FAIL: prt plugins does not list zonal"; exit 1; }
-[ -f "$work/checkout/out/bunny_gautron.png" ] || { echo "FAIL: no glossy image"; exit 1; }
+for image in bunny_zonal_diffuse bunny_zonal_glossy bunny_gautron; do
+  [ -s "$work/checkout/out/$image.png" ] || { echo "FAIL: no image $image.png"; exit 1; }
+done
 if grep -q "warning" "$work/out.txt"; then grep warning "$work/out.txt"; echo "FAIL: warnings"; exit 1; fi
 
 # Debug and RelWithDebInfo plug-ins load into the Release host.

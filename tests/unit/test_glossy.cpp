@@ -20,7 +20,7 @@ namespace {
 
 Brdf model(const std::string& name) {
   Brdf b;
-  b.model = name;
+  b.model = brdf_model(name);
   b.kd = 0.3;
   b.ks = name == "lambert" ? 0.0 : 0.7;
   b.exponent = 8;

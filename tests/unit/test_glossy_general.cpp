@@ -27,7 +27,7 @@ std::shared_ptr<Basis> make_basis(PluginRegistry& registry, const std::string& n
 
 Brdf phong() {
   Brdf b;
-  b.model = "phong";
+  b.model = BrdfModel::phong;
   b.kd = 0.3;
   b.ks = 0.7;
   b.exponent = 12;

@@ -14,8 +14,13 @@ namespace prt {
 
 class Params;
 
+enum class BrdfModel { lambert, phong, ward, cook_torrance };
+// The model named as in a scene ("lambert", "phong", "ward", "cook-torrance");
+// throws prt::Error for any other name.
+BrdfModel brdf_model(const std::string& name);
+
 struct Brdf {
-  std::string model = "lambert";        // lambert | phong | ward | cook-torrance
+  BrdfModel model = BrdfModel::lambert;
   double kd = 1.0;                      // diffuse weight
   double ks = 0.0;                      // specular weight
   double exponent = 32;                 // Phong
@@ -25,7 +30,7 @@ struct Brdf {
 
   // The material section's BRDF (kd = diffuse, ks = specular, ...).
   static Brdf from_material(const Params& material);
-  bool glossy() const { return model != "lambert"; }
+  bool glossy() const { return model != BrdfModel::lambert; }
 
   // rho(in, out); zero when either direction is below the horizon.
   double evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) const;
