@@ -113,8 +113,8 @@ SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet&
   }
   try {
     plan_bake(out, registry);
-  } catch (const Error& e) {
-    throw Error(where, e.what());
+  } catch (const Error& e) {  // already located: name the entry in front
+    throw Error(where.file + ": " + e.what());
   }
   return out;
 }
@@ -159,8 +159,11 @@ int compare_bases(Context& context, const CompareArgs& args) {
     Row row;
     row.spec = specs[i].text;
     row.seconds = clock.seconds();
-    row.coefficients =
-        data.compressed.sparse() ? data.compressed.components : relighting.basis().size();
+    // The entry's own size: the exit basis's rows, or the light basis's
+    // coefficients (kept terms of a sparse approximation).
+    row.coefficients = exit_role[i]               ? data.transfer.exit_rows
+                       : data.compressed.sparse() ? data.compressed.components
+                                                  : relighting.basis().size();
     row.bytes = 4 * data.compressed.stored_floats();
     if (!data.transfer.glossy())
       row.transport_error = transport_error(mesh, set, traced, data, relighting.basis());

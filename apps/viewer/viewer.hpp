@@ -25,6 +25,9 @@ struct Options {
 class Viewer {
  public:
   Viewer(PluginRegistry& registry, const Options& options);
+  // relighting_ refers to scene_ and data_: a viewer stays where it was made.
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
 
   Image render();  // one frame at the current light and camera
   void rotate_light(double degrees);

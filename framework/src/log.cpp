@@ -17,9 +17,13 @@ void set_log_sink(LogSink new_sink) {
 
 namespace {
 void emit(LogLevel level, const std::string& text) {
-  std::lock_guard lock(sink_mutex);
-  if (sink) {
-    sink(level, text);
+  LogSink current;
+  {
+    std::lock_guard lock(sink_mutex);
+    current = sink;
+  }
+  if (current) {  // outside the lock: a sink may log or set another sink
+    current(level, text);
   } else if (level == LogLevel::warning) {
     std::fprintf(stderr, "prt: warning: %s\n", text.c_str());
   } else {

@@ -93,22 +93,28 @@ double available_memory() {
 // and the basis evaluated at every direction (unless it projects by a fast
 // transform).
 void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& mesh,
-                    const DirectionSet& set, bool keep_visibility) {
+                    const DirectionSet& set, bool keep_visibility, bool exact_form) {
   const double v = double(mesh.vertex_count()), d = double(set.size()),
                n = double(plan.basis->size());
   const double rows = plan.glossy ? double(plan.exit->size()) : 1.0;
+  const double dimension = rows * n;
+  // The basis at every direction: the projection matrix (unless a fast
+  // transform projects), and glossy transfer's weighted light values.
   const double projection = plan.basis->has_fast_projection(set) ? 0 : d * n * sizeof(double);
-  const double bytes = 2 * v * rows * n * sizeof(float) + projection +
+  const double glossy_light = plan.glossy ? d * n * sizeof(double) : 0;
+  // An exact compressed form stores the identity as its representatives.
+  const double identity = exact_form ? dimension * dimension * sizeof(float) : 0;
+  const double bytes = 2 * v * dimension * sizeof(float) + projection + glossy_light + identity +
                        (keep_visibility ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0);
   const double available = available_memory();
   if (bytes > available) {
-    char message[400];
+    char message[480];
     std::snprintf(message, sizeof message,
                   "this bake needs about %.1f GB (%.0f vertices x %.0f coefficients%s, %.0f "
-                  "directions), but %.1f GB are available; lower the basis size, rays or mesh "
+                  "directions%s), but %.1f GB are available; lower the basis size, rays or mesh "
                   "resolution",
-                  bytes / 1e9, v, rows * n, rows > 1 ? " per glossy matrix" : "", d,
-                  available / 1e9);
+                  bytes / 1e9, v, dimension, rows > 1 ? " per glossy matrix" : "", d,
+                  identity > 0 ? ", and the exact form's identity matrix" : "", available / 1e9);
     throw Error(scene.basis.where, message);
   }
 }
@@ -188,6 +194,13 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
     plan.incident_order = scene.incident_order(*plan.basis);
     plan.least_squares = scene.material.get_string("projection") == "least-squares";
     plan.cutoff = scene.material.get_real("cutoff");
+    // Made here, before any ray: it depends only on the BRDF and the exit basis.
+    try {
+      plan.glossy_operator = GlossyOperator::make(plan.brdf, *plan.exit, plan.incident_order,
+                                                  plan.least_squares, plan.cutoff);
+    } catch (const Error& e) {
+      throw Error(exit.where, e.what());
+    }
   }
   plan.keep_visibility = plan.fit || plan.glossy;
   return plan;
@@ -283,10 +296,7 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     if (plan.subsurface) result.transfer.coefficients += scattered;
     return std::move(result.transfer);
   }
-  clock = Stopwatch();
-  const GlossyOperator glossy = GlossyOperator::make(plan.brdf, *plan.exit, plan.incident_order,
-                                                     plan.least_squares, plan.cutoff);
-  times.add("BRDF operator", clock.seconds());
+  const GlossyOperator& glossy = plan.glossy_operator;
   clock = Stopwatch();
   Progress progress("glossy matrices", double(mesh.vertex_count()), "", options.quiet);
   TransferSignal transfer = glossy_transfer(mesh, set, result.visibility, *plan.basis, glossy,
@@ -333,7 +343,8 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const DirectionSet set = scene.directions();
   times.add("directions", clock.seconds());
 
-  require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
+  require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced,
+                 plan.sparse_terms == 0 && (!options.compress || plan.compressor->exact()));
   TransportResult traced = trace_stage(plan, data.mesh, set, options);
   const auto rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
@@ -358,7 +369,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   data.transport = transport_description(scene, set);
   data.basis = plan.basis_record;
   data.compressor = plan.compressor_record;
-  if (!options.compress) data.compressor = {"exact", "", ""};
+  if (!options.compress && plan.sparse_terms == 0) data.compressor = {"exact", "", ""};
   data.albedo = scene.albedo();
   data.material = scene.material_description();
   data.bounces = plan.bounces;

@@ -31,7 +31,10 @@ Progress::Progress(std::string label, double total, std::string unit, bool quiet
       last_draw_(start_) {}
 
 Progress::~Progress() {
-  finish();
+  try {
+    finish();
+  } catch (...) {  // an app's sink that throws must not end the process here
+  }
 }
 
 namespace {
@@ -74,9 +77,14 @@ void Progress::draw(bool final) {
   const double item_rate = r.elapsed > 0 ? r.done / r.elapsed : 0.0;
   r.eta = (item_rate > 0 && r.done < r.total) ? (r.total - r.done) / item_rate : 0.0;
   r.final = final;
-  std::lock_guard lock(sink_mutex);
-  if (sink)
-    sink(r);
+  ProgressSink current;
+  {
+    std::lock_guard lock(sink_mutex);
+    current = sink;
+  }
+  // Called outside the lock: a sink may log, or set another sink.
+  if (current)
+    current(r);
   else
     draw_bar(r);
 }

@@ -58,14 +58,19 @@ void CompressedTransfer::validate(Eigen::Index vertex_count) const {
 }
 
 CompressedTransfer exact_form(const TransferSignal& t) {
+  // One cluster per vertex whose mean is that vertex's transfer and no
+  // components: exact, v x n floats (no n x n identity, which glossy matrices
+  // of a large light basis would make gigabytes), relit as VQ is.
+  const Eigen::Index v = t.vertices();
   CompressedTransfer c;
   c.compressor = "exact";
   c.dimension = t.dimension();
-  c.components = static_cast<int>(t.dimension());
-  c.cluster_of_vertex.assign(static_cast<std::size_t>(t.vertices()), 0);
-  c.means = MatrixXfRow::Zero(1, t.dimension());
-  c.representatives = {MatrixXfRow::Identity(t.dimension(), t.dimension())};
-  c.weights = t.coefficients;
+  c.components = 0;
+  c.cluster_of_vertex.resize(static_cast<std::size_t>(v));
+  std::iota(c.cluster_of_vertex.begin(), c.cluster_of_vertex.end(), 0);
+  c.weights = MatrixXfRow(v, 0);
+  c.means = t.coefficients;
+  c.representatives.assign(static_cast<std::size_t>(v), MatrixXfRow(0, t.dimension()));
   return c;
 }
 

@@ -79,6 +79,7 @@ int main(int argc, char** argv) {
     RenderInput prt_input = relighting.input(data.compressed, relit, light, camera);
     RenderInput plain = prt_input;
     plain.exit_values = nullptr;
+    plain.albedo = Eigen::Vector3f::Ones();  // vertex_radiance includes the albedo
     plain.vertex_radiance = &relit.vertex_radiance;
 
     auto time_frames = [&](const RenderInput& input, std::vector<double>* relight = nullptr) {

@@ -69,7 +69,8 @@ python3 - "$work/glossy.json" <<'PY'
 import json, sys
 rows = {r["basis"]: r for r in json.load(open(sys.argv[1]))}
 three, five = rows["hsh:order=3"], rows["hsh:order=5"]
-ok = three["transport_l2_relative"] is None and 0 < five["shading_rms"] < three["shading_rms"]
+ok = (three["transport_l2_relative"] is None and 0 < five["shading_rms"] < three["shading_rms"]
+      and three["coefficients"] == 9 and five["coefficients"] == 25)
 print(("ok  " if ok else "FAIL") + f" glossy exit bases: order 3 RMS {three['shading_rms']:.5g}, order 5 {five['shading_rms']:.5g}")
 sys.exit(0 if ok else 1)
 PY

@@ -3,8 +3,10 @@
 // and the roles of sphere and hemisphere bases.
 #include <catch2/catch.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <tuple>
 
+#include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/glossy.hpp"
 #include "prt/hemisphere.hpp"
@@ -193,5 +195,51 @@ samples = 256
     if (sh_error == 0) sh_error = e.relative_rms;
     CHECK(e.relative_rms < std::max(0.12, 1.5 * sh_error));
   }
+  Progress::set_enabled(true);
+}
+
+TEST_CASE("a glossy bake file keeps what rendering needs", "[glossy][bake]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  const char* text = R"(
+[mesh]
+generate = "sphere"
+detail = 1
+[material]
+brdf = "phong"
+exponent = 8
+[transport]
+rays = 256
+[basis]
+plugin = "sh"
+order = 4
+[exit]
+plugin = "hsh"
+order = 4
+reduced = true
+[compressor]
+plugin = "pca"
+components = 6
+[lighting]
+constant = [1, 0.5, 0.25]
+[camera]
+width = 32
+height = 24
+)";
+  const SceneSpec scene = SceneSpec::parse(text, "roundtrip.toml", registry);
+  StageTimes times;
+  const BakeData baked = bake(scene, registry, {true}, times);
+  const auto file = std::filesystem::temp_directory_path() / "prt_glossy_roundtrip.h5";
+  write_bake(file, baked);
+  const BakeData read = read_bake(file);
+  std::filesystem::remove(file);
+  CHECK(read.transfer.glossy());
+  CHECK(read.transfer.exit_rows == 15);
+  CHECK(read.exit.name == baked.exit.name);
+  CHECK(read.exit.parameters == baked.exit.parameters);
+  CHECK(read.exit_state.matrices.size() == baked.exit_state.matrices.size());
+  const Rendered from_memory = render(scene, baked, registry, times);
+  const Rendered from_file = render(scene, read, registry, times);
+  CHECK(from_file.vertex_radiance == from_memory.vertex_radiance);
   Progress::set_enabled(true);
 }

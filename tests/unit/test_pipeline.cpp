@@ -96,6 +96,9 @@ TEST_CASE("progress and messages reach the app's callbacks, not the terminal", "
   std::vector<std::string> messages;
   Progress::set_enabled(true);
   Progress::set_sink([&](const ProgressReport& r) { reports.push_back(r); });
+  struct Reset {  // the sink refers to locals: reset it however the test ends
+    ~Reset() { Progress::set_sink(nullptr); }
+  } reset;
   RunOptions options;
   options.log = [&](const std::string& text) { messages.push_back(text); };
   StageTimes times;
@@ -115,6 +118,9 @@ TEST_CASE("progress and messages reach the app's callbacks, not the terminal", "
 TEST_CASE("library warnings reach the app's log sink", "[pipeline]") {
   std::vector<std::pair<LogLevel, std::string>> lines;
   set_log_sink([&](LogLevel level, const std::string& text) { lines.emplace_back(level, text); });
+  struct Reset {
+    ~Reset() { set_log_sink(nullptr); }
+  } reset;
   RunOptions options;
   options.warn("a test warning");
   options.message("a test message");

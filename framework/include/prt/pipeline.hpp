@@ -71,6 +71,7 @@ struct BakePlan {
   bool least_squares = true;
   double cutoff = 1e-10;
   GlossyMethod glossy_method = GlossyMethod::rotate_sh;
+  GlossyOperator glossy_operator;  // made by plan_bake
 };
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry);
 

@@ -28,8 +28,8 @@ struct TransferSignal {
 
 // One form for every compressor: per vertex a cluster index and n'_k weights;
 // per cluster a mean and n'_k representative vectors; optional supercluster
-// ids. VQ is n' = 0, PCA is one cluster, "none" is one cluster with zero mean
-// and the identity as representatives (weights = the signal itself). Adaptive
+// ids. VQ is n' = 0, PCA is one cluster, "none" (exact_form) is a cluster per
+// vertex whose mean is the vertex's signal, with no components. Adaptive
 // CPCA gives clusters different n'_k; weights are stored padded to the largest.
 struct CompressedTransfer {
   std::string compressor;
@@ -66,8 +66,8 @@ struct CompressedTransfer {
   double stored_floats() const;
 };
 
-// The uncompressed transfer in the one compressed form: one cluster, zero
-// mean, identity representatives, the transfer itself as weights.
+// The uncompressed transfer in the one compressed form: a cluster per vertex
+// whose mean is the vertex's transfer, no components (v x n floats, exact).
 CompressedTransfer exact_form(const TransferSignal& signal);
 
 // Non-linear approximation: keeps the `terms` largest-magnitude coefficients of

@@ -1,5 +1,5 @@
-// The exact "compression": one cluster, zero mean, identity representatives,
-// so the per-vertex weights are the transfer itself.
+// The exact "compression" (exact_form): a cluster per vertex whose mean is the
+// vertex's transfer and no components, so nothing is lost.
 #include <array>
 
 #include "prt/compressor.hpp"
