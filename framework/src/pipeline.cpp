@@ -93,7 +93,7 @@ double available_memory() {
 // and the basis evaluated at every direction (unless it projects by a fast
 // transform).
 void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& mesh,
-                    const DirectionSet& set, bool keep_visibility, bool exact_form) {
+                    const DirectionSet& set, bool keep_visibility) {
   const double v = double(mesh.vertex_count()), d = double(set.size()),
                n = double(plan.basis->size());
   const double rows = plan.glossy ? double(plan.exit->size()) : 1.0;
@@ -102,19 +102,18 @@ void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& me
   // transform projects), and glossy transfer's weighted light values.
   const double projection = plan.basis->has_fast_projection(set) ? 0 : d * n * sizeof(double);
   const double glossy_light = plan.glossy ? d * n * sizeof(double) : 0;
-  // An exact compressed form stores the identity as its representatives.
-  const double identity = exact_form ? dimension * dimension * sizeof(float) : 0;
-  const double bytes = 2 * v * dimension * sizeof(float) + projection + glossy_light + identity +
+  // The transfer twice: exact, and its compressed (or exact) form.
+  const double bytes = 2 * v * dimension * sizeof(float) + projection + glossy_light +
                        (keep_visibility ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0);
   const double available = available_memory();
   if (bytes > available) {
-    char message[480];
+    char message[400];
     std::snprintf(message, sizeof message,
                   "this bake needs about %.1f GB (%.0f vertices x %.0f coefficients%s, %.0f "
-                  "directions%s), but %.1f GB are available; lower the basis size, rays or mesh "
+                  "directions), but %.1f GB are available; lower the basis size, rays or mesh "
                   "resolution",
                   bytes / 1e9, v, dimension, rows > 1 ? " per glossy matrix" : "", d,
-                  identity > 0 ? ", and the exact form's identity matrix" : "", available / 1e9);
+                  available / 1e9);
     throw Error(scene.basis.where, message);
   }
 }
@@ -343,8 +342,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const DirectionSet set = scene.directions();
   times.add("directions", clock.seconds());
 
-  require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced,
-                 plan.sparse_terms == 0 && (!options.compress || plan.compressor->exact()));
+  require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
   TransportResult traced = trace_stage(plan, data.mesh, set, options);
   const auto rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
@@ -402,7 +400,7 @@ namespace {
 
 void check_plugin_matches(const PluginRecord& baked, const PluginChoice& wanted, const char* role) {
   const std::string parameters = wanted.params.describe();
-  if (baked.name == wanted.name && baked.parameters == parameters) return;
+  if (same_plugin(baked.name, baked.parameters, wanted.name, parameters)) return;
   auto first_line = [](const std::string& text) { return text.substr(0, text.find('\n')); };
   throw Error(wanted.where, std::string("the bake file was made with ") + role + " \"" +
                                 baked.name + "\" (" + first_line(baked.parameters) +

@@ -22,6 +22,11 @@ const char* host_build_key() {
   return PRT_BUILD_KEY;
 }
 
+bool same_plugin(const std::string& recorded_name, const std::string& recorded_parameters,
+                 const std::string& name, const std::string& parameters) {
+  return recorded_name == name && recorded_parameters == parameters;
+}
+
 ParamSchema PluginDescriptor::schema() const {
   ParamSchema schema;
   schema.owner = std::string(to_string(kind())) + " \"" + name() + "\"";

@@ -15,8 +15,9 @@ TEST_CASE("the exact compressor decodes to the signal and relights as t . l", "[
   s.coefficients = MatrixXfRow::Random(50, 16);
   const CompressedTransfer c = none->encode(s, nullptr);
   CHECK(c.decode() == s.coefficients);
-  CHECK(c.clusters() == 1);
-  CHECK(c.stored_floats() == 50.0 * 16 + 1.0 * 17 * 16);
+  CHECK(c.clusters() == 50);  // a cluster per vertex, its mean the vertex's transfer
+  CHECK(c.components == 0);
+  CHECK(c.stored_floats() == 50.0 * 16);
   const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(16, 3);
   const Eigen::MatrixX3f expected = (s.coefficients.cast<double>() * light).cast<float>();
   CHECK((relight(c, light) - expected).cwiseAbs().maxCoeff() < 1e-5f);

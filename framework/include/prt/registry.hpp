@@ -29,6 +29,12 @@ struct PluginDescriptor {
 // The build key of the host, to compare with each plug-in's.
 const char* host_build_key();
 
+// Whether a plug-in recorded as (name, parameters), e.g. in a bake file, is
+// the one now named with these parameters. Plug-in identity is the
+// registry's business; everything else asks plug-ins for capabilities.
+bool same_plugin(const std::string& recorded_name, const std::string& recorded_parameters,
+                 const std::string& name, const std::string& parameters);
+
 // A file or folder on the plug-in path that was skipped, and why. `name` is
 // the plug-in name it declares, or that its file name suggests (may be empty).
 struct PluginProblem {
