@@ -75,9 +75,13 @@ double transport_error(const Mesh& mesh, const DirectionSet& set, const Transpor
   return std::sqrt(error / std::max(energy, 1e-300));
 }
 
-}  // namespace
-
-namespace {
+// A diffuse entry's transport error in `format`; `absent` for a glossy one.
+std::string transport_text(double error, const char* format, const char* absent) {
+  if (!std::isfinite(error)) return absent;
+  char text[32];
+  std::snprintf(text, sizeof text, format, error);
+  return text;
+}
 
 // The scene with one --bases entry in the role its domain serves: a sphere
 // basis replaces [basis] (the light basis); a hemisphere basis replaces [exit]
@@ -175,8 +179,7 @@ int compare_bases(Context& context, const CompareArgs& args) {
     rows.push_back(row);
     std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g\n", row.spec.c_str(),
                  row.coefficients, exit_role[i] ? "exit functions" : "coefficients",
-                 std::isfinite(row.transport_error) ? std::to_string(row.transport_error).c_str()
-                                                    : "- (glossy)",
+                 transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(),
                  row.shading_rms);
   }
 
@@ -189,7 +192,7 @@ int compare_bases(Context& context, const CompareArgs& args) {
     char line[512];
     std::snprintf(line, sizeof line, "%s,%d,%.0f,%s,%.6g,%.6g,%.3f\n",
                   nlohmann::json(r.spec).dump().c_str(), r.coefficients, r.bytes,
-                  has_transport ? std::to_string(r.transport_error).c_str() : "", r.shading_rms,
+                  transport_text(r.transport_error, "%.6g", "").c_str(), r.shading_rms,
                   r.shading_relative, r.seconds);
     csv << line;
     json.push_back({{"basis", r.spec},
@@ -207,8 +210,8 @@ int compare_bases(Context& context, const CompareArgs& args) {
               "shading RMS", "relative");
   for (const auto& r : rows)
     std::printf("%-28s %6d %12.0f %14s %12.5g %10.4f\n", r.spec.c_str(), r.coefficients, r.bytes,
-                std::isfinite(r.transport_error) ? std::to_string(r.transport_error).c_str() : "-",
-                r.shading_rms, r.shading_relative);
+                transport_text(r.transport_error, "%.4f", "-").c_str(), r.shading_rms,
+                r.shading_relative);
   return 0;
 }
 

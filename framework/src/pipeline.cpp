@@ -464,13 +464,9 @@ Eigen::MatrixX3d Relighting::light(const Environment& environment) const {
 Relit Relighting::relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
                           const Camera& camera) const {
   Relit out;
-  out.exit_coefficients = exit_coefficients(transfer, light, data_.transfer.exit_rows);
-  if (exit_) {
-    out.exit_values = exit_values_toward(camera);
-    out.vertex_radiance = exit_radiance(out.exit_coefficients, out.exit_values);
-  } else {
-    out.vertex_radiance = out.exit_coefficients;
-  }
+  out.exit_values = exit_values_toward(camera);  // empty for diffuse transfer
+  // The renderers' own relight path (prt::relight), so CPU results are theirs.
+  out.vertex_radiance = prt::relight(transfer, light, exit_ ? &out.exit_values : nullptr);
   for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data_.albedo[c];
   return out;
 }

@@ -114,12 +114,10 @@ struct Rendered {
 };
 
 // One relighting of a bake's transfer (its compressed form or another encoding
-// of it) for a light vector and camera: per-vertex exit coefficients, exit
-// basis values toward the camera (glossy) and the radiance each vertex sends
-// to the camera (albedo included).
+// of it) for a light vector and camera: the exit basis's values toward the
+// camera (glossy) and the radiance each vertex sends to it (albedo included).
 struct Relit {
-  MatrixXfRow exit_coefficients;  // v x 3 N_r
-  MatrixXfRow exit_values;        // glossy only: v x N_r
+  MatrixXfRow exit_values;  // glossy only: v x N_r
   Eigen::MatrixX3f vertex_radiance;
 };
 
