@@ -461,12 +461,16 @@ Eigen::MatrixX3d Relighting::light(const Environment& environment) const {
   return scene_.project_light(environment, *basis_);
 }
 
-Relit Relighting::relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+RelightKernel Relighting::prepare(const CompressedTransfer& transfer) const {
+  return RelightKernel(transfer, data_.transfer.exit_rows);
+}
+
+Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& light,
                           const Camera& camera) const {
   Relit out;
   out.exit_values = exit_values_toward(camera);  // empty for diffuse transfer
-  // The renderers' own relight path (prt::relight), so CPU results are theirs.
-  out.vertex_radiance = prt::relight(transfer, light, exit_ ? &out.exit_values : nullptr);
+  // The renderers' own relight path (RelightKernel), so CPU results are theirs.
+  out.vertex_radiance = kernel.radiance(light, exit_ ? &out.exit_values : nullptr);
   for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data_.albedo[c];
   return out;
 }

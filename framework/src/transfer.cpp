@@ -1,6 +1,5 @@
 #include "prt/transfer.hpp"
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -110,95 +109,6 @@ double CompressedTransfer::stored_floats() const {
   for (auto k : cluster_of_vertex) floats += components_of(k);
   for (Eigen::Index k = 0; k < clusters(); ++k) floats += double(components_of(k) + 1) * dimension;
   return floats;
-}
-
-namespace {
-
-void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int rows) {
-  const Eigen::Index n_i = light.rows();
-  if (rows < 1 || n_i * rows != t.dimension)
-    throw Error("light vector has " + std::to_string(n_i) + " coefficients, but the transfer's " +
-                std::to_string(t.dimension) + " do not form " + std::to_string(rows) + " rows of " +
-                std::to_string(n_i));
-}
-
-// One stored vector (rows x N_i, row-major) times the light, flattened.
-Eigen::RowVectorXf times_light(const float* vector, int rows, const Eigen::MatrixX3f& l) {
-  using Rows3 = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
-  const Rows3 e = Eigen::Map<const MatrixXfRow>(vector, rows, l.rows()) * l;
-  return Eigen::Map<const Eigen::RowVectorXf>(e.data(), 3 * rows);
-}
-
-}  // namespace
-
-std::vector<MatrixXfRow> cluster_constants(const CompressedTransfer& t,
-                                           const Eigen::MatrixX3d& light, int rows) {
-  check_light(t, light, rows);
-  if (t.sparse()) throw Error("cluster_constants: a sparse transfer has no clusters");
-  const Eigen::MatrixX3f l = light.cast<float>();
-  std::vector<MatrixXfRow> constants(t.clusters());
-  for (Eigen::Index k = 0; k < t.clusters(); ++k) {
-    const int n_k = t.components_of(k);
-    constants[k].resize(n_k + 1, 3 * rows);
-    constants[k].row(0) = times_light(t.means.row(k).data(), rows, l);
-    for (int i = 0; i < n_k; ++i)
-      constants[k].row(i + 1) = times_light(t.representatives[k].row(i).data(), rows, l);
-  }
-  return constants;
-}
-
-MatrixXfRow exit_coefficients(const CompressedTransfer& t, const Eigen::MatrixX3d& light,
-                              int rows) {
-  check_light(t, light, rows);
-  const Eigen::Index n_i = light.rows();
-  const Eigen::MatrixX3f l = light.cast<float>();
-  MatrixXfRow out(t.vertices(), 3 * rows);
-  if (t.sparse()) {  // sparse products with the full light vector
-    const Eigen::RowVectorXf base = times_light(t.means.row(0).data(), rows, l);
-    tbb::parallel_for(Eigen::Index(0), t.vertices(), [&](Eigen::Index p) {
-      Eigen::RowVectorXf e = base;
-      for (int j = 0; j < t.components; ++j) {
-        const int index = t.weight_index[p * t.components + j];
-        const int row = index / n_i, column = index % n_i;
-        e.segment<3>(3 * row) += t.weights(p, j) * l.row(column);
-      }
-      out.row(p) = e;
-    });
-    return out;
-  }
-  const std::vector<MatrixXfRow> constants = cluster_constants(t, light, rows);
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, t.vertices(), 4096), [&](const auto& r) {
-    for (Eigen::Index p = r.begin(); p < r.end(); ++p) {
-      const auto& c = constants[t.cluster_of_vertex[p]];
-      const Eigen::Index n_k = c.rows() - 1;
-      if (n_k > 0)
-        out.row(p) = c.row(0) + t.weights.row(p).head(n_k) * c.bottomRows(n_k);
-      else
-        out.row(p) = c.row(0);
-    }
-  });
-  return out;
-}
-
-Eigen::MatrixX3f exit_radiance(const MatrixXfRow& coefficients, const MatrixXfRow& values) {
-  const Eigen::Index rows = values.cols();
-  if (coefficients.cols() != 3 * rows || coefficients.rows() != values.rows())
-    throw Error("exit radiance: coefficients do not match the exit basis and vertices");
-  Eigen::MatrixX3f out(coefficients.rows(), 3);
-  tbb::parallel_for(Eigen::Index(0), coefficients.rows(), [&](Eigen::Index p) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (Eigen::Index i = 0; i < rows; ++i)
-      for (int c = 0; c < 3; ++c) sum[c] += double(values(p, i)) * coefficients(p, 3 * i + c);
-    out.row(p) = sum.cast<float>().transpose();
-  });
-  return out;
-}
-
-Eigen::MatrixX3f relight(const CompressedTransfer& t, const Eigen::MatrixX3d& light,
-                         const MatrixXfRow* exit_values) {
-  if (!exit_values) return exit_coefficients(t, light, 1);
-  return exit_radiance(exit_coefficients(t, light, static_cast<int>(exit_values->cols())),
-                       *exit_values);
 }
 
 double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation) {

@@ -8,6 +8,7 @@
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/hemisphere.hpp"
+#include "prt/relight.hpp"
 #include "prt/registry.hpp"
 #include "prt/sh.hpp"
 #include "prt/transport.hpp"

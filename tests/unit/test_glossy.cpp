@@ -7,6 +7,7 @@
 #include "prt/basis.hpp"
 #include "prt/brdf.hpp"
 #include "prt/glossy.hpp"
+#include "prt/relight.hpp"
 #include "prt/hemisphere.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"

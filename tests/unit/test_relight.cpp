@@ -4,6 +4,7 @@
 #include "prt/compressor.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/registry.hpp"
+#include "prt/relight.hpp"
 
 using namespace prt;
 
@@ -51,4 +52,65 @@ TEST_CASE("vertex error statistics", "[relight]") {
   CHECK(e.max == Approx(1.0));
   CHECK(e.relative_rms == Approx(0.1));
   CHECK(vertex_error(reference, reference).rms == 0.0);
+}
+
+namespace {
+
+// A compressed transfer with clusters of every kernel size (n'_k = 0..17,
+// fixed-size and generic kernels), an empty cluster and clusters larger than
+// one block of vertices, in scrambled vertex order.
+CompressedTransfer mixed_clusters(Eigen::Index dimension, int vertices) {
+  CompressedTransfer c;
+  c.dimension = dimension;
+  const int clusters = 19;
+  c.components = 17;
+  c.means = MatrixXfRow::Random(clusters, dimension);
+  for (int k = 0; k < clusters; ++k)
+    c.representatives.push_back(MatrixXfRow::Random(k == 18 ? 0 : k, dimension));
+  c.weights = MatrixXfRow::Zero(vertices, c.components);
+  for (int p = 0; p < vertices; ++p) {
+    const int k = (p * 7919) % clusters == 5 ? 6 : (p * 7919) % clusters;  // cluster 5 empty
+    c.cluster_of_vertex.push_back(k);
+    const int n_k = c.components_of(k);
+    c.weights.row(p).head(n_k) = Eigen::RowVectorXf::Random(n_k);
+  }
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("the relight kernel matches the decoded transfer for every cluster shape", "[relight]") {
+  const CompressedTransfer c = mixed_clusters(12, 1500);
+  c.validate(1500);
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(12, 3);
+  const Eigen::MatrixX3f expected = (c.decode().cast<double>() * light).cast<float>();
+  const RelightKernel kernel(c, 1);
+  const Eigen::MatrixX3f once = kernel.radiance(light);
+  CHECK((once - expected).cwiseAbs().maxCoeff() < 1e-4f);
+  CHECK(kernel.radiance(light) == once);  // the layout is reused, not consumed
+  // exit coefficients of a diffuse transfer are its radiance, RGB interleaved
+  const MatrixXfRow e = kernel.exit_coefficients(light);
+  CHECK((e - MatrixXfRow(once)).cwiseAbs().maxCoeff() < 1e-5f);
+  CHECK(kernel.streamed_bytes(false) > 0);
+}
+
+TEST_CASE("the glossy relight kernel dots each exit vector with the exit values", "[relight]") {
+  const int rows = 5, n_i = 4, vertices = 700;
+  const CompressedTransfer c = mixed_clusters(rows * n_i, vertices);
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(n_i, 3);
+  const MatrixXfRow values = MatrixXfRow::Random(vertices, rows);
+  const MatrixXfRow decoded = c.decode();
+  Eigen::MatrixX3f expected(vertices, 3);
+  for (int p = 0; p < vertices; ++p) {
+    const Eigen::MatrixXd m =
+        Eigen::Map<const MatrixXfRow>(decoded.row(p).data(), rows, n_i).cast<double>();
+    expected.row(p) = (values.row(p).cast<double>() * m * light).cast<float>();
+  }
+  const RelightKernel kernel(c, rows);
+  CHECK((kernel.radiance(light, &values) - expected).cwiseAbs().maxCoeff() < 1e-4f);
+  CHECK((relight(c, light, &values) - expected).cwiseAbs().maxCoeff() < 1e-4f);
+  CHECK_THROWS_WITH(kernel.radiance(light), Catch::Contains("exit basis"));
+  const MatrixXfRow wrong = MatrixXfRow::Zero(vertices, rows + 1);
+  CHECK_THROWS_WITH(kernel.radiance(light, &wrong), Catch::Contains("exit values"));
+  CHECK_THROWS(RelightKernel(c, 7));  // 20 coefficients do not form 7 rows
 }

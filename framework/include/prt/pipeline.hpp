@@ -14,6 +14,7 @@
 #include "prt/glossy.hpp"
 #include "prt/image.hpp"
 #include "prt/registry.hpp"
+#include "prt/relight.hpp"
 #include "prt/renderer.hpp"
 #include "prt/scene.hpp"
 
@@ -131,8 +132,14 @@ class Relighting {
   const Basis& basis() const { return *basis_; }
   // The light vector of an environment in the light basis ([lighting] window applied).
   Eigen::MatrixX3d light(const Environment& environment) const;
-  Relit relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+  // Lays a transfer out for relighting frame after frame (viewer, bench).
+  RelightKernel prepare(const CompressedTransfer& transfer) const;
+  Relit relight(const RelightKernel& kernel, const Eigen::MatrixX3d& light,
                 const Camera& camera) const;
+  Relit relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                const Camera& camera) const {
+    return relight(prepare(transfer), light, camera);
+  }
   // Glossy: the exit basis toward the camera at each vertex (v x N_r); empty
   // for diffuse transfer.
   MatrixXfRow exit_values_toward(const Camera& camera) const;

@@ -74,30 +74,6 @@ CompressedTransfer exact_form(const TransferSignal& signal);
 // each vertex, stored sparsely (index + value).
 CompressedTransfer keep_largest(const TransferSignal& signal, int terms);
 
-// Per-vertex exit radiance (v x 3, linear RGB) for a light vector (n x 3):
-// per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki;
-// for glossy transfer then y(v_p) . e_p with the exit basis's values toward
-// the camera (v x N_r). The one relight path of every renderer.
-Eigen::MatrixX3f relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
-                         const MatrixXfRow* exit_values = nullptr);
-
-// Exit radiance y(v_p) . e_p per vertex (v x 3) from exit coefficients
-// (v x 3 N_r, as exit_coefficients returns) and exit values (v x N_r).
-Eigen::MatrixX3f exit_radiance(const MatrixXfRow& coefficients, const MatrixXfRow& values);
-
-// The per-cluster constants of Sloan 2003 §6 (CPU side of rendering): for
-// each cluster k a (n'_k + 1) x 3 rows matrix, row 0 = M_k0 l, row i = M_ki l,
-// each stored vector read as a `rows` x N_i matrix (RGB interleaved).
-std::vector<MatrixXfRow> cluster_constants(const CompressedTransfer& transfer,
-                                           const Eigen::MatrixX3d& light, int rows);
-
-// Exit-radiance coefficients per vertex for a light vector (N_i x 3), with
-// each stored vector read as a `rows` x N_i matrix: per-cluster constants
-// C_ki = M_ki l (rows x 3), then e_p = C_k0 + sum_i w_pi C_ki. Returns
-// v x 3 rows, RGB interleaved per coefficient (e_p(i, c) at 3 i + c).
-MatrixXfRow exit_coefficients(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
-                              int rows);
-
 // Squared error sum over vertices of |t_p - reconstruction_p|^2.
 double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation);
 

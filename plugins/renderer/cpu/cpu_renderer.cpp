@@ -3,6 +3,7 @@
 #include <array>
 
 #include "prt/plugin.hpp"
+#include "prt/relight.hpp"
 #include "prt/renderer.hpp"
 #include "rasterizer.hpp"
 

@@ -10,6 +10,7 @@
 
 #include "gl_context.hpp"
 #include "prt/plugin.hpp"
+#include "prt/relight.hpp"
 #include "prt/renderer.hpp"
 #include "shaders.hpp"
 

@@ -1,0 +1,89 @@
+// Relighting at memory speed (Sloan 2003 §6 on the CPU): the one compressed
+// form laid out once so that each frame streams its per-vertex data once.
+//
+// Vertices are visited in cluster order, so a cluster's constants
+// C_ki = M_ki l stay in registers while its vertices' weights stream past;
+// weights are stored compactly in that order (n'_k per vertex, no padding);
+// the constants are computed per cluster into one per-thread buffer (no
+// per-cluster allocation) right before that cluster's sums; the sums use
+// kernels of fixed n' for the common sizes. Glossy transfer is fused: each
+// vertex's exit-basis values toward the camera are dotted with its exit
+// vector without writing the v x 3 N_r exit coefficients.
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "prt/transfer.hpp"
+
+namespace prt {
+
+class RelightKernel {
+ public:
+  // Each stored vector is read as a `rows` x N_i matrix (rows = 1: diffuse).
+  // `transfer` must outlive the kernel and stay unchanged.
+  RelightKernel(const CompressedTransfer& transfer, int rows);
+
+  int rows() const { return rows_; }
+  const CompressedTransfer& transfer() const { return *transfer_; }
+
+  // v x 3 radiance in mesh order: e_p . l for diffuse transfer (exit_values
+  // null, rows 1); y(v_p) . e_p for glossy (exit_values v x rows).
+  Eigen::MatrixX3f radiance(const Eigen::MatrixX3d& light,
+                            const MatrixXfRow* exit_values = nullptr) const;
+  // v x 3 rows exit coefficients, RGB interleaved (e_p(i, c) at 3 i + c).
+  MatrixXfRow exit_coefficients(const Eigen::MatrixX3d& light) const;
+
+  // Bytes a frame must move at least: every per-vertex weight and cluster
+  // index read, the exit values read (glossy), three floats written per
+  // vertex. The bound the relight benchmark compares against.
+  double streamed_bytes(bool with_exit_values) const;
+
+ private:
+  // Per cluster: its constants, then sums(k, constants, vertices, size,
+  // weights, scratch) with `scratch_floats` floats of per-task scratch.
+  template <class Sums>
+  void for_each_cluster(const Eigen::MatrixX3f& light, std::size_t scratch_floats,
+                        const Sums& sums) const;
+
+  // Radiance in cluster order (SoA) back to mesh order.
+  Eigen::MatrixX3f to_mesh_order(const Eigen::MatrixX3f& sorted) const;
+
+  const CompressedTransfer* transfer_;
+  int rows_;
+  std::vector<std::int32_t> vertex_order_;          // vertices sorted by cluster (stable)
+  std::vector<std::int32_t> rank_;                  // inverse of vertex_order_
+  std::vector<std::int64_t> cluster_begin_;         // clusters + 1 offsets into vertex_order_
+  std::vector<std::int64_t> weight_begin_;          // per cluster offset into weights_
+  std::vector<float> weights_;                      // n'_k per vertex, in vertex_order_
+  std::vector<std::int64_t> representative_begin_;  // per cluster, in stored vectors
+  std::vector<float> representatives_;              // all clusters' n'_k x n, packed
+};
+
+// One-off forms of the kernel (it is laid out on each call; a loop over
+// frames keeps a RelightKernel instead).
+// Per-vertex exit radiance (v x 3, linear RGB) for a light vector (n x 3):
+// per-cluster constants c_ki = M_ki . l, then e_p = c_k0 + sum_i w_pi c_ki;
+// for glossy transfer then y(v_p) . e_p with the exit basis's values toward
+// the camera (v x N_r). The one relight path of every renderer.
+Eigen::MatrixX3f relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                         const MatrixXfRow* exit_values = nullptr);
+
+// Exit radiance y(v_p) . e_p per vertex (v x 3) from exit coefficients
+// (v x 3 N_r, as exit_coefficients returns) and exit values (v x N_r).
+Eigen::MatrixX3f exit_radiance(const MatrixXfRow& coefficients, const MatrixXfRow& values);
+
+// The per-cluster constants of Sloan 2003 §6 (CPU side of rendering): for
+// each cluster k a (n'_k + 1) x 3 rows matrix, row 0 = M_k0 l, row i = M_ki l,
+// each stored vector read as a `rows` x N_i matrix (RGB interleaved).
+std::vector<MatrixXfRow> cluster_constants(const CompressedTransfer& transfer,
+                                           const Eigen::MatrixX3d& light, int rows);
+
+// Exit-radiance coefficients per vertex for a light vector (N_i x 3), with
+// each stored vector read as a `rows` x N_i matrix: per-cluster constants
+// C_ki = M_ki l (rows x 3), then e_p = C_k0 + sum_i w_pi C_ki. Returns
+// v x 3 rows, RGB interleaved per coefficient (e_p(i, c) at 3 i + c).
+MatrixXfRow exit_coefficients(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                              int rows);
+
+}  // namespace prt
