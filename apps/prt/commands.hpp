@@ -55,6 +55,8 @@ int bench(Context& context, const BenchArgs& args);
 struct StabilityArgs {
   std::vector<int> orders{2, 5, 10, 15, 20, 30, 40, 50, 60, 70, 80, 90, 101, 120, 150};
   int max_rotation_order = 101;
+  // Single bands measured alone (rotation and the addition theorem) to high degree.
+  std::vector<int> bands{100, 200, 500, 1000};
   int hemisphere_order = 12;
   std::string json, figure_data;
   bool force = false;

@@ -90,6 +90,10 @@ int main(int argc, char** argv) {
       ->delimiter(',');
   stability_cmd->add_option("--max-rotation-order", stability.max_rotation_order,
                             "largest order whose rotation is measured");
+  stability_cmd
+      ->add_option("--bands", stability.bands,
+                   "single bands l measured alone to high degree (rotation, evaluation)")
+      ->delimiter(',');
   stability_cmd->add_option("--hemisphere-order", stability.hemisphere_order,
                             "largest order of the hemispherical Gram matrix");
   stability_cmd->add_option("--json", stability.json, "write the figures as JSON");

@@ -18,6 +18,7 @@
 #include "prt/output_file.hpp"
 #include "prt/quadrature.hpp"
 #include "prt/sh.hpp"
+#include "prt/sh_rotation.hpp"
 
 namespace prt::cli {
 
@@ -92,6 +93,75 @@ void rotation_errors(int order, double& orthogonality, double& reprojection) {
   reprojection = (projected - r * c).norm();
 }
 
+// A random rotation whose Euler angle beta is `beta` (ZYZ), so that the
+// degenerate ends (beta ~ 0, pi) are measured as well as generic ones.
+Eigen::Matrix3d rotation_with_beta(double beta, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> angle(0, 2 * M_PI);
+  return (Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(beta, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitZ()))
+      .toRotationMatrix();
+}
+
+// Band l alone: worst max abs(B B^T - I) and worst pointwise difference of
+// sum_m (B c)_m y_lm(d) from sum_m c_m y_lm(R^T d) (abs(c) = 1, relative to
+// the bound sqrt((2l+1)/4pi) of abs(f)) over rotations with beta from 0 to pi.
+void band_rotation_errors(int l, double& orthogonality, double& pointwise, bool& finite) {
+  std::mt19937_64 rng(l);
+  std::normal_distribution<double> normal;
+  const int size = 2 * l + 1;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> band(size, size);
+  std::vector<double> y(static_cast<std::size_t>(l + 1) * (l + 1));
+  const double scale = std::sqrt((2.0 * l + 1) / (4 * M_PI));
+  orthogonality = pointwise = 0;
+  finite = true;
+  for (double beta : {1e-9, 1e-3, 0.7, M_PI / 2, M_PI - 1e-3, M_PI}) {
+    const Eigen::Matrix3d r = rotation_with_beta(beta, rng);
+    sh::rotation_band(l, r, band.data());
+    finite = finite && band.allFinite();
+    orthogonality = std::max(
+        orthogonality,
+        (band * band.transpose() - Eigen::MatrixXd::Identity(size, size)).cwiseAbs().maxCoeff());
+    Eigen::VectorXd c(size);
+    for (auto& x : c) x = normal(rng);
+    c.normalize();
+    const Eigen::VectorXd rotated = band * c;
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d d = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized(),
+                            back = r.transpose() * d;
+      sh::evaluate(l + 1, d.x(), d.y(), d.z(), y.data());
+      const double g = Eigen::Map<const Eigen::VectorXd>(y.data() + l * l, size).dot(rotated);
+      sh::evaluate(l + 1, back.x(), back.y(), back.z(), y.data());
+      const double f = Eigen::Map<const Eigen::VectorXd>(y.data() + l * l, size).dot(c);
+      pointwise = std::max(pointwise, std::abs(g - f) / scale);
+    }
+  }
+}
+
+// The addition theorem sum_m y_lm(d)^2 = (2l+1)/4pi at the poles, next to
+// them and at random directions: worst relative error, and whether every
+// value of bands 0..l is finite.
+double addition_theorem_error(int l, bool& finite) {
+  std::mt19937_64 rng(l);
+  std::normal_distribution<double> normal;
+  std::vector<Eigen::Vector3d> directions = {
+      {0, 0, 1}, {0, 0, -1}, {std::sqrt(2e-12), 0, 1 - 1e-12}, {1, 0, 0}, {0, 1, 0}};
+  for (int k = 0; k < 16; ++k)
+    directions.push_back(Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized());
+  std::vector<double> y(static_cast<std::size_t>(l + 1) * (l + 1));
+  const double expected = (2.0 * l + 1) / (4 * M_PI);
+  double worst = 0;
+  finite = true;
+  for (const Eigen::Vector3d& d : directions) {
+    sh::evaluate(l + 1, d.x(), d.y(), d.z(), y.data());
+    const Eigen::Map<const Eigen::VectorXd> all(y.data(), static_cast<Eigen::Index>(y.size()));
+    finite = finite && all.allFinite();
+    const double sum = all.tail(2 * l + 1).squaredNorm();
+    worst = std::max(worst, std::abs(sum - expected) / expected);
+  }
+  return worst;
+}
+
 // Negative-radiance solid angle (fraction of the sphere) of a truncated SH
 // reconstruction, and its most negative value relative to the sky.
 struct Ringing {
@@ -129,10 +199,23 @@ int stability(Context& context, const StabilityArgs& args) {
   }
   report.row(format("\nHighest l within 1e-10 (of those measured): **%d**", highest_evaluation));
   report.value("evaluation_highest_l_1e-10", highest_evaluation);
+  report.section("SH evaluation of single high bands: addition theorem",
+                 "| l | max relative abs(sum_m y_lm^2 - (2l+1)/4pi) | all values finite |\n"
+                 "|---|---|---|");
+  int highest_band_evaluation = 0;
+  for (int l : args.bands) {
+    bool finite = true;
+    const double e = addition_theorem_error(l, finite);
+    if (e < 1e-10 && finite) highest_band_evaluation = std::max(highest_band_evaluation, l);
+    report.row(format("| %d | %.3g | %s |", l, e, finite ? "yes" : "NO"));
+    report.value("evaluation_addition_l" + std::to_string(l), e);
+  }
+  report.row(format("\nHighest band within 1e-10, all finite: **%d**", highest_band_evaluation));
+  report.value("evaluation_band_highest_l_1e-10", highest_band_evaluation);
 
   // 2. SH rotation.
   report.section(
-      "SH rotation (Ivanic-Ruedenberg)",
+      "SH rotation (Gumerov-Duraiswami, block-diagonal)",
       "| order | max abs(R R^T - I) | abs(R c - reprojected) for abs(c) = 1 |\n|---|---|---|");
   int highest_rotation = 0;
   for (int order : args.orders) {
@@ -144,6 +227,20 @@ int stability(Context& context, const StabilityArgs& args) {
     report.row(format("| %d | %.3g | %.3g |", order, orthogonality, reprojection));
     report.value("rotation_orthogonality_l" + std::to_string(order - 1), orthogonality);
     report.value("rotation_reprojection_l" + std::to_string(order - 1), reprojection);
+  }
+  report.section("SH rotation of single high bands (beta from 1e-9 to pi)",
+                 "| l | max abs(B B^T - I) | max relative abs(B c - c(R^T .)) pointwise | "
+                 "finite |\n|---|---|---|---|");
+  for (int l : args.bands) {
+    double orthogonality = 0, pointwise = 0;
+    bool finite = true;
+    band_rotation_errors(l, orthogonality, pointwise, finite);
+    if (std::max(orthogonality, pointwise) < 1e-10 && finite)
+      highest_rotation = std::max(highest_rotation, l);
+    report.row(
+        format("| %d | %.3g | %.3g | %s |", l, orthogonality, pointwise, finite ? "yes" : "NO"));
+    report.value("rotation_band_orthogonality_l" + std::to_string(l), orthogonality);
+    report.value("rotation_band_pointwise_l" + std::to_string(l), pointwise);
   }
   report.row(format("\nHighest l within 1e-10 for rotation (of those measured): **%d**",
                     highest_rotation));

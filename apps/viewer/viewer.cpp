@@ -42,8 +42,10 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
   environment_ = scene_.load_environment();
   scene_rotation_ = environment_.rotation();
   base_light_ = relighting_->light(environment_);
-  encodings_.push_back({data_.compressor.name, data_.compressed});
-  encodings_.push_back({"exact", exact_form(data_.transfer)});
+  encodings_.push_back({data_.compressor.name, data_.compressed, nullptr});
+  encodings_.push_back({"exact", exact_form(data_.transfer), nullptr});
+  for (auto& encoding : encodings_)
+    encoding.kernel = std::make_unique<RelightKernel>(relighting_->prepare(encoding.transfer));
   current_ = options.exact ? 1 : 0;
   home_ = scene_.make_camera(data_.mesh);
   exposure_ = static_cast<float>(scene_.camera.get_real("exposure"));
@@ -117,11 +119,11 @@ void Viewer::update_light() {
 
 Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camera& cam) const {
   const Eigen::MatrixX3f exact =
-      relighting_->relight(encodings_[1].transfer, light, cam).vertex_radiance;
+      relighting_->relight(*encodings_[1].kernel, light, cam).vertex_radiance;
   const Eigen::MatrixX3f shown =
       current_ == 1
           ? exact
-          : relighting_->relight(encodings_[current_].transfer, light, cam).vertex_radiance;
+          : relighting_->relight(*encodings_[current_].kernel, light, cam).vertex_radiance;
   const float scale = std::max(1e-12f, exact.rowwise().norm().maxCoeff());
   Eigen::MatrixX3f colours(shown.rows(), 3);
   for (Eigen::Index p = 0; p < shown.rows(); ++p)

@@ -45,6 +45,7 @@ class Viewer {
   struct Encoding {
     std::string name;
     CompressedTransfer transfer;
+    std::unique_ptr<RelightKernel> kernel;  // laid out once encodings_ is final
   };
   void make_renderer(const std::string& method);
   void update_light();

@@ -11,6 +11,7 @@
 #include "prt/hemisphere.hpp"
 #include "prt/progress.hpp"
 #include "prt/sh.hpp"
+#include "prt/sh_rotation.hpp"
 #include "prt/transport.hpp"
 
 namespace prt {
@@ -76,7 +77,7 @@ TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
   out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), n_r * n_i);
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), 64), [&](const auto& range) {
-        Eigen::MatrixXd visible_light, visible_incident;
+        Eigen::MatrixXd visible_light, visible_incident, projected, rotated;
         std::vector<std::uint32_t> seen;
         for (std::size_t v = range.begin(); v < range.end(); ++v) {
           visible_directions(visibility, v, words, seen);
@@ -88,8 +89,11 @@ TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
             visible_incident.resize(count, incident.cols());
             for (Eigen::Index j = 0; j < count; ++j)
               visible_incident.row(j) = incident.row(seen[j]);
-            m.noalias() = glossy.matrix * (sh::rotation(order, frames[v]) *
-                                           (visible_incident.transpose() * visible_light));
+            // Block-diagonal rotation applied band by band (no dense M^2 x M^2).
+            projected.noalias() = visible_incident.transpose() * visible_light;
+            rotated.resize(projected.rows(), projected.cols());
+            sh::Rotation(order, frames[v]).apply(projected, rotated);
+            m.noalias() = glossy.matrix * rotated;
           } else {
             Directions local(count, 3);
             for (Eigen::Index j = 0; j < count; ++j)

@@ -13,8 +13,9 @@ namespace {
 constexpr double kSqrt2 = 1.41421356237309504880;
 
 // R = Rz(alpha) Ry(beta) Rz(gamma), in the forms the recursion and the assembly need. For
-// beta > pi/2 the recursion runs at pi - beta (flip): it loses accuracy near beta = pi (1e-10 at
-// l = 1000 for pi - beta = 1e-7), and H^{m',m}(beta) = (-1)^{l+m+m'} H^{-m',m}(pi - beta).
+// beta > pi/2 the recursion runs at pi - beta (flip), using H^{m',m}(beta) = (-1)^{l+m+m'}
+// H^{-m',m}(pi - beta): the Legendre seeds are computed from 1 - cos, which is only accurate
+// near cos = 1 (without the flip, |B B^T - I| reaches 6e-11 at l = 500 for pi - beta = 1e-3).
 struct Euler {
   double cos_beta, sin_beta, one_minus_cos, one_plus_cos;  // of the recursion angle
   double cos_alpha, sin_alpha, cos_gamma, sin_gamma;
@@ -112,7 +113,7 @@ const Cache& cache() {
 // ~ d^2 ulp (1e-11 at d = 500); instead it runs on D_d = P~_d - g_d P~_{d-1}, g_d = sqrt((d+m) /
 // (d-m)) being the ratio at x = 1, with u = 1 - x (exact, and <= 1 thanks to the flip):
 //   D_d = (d-1-m) / sqrt(d^2 - m^2) D_{d-1} - a u P~_{d-1},  P~_d = g_d P~_{d-1} + D_d.
-// Values below the double range are negligible for degrees up to ~1900 (the sectoral seeds
+// Values below the double range are negligible for degrees up to ~1800 (the sectoral seeds
 // that matter there are >= e^{-d/e}).
 void legendre_next(int n, const double* root, const double* inv_root, const Euler& e,
                    const double* p, const double* dp, double* p_next, double* dp_next) {
@@ -172,7 +173,8 @@ inline void put_group(int m, double A, double B, double ck, double sk, double cg
   minus[-m] = A * cos_p - B * cos_m;
 }
 
-// put_group for m = first..last with A = ha[m], B = hb[m] (contiguous, so it vectorises).
+// put_group for m = first..last with A = ha[m], B = hb[m]: contiguous and spelt out, so that
+// it vectorises.
 void put_groups(int first, int last, const double* __restrict ha, const double* __restrict hb,
                 double ck, double sk, const double* __restrict cg, const double* __restrict sg,
                 double* __restrict plus, double* __restrict minus) {

@@ -2,10 +2,12 @@
 //
 //   bench_bake [mesh.off] [rays] [order] [repeats]
 //
-// "raw" builds the BVH and traces exactly the rays the bake casts (only
-// directions above each vertex's tangent plane) and does nothing else; "bake"
-// is the full transfer stage (BVH, rays, visibility bits, SH projection as
-// GEMMs). The acceptance limit of issue 2 is bake / raw <= 1.25.
+// "raw" is the best raw Embree path we found (raw_embree.hpp, written
+// directly against Embree): it builds the BVH and traces exactly the rays the
+// bake casts (directions above each vertex's tangent plane, Morton order,
+// rtcOccluded1M streams, incoherent) and keeps only a count. "bake" is the
+// full transfer stage (BVH, rays, visibility bits, SH projection as GEMMs).
+// Limit (issue 12): bake / raw <= 1.1 in the same run.
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -16,6 +18,7 @@
 #include "prt/progress.hpp"
 #include "prt/sh.hpp"
 #include "prt/transport.hpp"
+#include "raw_embree.hpp"
 
 #ifndef PRT_SOURCE_DIR
 #define PRT_SOURCE_DIR "."
@@ -28,18 +31,19 @@ int main(int argc, char** argv) {
   const int rays = argc > 2 ? std::stoi(argv[2]) : 1024;
   const int order = argc > 3 ? std::stoi(argv[3]) : 10;
   const int repeats = argc > 4 ? std::stoi(argv[4]) : 3;
-  const double limit = 1.25;
+  const double limit = 1.1;
 
   const Mesh mesh = load_mesh(mesh_file);
   const DirectionSet set = DirectionSet::fibonacci(rays);
   std::printf("mesh %s: %zu vertices; %d directions; SH order %d (%d coefficients)\n",
               mesh_file.c_str(), mesh.vertex_count(), rays, order, order * order);
 
+  const std::vector<std::uint32_t> order_of_vertices = morton_order(mesh);
   std::vector<double> raw, bake;
   std::uint64_t rays_raw = 0, rays_bake = 0;
   for (int r = 0; r < repeats; ++r) {
     Stopwatch raw_clock;
-    rays_raw = trace_only(mesh, set, nullptr);
+    rays_raw = bench::raw_trace(mesh, set, order_of_vertices, bench::RawSettings{}).rays;
     raw.push_back(raw_clock.seconds());
 
     Stopwatch bake_clock;

@@ -58,7 +58,10 @@ out=$("$prt" stability --orders 5,20,101 --hemisphere-order 6)
 grep -q '^| 101 | 100 | .* | yes |' <<<"$out" || { echo "FAIL: no finite l = 100 row"; exit 1; }
 grep -q 'Highest l within 1e-10 (of those measured): \*\*100\*\*' <<<"$out" ||
   { echo "FAIL: evaluation not within 1e-10 at l = 100"; exit 1; }
-grep -q 'Highest l within 1e-10 for rotation' <<<"$out" || { echo "FAIL: no rotation order"; exit 1; }
+grep -q 'Highest l within 1e-10 for rotation (of those measured): \*\*1000\*\*' <<<"$out" ||
+  { echo "FAIL: rotation not within 1e-10 to l = 1000"; exit 1; }
+grep -q 'Highest band within 1e-10, all finite: \*\*1000\*\*' <<<"$out" ||
+  { echo "FAIL: SH evaluation not finite and within 1e-10 at l = 1000"; exit 1; }
 grep -E '^\| 20 \| (none|hanning) \|' <<<"$out" | awk -F'|' '
   { area[$3] = $4 }
   END { if (!(area[" hanning "] < area[" none "])) { print "FAIL: window did not help"; exit 1 }

@@ -5,6 +5,7 @@
 
 #include "prt/quadrature.hpp"
 #include "prt/sh.hpp"
+#include "prt/sh_rotation.hpp"
 
 using namespace prt;
 
@@ -142,4 +143,54 @@ TEST_CASE("SH windows damp high bands and the ringing of a bright spot", "[sh][w
   CHECK(plain > 0.5);
   CHECK(negative_area(windowed) < 0.9 * plain);
   CHECK((y * windowed).minCoeff() > 0.2 * (y * c).minCoeff());  // 5x shallower troughs
+}
+
+TEST_CASE("block-diagonal rotation: apply and bands agree with the dense matrix",
+          "[sh][rotation]") {
+  std::mt19937_64 rng(5);
+  for (int order : {1, 3, 10, 17}) {
+    const Eigen::Matrix3d r = random_rotation(rng);
+    const sh::Rotation rotation(order, r);
+    const Eigen::MatrixXd dense = rotation.dense();
+    const Eigen::MatrixXd in = Eigen::MatrixXd::Random(order * order, 3);
+    Eigen::MatrixXd out(order * order, 3);
+    rotation.apply(in, out);
+    INFO("order " << order);
+    CHECK((out - dense * in).cwiseAbs().maxCoeff() < 1e-13);
+    for (int l = 0; l < order; ++l) {
+      CHECK((rotation.band(l) - dense.block(l * l, l * l, 2 * l + 1, 2 * l + 1))
+                .cwiseAbs()
+                .maxCoeff() == 0.0);
+      // off-diagonal blocks are exactly zero: nothing couples bands
+      if (l > 0) CHECK(dense.block(l * l, 0, 2 * l + 1, l * l).cwiseAbs().maxCoeff() == 0.0);
+    }
+  }
+  Eigen::MatrixXd wrong(5, 3), out(5, 3);
+  CHECK_THROWS(sh::Rotation(3, Eigen::Matrix3d::Identity()).apply(wrong, out));
+}
+
+TEST_CASE("rotation at the degenerate Euler angles and at high degree", "[sh][rotation]") {
+  // beta = 0 and beta = pi (rotations about z, and by pi about x): the l = 1
+  // block is R itself in (y, z, x) order, the blocks stay orthogonal.
+  const Eigen::Matrix3d about_x = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).matrix();
+  const Eigen::Matrix3d tiny =
+      Eigen::AngleAxisd(1e-12, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
+  for (const Eigen::Matrix3d& r : {about_x, tiny}) {
+    const sh::Rotation rotation(12, r);
+    const int perm[3] = {1, 2, 0};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        CHECK(rotation.band(1)(i, j) == Approx(r(perm[i], perm[j])).margin(1e-15));
+    const Eigen::MatrixXd d = rotation.dense();
+    CHECK((d * d.transpose() - Eigen::MatrixXd::Identity(144, 144)).cwiseAbs().maxCoeff() < 1e-13);
+  }
+  // One band at l = 300, alone: orthogonal to 1e-10 (Ivanic-Ruedenberg lost
+  // that near l = 70).
+  std::mt19937_64 rng(9);
+  const int l = 300, size = 2 * l + 1;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> band(size, size);
+  sh::rotation_band(l, random_rotation(rng), band.data());
+  REQUIRE(band.allFinite());
+  CHECK((band * band.transpose() - Eigen::MatrixXd::Identity(size, size)).cwiseAbs().maxCoeff() <
+        1e-10);
 }

@@ -9,9 +9,10 @@
 //    in (y, z, x) order;
 //  - y_{l,m} = sqrt(2) K_l^m P_l^|m|(z) cos(m phi) for m > 0 and
 //    sqrt(2) K_l^|m| P_l^|m|(z) sin(|m| phi) for m < 0.
-// Evaluation uses the normalised associated-Legendre recurrence with the
-// sin^m(theta) factor folded into Re/Im (x + i y)^m, so no factorials appear
-// and nothing overflows (tested to l = 100 and beyond).
+// Evaluation uses the normalised associated-Legendre recurrence with sin^m(theta)
+// kept in the sectoral seeds and cos/sin(m phi) from (x, y) / sin(theta), so no
+// factorials appear and nothing overflows (finite and accurate to l = 1600;
+// seeds below the double range start to matter beyond l ~ 1800).
 #pragma once
 #include <Eigen/Core>
 #include <string>
@@ -34,7 +35,8 @@ void evaluate(int order, double x, double y, double z, double* out);
 Eigen::MatrixXd evaluate(int order, const Directions& directions);
 
 // Block-diagonal order^2 x order^2 matrix mapping the coefficients of f to
-// those of g(d) = f(R^T d), by the Ivanic-Ruedenberg recurrence.
+// those of g(d) = f(R^T d): Rotation(order, R).dense() (prt/sh_rotation.hpp,
+// which also has the block-diagonal form, apply and single bands).
 Eigen::MatrixXd rotation(int order, const Eigen::Matrix3d& rotation);
 
 // Per-band sigma factors that damp Gibbs ringing of truncated SH (e.g. the
