@@ -147,6 +147,12 @@ Eigen::MatrixX3d Environment::project(const Basis& basis) const {
     return basis.project(samples, set).transpose();
   }
   const int w = width_, h = height_;
+  if (!rotated || rotate_coefficients)
+    if (auto fast = basis.project_equirect(w, h, rgb_.data())) {
+      Eigen::MatrixX3d light = double(intensity_) * *fast;
+      if (rotate_coefficients) light = basis.rotation_matrix(rotation_) * light;
+      return light;
+    }
   constexpr int kRows = 8;
   const int blocks = (h + kRows - 1) / kRows;
   std::vector<Eigen::MatrixX3d> partial(blocks);

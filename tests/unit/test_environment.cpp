@@ -104,3 +104,23 @@ TEST_CASE("unreadable EXR files are refused with the file name", "[environment]"
   std::ofstream(bad) << "not an exr";
   CHECK_THROWS_WITH(Environment::load_exr(bad), Catch::Contains("prt_bad.exr"));
 }
+
+TEST_CASE("the separable SH projection of an equirectangular map equals the per-texel one",
+          "[environment][sh]") {
+  // Random texels (not band-limited) on an odd-sized grid: every texel and
+  // row weight must enter exactly as in the quadrature through directions.
+  const int width = 67, height = 31;
+  std::vector<float> rgb(width * height * 3);
+  std::uint32_t state = 12345;
+  for (float& v : rgb) v = float((state = state * 1664525u + 1013904223u) >> 8) / float(1 << 24);
+  Environment env = Environment::from_pixels(width, height, rgb);
+  env.set_intensity(2.f);
+  for (int order : {1, 2, 5, 10}) {
+    const Eigen::MatrixX3d generic = env.project(TestSH(order, true));  // through directions
+    const Eigen::MatrixX3d separable =
+        2.0 * sh::project_equirect(order, width, height, env.pixels().data());
+    INFO("order " << order);
+    CHECK((separable - generic).cwiseAbs().maxCoeff() < 1e-12 * generic.cwiseAbs().maxCoeff());
+  }
+  CHECK(sh::project_equirect(0, width, height, rgb.data()).rows() == 0);
+}

@@ -54,6 +54,16 @@ class Basis : public PluginObject {
   virtual Eigen::MatrixXd project(const Eigen::MatrixXd& samples, const DirectionSet& set) const;
   virtual bool has_fast_projection(const DirectionSet&) const { return false; }
 
+  // Capability: projection of an equirectangular RGB image (width x height
+  // texels, rgb interleaved, each sampled at its centre with its exact solid
+  // angle, as DirectionSet::equirect) without evaluating the basis per texel,
+  // e.g. SH by a separable transform. Returns size() x 3, or nothing when the
+  // basis has no such transform (the caller projects through the directions).
+  virtual std::optional<Eigen::MatrixX3d> project_equirect(int /*width*/, int /*height*/,
+                                                           const float* /*rgb*/) const {
+    return std::nullopt;
+  }
+
   // Capability: rotation of coefficient vectors. rotation_matrix(R) returns the
   // size() x size() matrix that maps coefficients of f to those of f(R^T .).
   virtual bool can_rotate() const { return false; }

@@ -39,6 +39,12 @@ Eigen::MatrixXd evaluate(int order, const Directions& directions);
 // which also has the block-diagonal form, apply and single bands).
 Eigen::MatrixXd rotation(int order, const Eigen::Matrix3d& rotation);
 
+// Coefficients (order^2 x 3) of an equirectangular RGB image (width x height
+// texels, row-major, rgb interleaved), each texel sampled at its centre and
+// weighted by its exact solid angle (as DirectionSet::equirect), by a
+// separable transform: Fourier sums per row, then Legendre per row.
+Eigen::MatrixX3d project_equirect(int order, int width, int height, const float* rgb);
+
 // Per-band sigma factors that damp Gibbs ringing of truncated SH (e.g. the
 // negative lobes around a bright sun): "none" (1), "hanning"
 // (0.5 (1 + cos(pi l / order))) or "lanczos" (sinc(l / order)); order^2 values,

@@ -30,6 +30,10 @@ class SphericalHarmonics final : public Basis {
     for (int l = 0; l < order_; ++l) bands.insert(bands.end(), 2 * l + 1, l);
     return bands;
   }
+  std::optional<Eigen::MatrixX3d> project_equirect(int width, int height,
+                                                   const float* rgb) const override {
+    return sh::project_equirect(order_, width, height, rgb);
+  }
   bool can_rotate() const override { return true; }
   Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& rotation) const override {
     return sh::rotation(order_, rotation);
