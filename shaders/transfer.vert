@@ -6,9 +6,18 @@
 // transfer has ROWS exit coefficients per colour, dotted with the exit basis's
 // values toward the camera (exit_values, ROWS per vertex, updated with the
 // view on the CPU by the exit plug-in, so any exit basis works).
-// The host prepends: #version, ROWS, COMPONENTS, SPARSE, GLOSSY.
+// Where n' allows (ATTRIBUTES), the cluster index and the weights arrive as
+// vertex attributes instead of buffer fetches.
+// The host prepends: #version, ROWS, COMPONENTS, SPARSE, GLOSSY, ATTRIBUTES,
+// WEIGHT_VEC4S.
 
 layout(location = 0) in vec3 position;
+#if ATTRIBUTES
+layout(location = 1) in int cluster_attribute;
+#if COMPONENTS > 0
+layout(location = 2) in vec4 weight_attribute[WEIGHT_VEC4S];
+#endif
+#endif
 
 uniform mat4 view_projection;
 uniform vec3 albedo;
@@ -32,7 +41,11 @@ void main() {
 #if COMPONENTS < 0
   colour = texelFetch(vertex_colour, v).rgb;
 #else
+#if ATTRIBUTES
+  int k = cluster_attribute;
+#else
   int k = texelFetch(cluster_of_vertex, v).r;
+#endif
   // Partition of unity for per-cluster drawing: other clusters' vertices add 0.
   float member =
       (only_cluster < 0 || texelFetch(group_of_cluster, k).r == only_cluster) ? 1.0 : 0.0;
@@ -47,7 +60,11 @@ void main() {
   int base = k * (COMPONENTS + 1) * ROWS;
   float w[COMPONENTS + 1];
   w[0] = 1.0;
+#if ATTRIBUTES && COMPONENTS > 0
+  for (int i = 0; i < COMPONENTS; ++i) w[i + 1] = weight_attribute[i / 4][i % 4];
+#else
   for (int i = 0; i < COMPONENTS; ++i) w[i + 1] = texelFetch(weights, v * COMPONENTS + i).r;
+#endif
 #if GLOSSY
   vec3 e = vec3(0.0);
   for (int r = 0; r < ROWS; ++r) {

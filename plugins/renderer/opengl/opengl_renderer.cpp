@@ -158,7 +158,7 @@ class OpenGLRenderer final : public Renderer {
     std::string defines =
         "#define ROWS " + std::to_string(rows) + "\n#define GLOSSY " + (glossy ? "1" : "0") + "\n";
     if (!t) {
-      defines += "#define COMPONENTS -1\n#define SPARSE 0\n";
+      defines += "#define COMPONENTS -1\n#define SPARSE 0\n#define ATTRIBUTES 0\n";
     } else {
       defines += "#define COMPONENTS " + std::to_string(t->components) + "\n#define SPARSE " +
                  (t->sparse() ? "1" : "0") + "\n";
@@ -167,10 +167,42 @@ class OpenGLRenderer final : public Renderer {
       cluster_of_vertex_.upload(GL_R32I, t->cluster_of_vertex.data(),
                                 t->cluster_of_vertex.size() * sizeof(std::int32_t));
       weights_.upload(GL_R32F, t->weights.data(), t->weights.size() * sizeof(float));
+      // Where n' fits the vertex attributes, weights and cluster index come
+      // in with the vertex (no texture fetches per weight).
+      const int vec4s = (t->components + 3) / 4;
+      const bool attributes = !t->sparse() && vec4s <= kMaxWeightVec4s;
+      defines += std::string("#define ATTRIBUTES ") + (attributes ? "1" : "0") +
+                 "\n#define WEIGHT_VEC4S " + std::to_string(std::max(vec4s, 1)) + "\n";
+      if (attributes) upload_weight_attributes(*t, vec4s);
       weight_index_.upload(GL_R32I, t->weight_index.data(),
                            t->weight_index.size() * sizeof(std::int32_t));
     }
     program_ = build_program("transfer", defines, kTransferVert, kTransferFrag);
+  }
+
+  // Cluster index (location 1) and weights padded to whole vec4s (locations
+  // 2, 3, ...) as vertex attributes.
+  void upload_weight_attributes(const CompressedTransfer& t, int vec4s) {
+    const std::size_t v = t.cluster_of_vertex.size();
+    glGenBuffers(1, &cluster_attribute_buffer_);
+    glBindBuffer(GL_ARRAY_BUFFER, cluster_attribute_buffer_);
+    glBufferData(GL_ARRAY_BUFFER, v * sizeof(std::int32_t), t.cluster_of_vertex.data(),
+                 GL_STATIC_DRAW);
+    glVertexAttribIPointer(1, 1, GL_INT, 0, nullptr);
+    glEnableVertexAttribArray(1);
+    if (t.components == 0) return;
+    std::vector<float> padded(v * 4 * vec4s, 0.f);
+    for (std::size_t p = 0; p < v; ++p)
+      std::copy_n(t.weights.row(Eigen::Index(p)).data(), t.components, &padded[p * 4 * vec4s]);
+    glGenBuffers(1, &weight_attribute_buffer_);
+    glBindBuffer(GL_ARRAY_BUFFER, weight_attribute_buffer_);
+    glBufferData(GL_ARRAY_BUFFER, padded.size() * sizeof(float), padded.data(), GL_STATIC_DRAW);
+    const GLsizei stride = 4 * vec4s * sizeof(float);
+    for (int i = 0; i < vec4s; ++i) {
+      glVertexAttribPointer(2 + i, 4, GL_FLOAT, GL_FALSE, stride,
+                            reinterpret_cast<const void*>(std::size_t(16 * i)));
+      glEnableVertexAttribArray(2 + i);
+    }
   }
 
   // One index buffer; per-cluster drawing orders it by group (cluster, or
@@ -333,6 +365,9 @@ class OpenGLRenderer final : public Renderer {
     if (vao_) glDeleteVertexArrays(1, &vao_);
     if (vertex_buffer_) glDeleteBuffers(1, &vertex_buffer_);
     if (index_buffer_) glDeleteBuffers(1, &index_buffer_);
+    if (cluster_attribute_buffer_) glDeleteBuffers(1, &cluster_attribute_buffer_);
+    if (weight_attribute_buffer_) glDeleteBuffers(1, &weight_attribute_buffer_);
+    cluster_attribute_buffer_ = weight_attribute_buffer_ = 0;
     if (program_) glDeleteProgram(program_);
     for (TextureBuffer* b : {&constants_, &cluster_of_vertex_, &group_of_cluster_, &weights_,
                              &weight_index_, &vertex_colour_, &exit_values_})
@@ -365,6 +400,9 @@ class OpenGLRenderer final : public Renderer {
   int width_ = 0, height_ = 0;
   GLuint framebuffer_ = 0, renderbuffers_[2] = {0, 0};
   GLuint vao_ = 0, vertex_buffer_ = 0, index_buffer_ = 0, program_ = 0;
+  GLuint cluster_attribute_buffer_ = 0, weight_attribute_buffer_ = 0;
+  // Locations 2..15 (position 0, cluster 1): n' <= 56 weights as attributes.
+  static constexpr int kMaxWeightVec4s = 14;
   TextureBuffer constants_, cluster_of_vertex_, group_of_cluster_, weights_, weight_index_,
       vertex_colour_, exit_values_;
   std::vector<Group> groups_;
