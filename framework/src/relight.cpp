@@ -139,19 +139,21 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
                 representatives_.data() + representative_begin_[k] * t.dimension);
 }
 
-Eigen::MatrixX3f RelightKernel::to_mesh_order(const Eigen::MatrixX3f& sorted) const {
-  Eigen::MatrixX3f out(sorted.rows(), 3);
+void RelightKernel::to_mesh_order(const float* sorted, Eigen::MatrixX3f& out) const {
+  float* red = out.col(0).data();
+  float* green = out.col(1).data();
+  float* blue = out.col(2).data();
   tbb::parallel_for(
-      tbb::blocked_range<Eigen::Index>(0, sorted.rows(), 4096),
+      tbb::blocked_range<Eigen::Index>(0, out.rows(), 4096),
       [&](const auto& range) {
-        for (int c = 0; c < 3; ++c) {
-          const float* from = sorted.col(c).data();
-          float* to = out.col(c).data();
-          for (Eigen::Index p = range.begin(); p < range.end(); ++p) to[p] = from[rank_[p]];
+        for (Eigen::Index p = range.begin(); p < range.end(); ++p) {
+          const float* rgb = sorted + 3 * std::size_t(rank_[p]);  // one cache line per vertex
+          red[p] = rgb[0];
+          green[p] = rgb[1];
+          blue[p] = rgb[2];
         }
       },
       tbb::static_partitioner());
-  return out;
 }
 
 template <class Sums>
@@ -191,6 +193,13 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
 
 Eigen::MatrixX3f RelightKernel::radiance(const Eigen::MatrixX3d& light,
                                          const MatrixXfRow* exit_values) const {
+  Eigen::MatrixX3f out;
+  radiance(light, exit_values, out);
+  return out;
+}
+
+void RelightKernel::radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* exit_values,
+                             Eigen::MatrixX3f& out) const {
   const CompressedTransfer& t = *transfer_;
   check_light(t, light, rows_);
   if (exit_values && (exit_values->cols() != rows_ || exit_values->rows() != t.vertices()))
@@ -199,17 +208,21 @@ Eigen::MatrixX3f RelightKernel::radiance(const Eigen::MatrixX3d& light,
                 " x " + std::to_string(rows_));
   if (!exit_values && rows_ != 1)
     throw Error("relight: glossy transfer needs the exit basis's values toward the camera");
-  if (t.sparse())
-    return exit_values ? exit_radiance(exit_coefficients(light), *exit_values)
-                       : Eigen::MatrixX3f(Eigen::Map<const Rows3>(exit_coefficients(light).data(),
-                                                                  t.vertices(), 3));
+  if (t.sparse()) {
+    out = exit_values ? exit_radiance(exit_coefficients(light), *exit_values)
+                      : Eigen::MatrixX3f(Eigen::Map<const Rows3>(exit_coefficients(light).data(),
+                                                                 t.vertices(), 3));
+    return;
+  }
   const Eigen::MatrixX3f l = light.cast<float>();
-  // Sums are written in cluster order (each core writes its own contiguous
-  // runs: no cache line shared between cores), then gathered to mesh order.
-  Eigen::MatrixX3f sorted(t.vertices(), 3);
-  float* red = sorted.col(0).data();
-  float* green = sorted.col(1).data();
-  float* blue = sorted.col(2).data();
+  // Sums are written in cluster order, RGB interleaved (each core writes its
+  // own contiguous runs: no cache line shared between cores), then gathered
+  // to mesh order (one cache line per vertex). The buffer is per thread and
+  // reused across frames: no page faults of a fresh array each frame.
+  thread_local std::vector<float> sorted_buffer;
+  sorted_buffer.resize(3 * std::size_t(t.vertices()));
+  float* sorted = sorted_buffer.data();
+  out.resize(t.vertices(), 3);
   const std::int32_t* first = vertex_order_.data();
   if (!exit_values) {
     for_each_cluster(l, 0,
@@ -218,14 +231,21 @@ Eigen::MatrixX3f RelightKernel::radiance(const Eigen::MatrixX3d& light,
                        const int n_k = t.components_of(k);
                        const DiffuseBlock block = diffuse_kernel(n_k);
                        const std::int64_t at = vertices - first;
+                       alignas(64) float r[kBlock], g[kBlock], b[kBlock];
                        for (std::int64_t j0 = 0; j0 < size; j0 += kBlock) {
                          const int count =
                              static_cast<int>(std::min<std::int64_t>(kBlock, size - j0));
-                         block(constants, weights + j0, size, n_k, count, red + at + j0,
-                               green + at + j0, blue + at + j0);
+                         block(constants, weights + j0, size, n_k, count, r, g, b);
+                         float* rgb = sorted + 3 * (at + j0);
+                         for (int j = 0; j < count; ++j) {
+                           rgb[3 * j] = r[j];
+                           rgb[3 * j + 1] = g[j];
+                           rgb[3 * j + 2] = b[j];
+                         }
                        }
                      });
-    return to_mesh_order(sorted);
+    to_mesh_order(sorted, out);
+    return;
   }
   // Glossy, fused: d_i(p) = y(v_p) . C_i (3 floats per stored vector) for a
   // block of vertices as one small product, then d_0 + sum_i w_pi d_i.
@@ -255,14 +275,14 @@ Eigen::MatrixX3f RelightKernel::radiance(const Eigen::MatrixX3d& light,
               const float w = weights[i * size + j0 + j];
               for (int c = 0; c < 3; ++c) s[c] += w * d(j, 3 * (i + 1) + c);
             }
-            const std::int64_t at = vertices - first + j0 + j;
-            red[at] = s[0];
-            green[at] = s[1];
-            blue[at] = s[2];
+            float* rgb = sorted + 3 * (vertices - first + j0 + j);
+            rgb[0] = s[0];
+            rgb[1] = s[1];
+            rgb[2] = s[2];
           }
         }
       });
-  return to_mesh_order(sorted);
+  to_mesh_order(sorted, out);
 }
 
 MatrixXfRow RelightKernel::exit_coefficients(const Eigen::MatrixX3d& light) const {

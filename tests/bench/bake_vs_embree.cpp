@@ -65,5 +65,8 @@ int main(int argc, char** argv) {
   std::printf("bake (trace+SH)  : %8.3f s  %6.2f Mrays/s\n", bake_s, rays_bake / bake_s * 1e-6);
   std::printf("ratio bake/raw   : %8.3f  (limit %.2f: %s)\n", ratio, limit,
               ratio <= limit ? "PASS" : "FAIL");
+  std::printf("PERF|bake, bunny %d rays order %d|%.3f s|raw Embree %.3f s|%.3f|%.2f|%s\n", rays,
+              order, bake_s, raw_s, ratio, limit,
+              ratio <= limit && rays_raw == rays_bake ? "PASS" : "FAIL");
   return ratio <= limit && rays_raw == rays_bake ? 0 : 1;
 }

@@ -1,6 +1,6 @@
 // Compression speed against the matrix products it is made of, in one run.
 //
-//   bench_compress [bake.h5] [clusters] [components] [method]
+//   bench_compress [bake.h5] [clusters] [components] [method] [wall limit, s]
 //
 // For every iteration of LBG and of iterative/adaptive CPCA it prints the
 // iteration's wall time next to the time of one float GEMM of the same shape
@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
   options.lbg.clusters = argc > 2 ? std::stoi(argv[2]) : 256;
   options.components = argc > 3 ? std::stoi(argv[3]) : 8;
   const std::string method = argc > 4 ? argv[4] : "iterative";
+  const double wall_limit = argc > 5 ? std::stod(argv[5]) : 0;  // seconds, 0: none
   options.method = method == "static"     ? clustering::Method::static_pca
                    : method == "adaptive" ? clustering::Method::adaptive
                                           : clustering::Method::iterative;
@@ -60,6 +62,7 @@ int main(int argc, char** argv) {
   std::printf("%-10s %4s %10s %22s %10s %8s\n", "stage", "#", "iter s", "GEMM shape", "GEMM s",
               "ratio");
   double sum_iterations = 0, sum_gemm = 0;
+  std::vector<double> ratios;
   int index = 0;
   for (const auto& it : result.log) {
     const double g = gemm_seconds(it.rows, it.inner, it.cols);
@@ -70,8 +73,22 @@ int main(int argc, char** argv) {
                 shape, g, it.seconds / g);
     sum_iterations += it.seconds;
     sum_gemm += g;
+    if (it.stage != "init") ratios.push_back(it.seconds / g);  // LBG and CPCA iterations
   }
   std::printf("total encode %.3f s; iterations %.3f s vs their GEMMs %.3f s: ratio %.2f\n", seconds,
               sum_iterations, sum_gemm, sum_iterations / sum_gemm);
+  // The limit applies to every iteration; the median shows the typical one.
+  std::sort(ratios.begin(), ratios.end());
+  const double median = ratios.empty() ? 0 : ratios[ratios.size() / 2];
+  const double worst = ratios.empty() ? 0 : ratios.back();
+  const std::string label = method + " CPCA iteration, " + std::to_string(x.cols()) + "-dim";
+  std::printf("PERF|%s (median; worst %.2f)|%.3f s|GEMM of its shape %.3f s|%.2f|1.3|%s\n",
+              label.c_str(), worst, sum_iterations / std::max<std::size_t>(1, result.log.size()),
+              sum_gemm / std::max<std::size_t>(1, result.log.size()), median,
+              median <= 1.3 ? "PASS" : "FAIL");
+  if (wall_limit > 0)
+    std::printf("PERF|%s CPCA encode, %lld-dim, %d x %d|%.1f s|-|%.2f|%.0f s|%s\n", method.c_str(),
+                (long long)x.cols(), options.lbg.clusters, options.components, seconds,
+                seconds / wall_limit, wall_limit, seconds <= wall_limit ? "PASS" : "FAIL");
   return 0;
 }

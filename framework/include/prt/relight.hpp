@@ -31,6 +31,9 @@ class RelightKernel {
   // null, rows 1); y(v_p) . e_p for glossy (exit_values v x rows).
   Eigen::MatrixX3f radiance(const Eigen::MatrixX3d& light,
                             const MatrixXfRow* exit_values = nullptr) const;
+  // The same into `out` (resized; its storage reused frame after frame).
+  void radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* exit_values,
+                Eigen::MatrixX3f& out) const;
   // v x 3 rows exit coefficients, RGB interleaved (e_p(i, c) at 3 i + c).
   MatrixXfRow exit_coefficients(const Eigen::MatrixX3d& light) const;
 
@@ -46,8 +49,8 @@ class RelightKernel {
   void for_each_cluster(const Eigen::MatrixX3f& light, std::size_t scratch_floats,
                         const Sums& sums) const;
 
-  // Radiance in cluster order (SoA) back to mesh order.
-  Eigen::MatrixX3f to_mesh_order(const Eigen::MatrixX3f& sorted) const;
+  // Radiance in cluster order (RGB interleaved) back to mesh order.
+  void to_mesh_order(const float* sorted, Eigen::MatrixX3f& out) const;
 
   const CompressedTransfer* transfer_;
   int rows_;
