@@ -66,11 +66,14 @@ double classify(const MatrixXfRow& x, const std::vector<ClusterModel>& models,
       labels[r.begin() + i] = best_label;
     }
   });
+  // Errors in double on every core; their sum in vertex order (the same
+  // figure whatever the number of cores).
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 1024), [&](const auto& r) {
+    for (Eigen::Index p = r.begin(); p < r.end(); ++p)
+      errors[p] = approximation_error(x, p, models[labels[p]]);
+  });
   double total = 0;
-  for (Eigen::Index p = 0; p < x.rows(); ++p) {
-    errors[p] = approximation_error(x, p, models[labels[p]]);
-    total += errors[p];
-  }
+  for (Eigen::Index p = 0; p < x.rows(); ++p) total += errors[p];
   return total;
 }
 

@@ -128,10 +128,12 @@ int update_means(const MatrixXfRow& x, std::vector<std::int32_t>& label, std::ve
   const int k = static_cast<int>(means.rows());
   std::vector<Eigen::Index> count(k, 0);
   RowMatrixXd sums = RowMatrixXd::Zero(k, x.cols());
-  for (Eigen::Index p = 0; p < x.rows(); ++p) {
-    sums.row(label[p]) += x.row(p).cast<double>();
-    ++count[label[p]];
-  }
+  // Per cluster on every core, each summing its members in vertex order.
+  const auto members = members_of(label, k);
+  tbb::parallel_for(0, k, [&](int j) {
+    for (std::uint32_t p : members[j]) sums.row(j) += x.row(p).cast<double>();
+    count[j] = static_cast<Eigen::Index>(members[j].size());
+  });
   int refilled = 0;
   for (int j = 0; j < k; ++j) {
     if (count[j] > 0) continue;
