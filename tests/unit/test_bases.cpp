@@ -1,5 +1,7 @@
 // Basis plug-ins beyond the conformance kit: Haar's fast projections agree
 // with the dense product, the sparse non-linear approximation, and hsh.
+#include <tbb/global_control.h>
+
 #include <Eigen/SVD>
 #include <catch2/catch.hpp>
 #include <random>
@@ -8,8 +10,8 @@
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/hemisphere.hpp"
-#include "prt/relight.hpp"
 #include "prt/registry.hpp"
+#include "prt/relight.hpp"
 #include "prt/sh.hpp"
 #include "prt/transport.hpp"
 
@@ -144,4 +146,22 @@ TEST_CASE("eigentransport: the randomized SVD finds the exact principal subspace
   restored->load(eigen->save());
   CHECK(restored->evaluate(lattice.directions) == eigen->evaluate(lattice.directions));
   CHECK_THROWS_WITH(make("eigen", {})->evaluate(lattice.directions), Catch::Contains("not fitted"));
+}
+
+TEST_CASE("eigentransport: a seed gives the same basis on one core and on all", "[eigen]") {
+  const Mesh scene = test::sphere_over_plane();
+  const DirectionSet lattice = DirectionSet::cubemap(4);
+  const TransportResult r = test::trace_visibility_only(scene, lattice);
+  auto fit = [&] {
+    auto eigen = make("eigen", {{"d", std::int64_t(6)}});
+    eigen->fit({&scene, &lattice, &r.visibility});
+    return Eigen::MatrixXd(eigen->save().matrices.at("eigentransports"));
+  };
+  const Eigen::MatrixXd all_cores = fit();
+  Eigen::MatrixXd one_core;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one_core = fit();
+  }
+  CHECK(one_core == all_cores);  // bit for bit: sums in a fixed order
 }
