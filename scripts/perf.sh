@@ -52,7 +52,7 @@ table="$out/table.md"
   for log in rotation light bake_1024 bake_4096 compress_diffuse compress_glossy eigen \
     view_diffuse view_glossy; do
     if grep -q '^PERF|' "$out/$log.log"; then
-      grep '^PERF|' "$out/$log.log" | sed 's/^PERF|/| /; s/|/ | /g; s/$/ |/'
+      grep '^PERF|' "$out/$log.log" | awk -F'|' '{ printf "|"; for (i = 2; i <= NF; ++i) printf " %s |", $i; print "" }'
     else
       echo "| $log | - | - | - | - | FAIL (no result: see out/perf/$log.log) |"
     fi

@@ -70,14 +70,14 @@ int main(int argc, char** argv) {
     for (const char* name : {"courtyard", "sunset", "forest", "night"})
       maps.push_back(std::string(PRT_SOURCE_DIR) + "/data/hdri/" + name + ".exr");
   const int repeats = 15;
-  double worst = 0;
+  double worst = 0, worst_project = 0, worst_gemm = 0;
   auto row = [&](const std::string& name, int width, int height, const float* rgb) {
     const double project = median_of(repeats, [&] {
       const Eigen::MatrixX3d light = sh::project_equirect(order, width, height, rgb);
       if (!light.allFinite()) std::puts("non-finite");
     });
     const double gemm = gemm_seconds(Eigen::Index(width) * height, order * order, repeats);
-    worst = std::max(worst, project / gemm);
+    if (project / gemm > worst) worst = project / gemm, worst_project = project, worst_gemm = gemm;
     std::printf("%-22s %5dx%-5d project %8.3f ms   GEMM 3x%dx%d %8.3f ms   ratio %5.2f\n",
                 name.c_str(), width, height, 1e3 * project, width * height, order * order,
                 1e3 * gemm, project / gemm);
@@ -103,8 +103,9 @@ int main(int argc, char** argv) {
     sh::Rotation(order, r).apply(light, rotated);
   });
   std::printf("rotated light (viewer): %.3f ms of a 16.7 ms frame\n", 1e3 * turn);
-  std::printf("PERF|light projection order %d (worst map)|%.4g|GEMM of its shape|%.3f|1.5|%s\n",
-              order, worst, worst, worst <= 1.5 ? "PASS" : "FAIL");
+  std::printf("PERF|light projection, equirect -> SH order %d (worst map)|%.2f ms|GEMM of its "
+              "shape %.2f ms|%.3f|1.5|%s\n",
+              order, 1e3 * worst_project, 1e3 * worst_gemm, worst, worst <= 1.5 ? "PASS" : "FAIL");
   std::printf("PERF|rotated light in the viewer|%.4g ms|60 Hz frame 16.7 ms|%.4f|1|%s\n",
               1e3 * turn, turn / (1.0 / 60), turn <= 1.0 / 60 ? "PASS" : "FAIL");
   return 0;
