@@ -180,6 +180,8 @@ Ringing ringing(const Eigen::VectorXd& coefficients, int order) {
 }  // namespace
 
 int stability(Context& context, const StabilityArgs& args) {
+  for (int l : args.bands)
+    if (l < 0 || l > 5000) throw Error("--bands: band " + std::to_string(l) + " is not in 0..5000");
   for (const std::string& file : {args.json, args.figure_data})
     if (!file.empty()) check_output({file, FileKind::text, "report"}, {}, args.force);
   Report report;
@@ -228,6 +230,7 @@ int stability(Context& context, const StabilityArgs& args) {
     report.value("rotation_orthogonality_l" + std::to_string(order - 1), orthogonality);
     report.value("rotation_reprojection_l" + std::to_string(order - 1), reprojection);
   }
+  int highest_band_rotation = 0;
   report.section("SH rotation of single high bands (beta from 1e-9 to pi)",
                  "| l | max abs(B B^T - I) | max relative abs(B c - c(R^T .)) pointwise | "
                  "finite |\n|---|---|---|---|");
@@ -236,7 +239,7 @@ int stability(Context& context, const StabilityArgs& args) {
     bool finite = true;
     band_rotation_errors(l, orthogonality, pointwise, finite);
     if (std::max(orthogonality, pointwise) < 1e-10 && finite)
-      highest_rotation = std::max(highest_rotation, l);
+      highest_band_rotation = std::max(highest_band_rotation, l);
     report.row(
         format("| %d | %.3g | %.3g | %s |", l, orthogonality, pointwise, finite ? "yes" : "NO"));
     report.value("rotation_band_orthogonality_l" + std::to_string(l), orthogonality);
@@ -245,6 +248,9 @@ int stability(Context& context, const StabilityArgs& args) {
   report.row(format("\nHighest l within 1e-10 for rotation (of those measured): **%d**",
                     highest_rotation));
   report.value("rotation_highest_l_1e-10", highest_rotation);
+  report.row(
+      format("\nHighest single band within 1e-10 for rotation: **%d**", highest_band_rotation));
+  report.value("rotation_band_highest_l_1e-10", highest_band_rotation);
 
   // 3. The hemispherical Gram matrix.
   report.section(

@@ -3,8 +3,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <mutex>
 #include <numeric>
 
 #include "prt/error.hpp"
@@ -103,6 +105,16 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
                 std::to_string(rows) + " exit rows");
   if (t.sparse()) return;  // no clusters to order
   const Eigen::Index clusters = t.clusters();
+  // The layout indexes by these: refuse what validate() would (a bad index
+  // here would be an out-of-bounds write).
+  if (static_cast<Eigen::Index>(t.representatives.size()) != clusters ||
+      t.weights.rows() != t.vertices())
+    throw Error("relight: compressed transfer has inconsistent sizes");
+  for (auto k : t.cluster_of_vertex)
+    if (k < 0 || k >= clusters) throw Error("relight: cluster index out of range");
+  for (Eigen::Index k = 0; k < clusters; ++k)
+    if (t.components_of(k) > t.components || t.representatives[k].cols() != t.dimension)
+      throw Error("relight: a representative block has the wrong size");
   cluster_begin_.assign(clusters + 1, 0);
   for (auto k : t.cluster_of_vertex) ++cluster_begin_[k + 1];
   std::partial_sum(cluster_begin_.begin(), cluster_begin_.end(), cluster_begin_.begin());
@@ -128,32 +140,25 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
       for (int i = 0; i < n_k; ++i) weights_[weight_begin_[k] + i * size + j] = t.weights(p, i);
     }
   });
-  // The representatives packed back to back (row-major n'_k x n each), so the
-  // constants of every cluster are one product with the light.
-  representative_begin_.assign(clusters + 1, 0);
-  for (Eigen::Index k = 0; k < clusters; ++k)
-    representative_begin_[k + 1] = representative_begin_[k] + t.components_of(k);
-  representatives_.resize(static_cast<std::size_t>(representative_begin_.back() * t.dimension));
-  for (Eigen::Index k = 0; k < clusters; ++k)
-    std::copy_n(t.representatives[k].data(), t.representatives[k].size(),
-                representatives_.data() + representative_begin_[k] * t.dimension);
 }
 
 void RelightKernel::to_mesh_order(const float* sorted, Eigen::MatrixX3f& out) const {
   float* red = out.col(0).data();
   float* green = out.col(1).data();
   float* blue = out.col(2).data();
-  tbb::parallel_for(
-      tbb::blocked_range<Eigen::Index>(0, out.rows(), 4096),
-      [&](const auto& range) {
-        for (Eigen::Index p = range.begin(); p < range.end(); ++p) {
-          const float* rgb = sorted + 3 * std::size_t(rank_[p]);  // one cache line per vertex
-          red[p] = rgb[0];
-          green[p] = rgb[1];
-          blue[p] = rgb[2];
-        }
-      },
-      tbb::static_partitioner());
+  tbb::this_task_arena::isolate([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<Eigen::Index>(0, out.rows(), 4096),
+        [&](const auto& range) {
+          for (Eigen::Index p = range.begin(); p < range.end(); ++p) {
+            const float* rgb = sorted + 3 * std::size_t(rank_[p]);  // one cache line per vertex
+            red[p] = rgb[0];
+            green[p] = rgb[1];
+            blue[p] = rgb[2];
+          }
+        },
+        tbb::static_partitioner());
+  });
 }
 
 template <class Sums>
@@ -164,31 +169,33 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
   const int width = 3 * rows_;  // floats of one stored vector's constant
   // One parallel pass (a second would cost a wake-up of the other cores per
   // frame): each cluster's constants, then its vertices' sums.
-  tbb::parallel_for(
-      tbb::blocked_range<Eigen::Index>(0, t.clusters()),
-      [&](const auto& range) {
-        // Buffers per task, sized for the largest cluster: no allocation per cluster.
-        std::vector<float> constants(std::size_t(t.components + 1) * width);
-        std::vector<float> scratch(scratch_floats);
-        for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
-          const std::int64_t begin = cluster_begin_[k], size = cluster_begin_[k + 1] - begin;
-          if (size == 0) continue;
-          // Dots of each stored row with the light's three columns (lazy: no
-          // packing of operands that are read once).
-          const Eigen::Index n_k = t.components_of(k);
-          Eigen::Map<Rows3>(constants.data(), rows_, 3).noalias() =
-              Eigen::Map<const MatrixXfRow>(t.means.row(k).data(), rows_, n_i).lazyProduct(l);
-          if (n_k > 0)
-            Eigen::Map<Rows3>(constants.data() + width, n_k * rows_, 3).noalias() =
-                Eigen::Map<const MatrixXfRow>(
-                    representatives_.data() + representative_begin_[k] * t.dimension, n_k * rows_,
-                    n_i)
-                    .lazyProduct(l);
-          sums(k, constants.data(), vertex_order_.data() + begin, size,
-               weights_.data() + weight_begin_[k], scratch.data());
-        }
-      },
-      tbb::static_partitioner());
+  // Isolated: a thread waiting here must not pick up an outer task that
+  // relights this kernel again (its buffer is in use).
+  tbb::this_task_arena::isolate([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<Eigen::Index>(0, t.clusters()),
+        [&](const auto& range) {
+          // Buffers per task, sized for the largest cluster: no allocation per cluster.
+          std::vector<float> constants(std::size_t(t.components + 1) * width);
+          std::vector<float> scratch(scratch_floats);
+          for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
+            const std::int64_t begin = cluster_begin_[k], size = cluster_begin_[k + 1] - begin;
+            if (size == 0) continue;
+            // Dots of each stored row with the light's three columns (lazy: no
+            // packing of operands that are read once).
+            const Eigen::Index n_k = t.components_of(k);
+            Eigen::Map<Rows3>(constants.data(), rows_, 3).noalias() =
+                Eigen::Map<const MatrixXfRow>(t.means.row(k).data(), rows_, n_i).lazyProduct(l);
+            if (n_k > 0)
+              Eigen::Map<Rows3>(constants.data() + width, n_k * rows_, 3).noalias() =
+                  Eigen::Map<const MatrixXfRow>(t.representatives[k].data(), n_k * rows_, n_i)
+                      .lazyProduct(l);
+            sums(k, constants.data(), vertex_order_.data() + begin, size,
+                 weights_.data() + weight_begin_[k], scratch.data());
+          }
+        },
+        tbb::static_partitioner());
+  });
 }
 
 Eigen::MatrixX3f RelightKernel::radiance(const Eigen::MatrixX3d& light,
@@ -216,10 +223,14 @@ void RelightKernel::radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* e
   }
   const Eigen::MatrixX3f l = light.cast<float>();
   // Sums are written in cluster order, RGB interleaved (each core writes its
-  // own contiguous runs: no cache line shared between cores), then gathered
-  // to mesh order (one cache line per vertex). The buffer is per thread and
-  // reused across frames: no page faults of a fresh array each frame.
-  thread_local std::vector<float> sorted_buffer;
+  // own contiguous runs: cores share only the lines at run boundaries), then gathered
+  // to mesh order (one cache line per vertex). The buffer is reused across
+  // frames: no page faults of a fresh array each frame.
+  // The kernel's own buffer when free; a caller relighting the same kernel
+  // concurrently (or re-entrantly, from a task) gets a fresh one.
+  std::unique_lock lock(scratch_->mutex, std::try_to_lock);
+  std::vector<float> fresh;
+  std::vector<float>& sorted_buffer = lock.owns_lock() ? scratch_->sorted : fresh;
   sorted_buffer.resize(3 * std::size_t(t.vertices()));
   float* sorted = sorted_buffer.data();
   out.resize(t.vertices(), 3);

@@ -215,7 +215,7 @@ std::vector<std::uint32_t> morton_order(const Mesh& mesh) {
 
 namespace {
 
-constexpr std::size_t kBlock = 32;  // vertices per task: one GEMM of kBlock x s' by s' x n
+constexpr std::size_t kBlock = 32;  // vertices per task (tracing, then projecting their rays)
 
 std::vector<float> to_float(const DirectionSet& set) {
   std::vector<float> out(3 * set.size());
@@ -331,20 +331,33 @@ void visible_sums_fixed(Eigen::Index n, const Mesh& mesh, const DirectionSet& se
   std::vector<Eigen::Vector3d> normals(count);
   for (std::size_t slot = 0; slot < count; ++slot)
     normals[slot] = mesh.normals[vertices[slot]].cast<double>() / M_PI;
-  for (std::size_t w = 0; w < words; ++w) {
-    std::uint64_t any = 0;
-    for (std::size_t slot = 0; slot < count; ++slot) any |= bits[slot * words + w];
-    for (; any; any &= any - 1) {
-      const int bit = std::countr_zero(any);
-      const std::size_t k = 64 * w + bit;
-      const Eigen::Vector3d d = set.directions.row(k).transpose();
-      Packet row[Packets];
-      std::memcpy(row, rows.row(k).data(), sizeof row);
-      for (std::size_t slot = 0; slot < count; ++slot) {
-        if (!((bits[slot * words + w] >> bit) & 1u)) continue;
-        const double c = normals[slot].dot(d);
-        Packet* sum = &sums[slot * Packets];
-        for (int p = 0; p < Packets; ++p) sum[p] += c * row[p];
+  // Per word of 64 directions, the transposed bits: which of (up to 64)
+  // slots see each direction, so that the inner loop visits only the pairs
+  // that see each other (no bit test per slot and direction).
+  std::uint64_t seen_by[64];
+  for (std::size_t first = 0; first < count; first += 64) {
+    const std::size_t last = std::min(count, first + 64);
+    for (std::size_t w = 0; w < words; ++w) {
+      std::fill(std::begin(seen_by), std::end(seen_by), 0);
+      std::uint64_t any = 0;
+      for (std::size_t slot = first; slot < last; ++slot) {
+        const std::uint64_t word = bits[slot * words + w];
+        any |= word;
+        for (std::uint64_t b = word; b; b &= b - 1)
+          seen_by[std::countr_zero(b)] |= std::uint64_t(1) << (slot - first);
+      }
+      for (; any; any &= any - 1) {
+        const int bit = std::countr_zero(any);
+        const std::size_t k = 64 * w + bit;
+        const Eigen::Vector3d d = set.directions.row(k).transpose();
+        Packet row[Packets];
+        std::memcpy(row, rows.row(k).data(), sizeof row);
+        for (std::uint64_t m = seen_by[bit]; m; m &= m - 1) {
+          const std::size_t slot = first + std::countr_zero(m);
+          const double c = normals[slot].dot(d);
+          Packet* sum = &sums[slot * Packets];
+          for (int p = 0; p < Packets; ++p) sum[p] += c * row[p];
+        }
       }
     }
   }

@@ -6,7 +6,8 @@
 // directly against Embree): it builds the BVH and traces exactly the rays the
 // bake casts (directions above each vertex's tangent plane, Morton order,
 // rtcOccluded1M streams, incoherent) and keeps only a count. "bake" is the
-// full transfer stage (BVH, rays, visibility bits, SH projection as GEMMs).
+// full transfer stage (BVH, rays, visibility bits, SH projection of the
+// visible rays).
 // Limit (issue 12): bake / raw <= 1.1 in the same run.
 #include <algorithm>
 #include <cstdio>

@@ -58,7 +58,9 @@ out=$("$prt" stability --orders 5,20,101 --hemisphere-order 6)
 grep -q '^| 101 | 100 | .* | yes |' <<<"$out" || { echo "FAIL: no finite l = 100 row"; exit 1; }
 grep -q 'Highest l within 1e-10 (of those measured): \*\*100\*\*' <<<"$out" ||
   { echo "FAIL: evaluation not within 1e-10 at l = 100"; exit 1; }
-grep -q 'Highest l within 1e-10 for rotation (of those measured): \*\*1000\*\*' <<<"$out" ||
+grep -q 'Highest l within 1e-10 for rotation (of those measured): \*\*100\*\*' <<<"$out" ||
+  { echo "FAIL: whole rotation not within 1e-10 at order 101"; exit 1; }
+grep -q 'Highest single band within 1e-10 for rotation: \*\*1000\*\*' <<<"$out" ||
   { echo "FAIL: rotation not within 1e-10 to l = 1000"; exit 1; }
 grep -q 'Highest band within 1e-10, all finite: \*\*1000\*\*' <<<"$out" ||
   { echo "FAIL: SH evaluation not finite and within 1e-10 at l = 1000"; exit 1; }

@@ -4,7 +4,7 @@
 // Vertices are visited in cluster order, so a cluster's constants
 // C_ki = M_ki l stay in registers while its vertices' weights stream past;
 // weights are stored compactly in that order (n'_k per vertex, no padding);
-// the constants are computed per cluster into one per-thread buffer (no
+// the constants are computed per cluster into one buffer per task (no
 // per-cluster allocation) right before that cluster's sums; the sums use
 // kernels of fixed n' for the common sizes. Glossy transfer is fused: each
 // vertex's exit-basis values toward the camera are dotted with its exit
@@ -12,6 +12,8 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "prt/transfer.hpp"
@@ -54,13 +56,17 @@ class RelightKernel {
 
   const CompressedTransfer* transfer_;
   int rows_;
-  std::vector<std::int32_t> vertex_order_;          // vertices sorted by cluster (stable)
-  std::vector<std::int32_t> rank_;                  // inverse of vertex_order_
-  std::vector<std::int64_t> cluster_begin_;         // clusters + 1 offsets into vertex_order_
-  std::vector<std::int64_t> weight_begin_;          // per cluster offset into weights_
-  std::vector<float> weights_;                      // n'_k per vertex, in vertex_order_
-  std::vector<std::int64_t> representative_begin_;  // per cluster, in stored vectors
-  std::vector<float> representatives_;              // all clusters' n'_k x n, packed
+  std::vector<std::int32_t> vertex_order_;   // vertices sorted by cluster (stable)
+  std::vector<std::int32_t> rank_;           // inverse of vertex_order_
+  std::vector<std::int64_t> cluster_begin_;  // clusters + 1 offsets into vertex_order_
+  std::vector<std::int64_t> weight_begin_;   // per cluster offset into weights_
+  std::vector<float> weights_;               // n'_k per vertex, in vertex_order_
+  // The cluster-ordered radiance of the last frame, reused by the next.
+  struct Scratch {
+    std::mutex mutex;
+    std::vector<float> sorted;
+  };
+  std::unique_ptr<Scratch> scratch_ = std::make_unique<Scratch>();
 };
 
 // One-off forms of the kernel (it is laid out on each call; a loop over

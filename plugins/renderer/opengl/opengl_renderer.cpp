@@ -164,6 +164,10 @@ class OpenGLRenderer final : public Renderer {
                  (t->sparse() ? "1" : "0") + "\n";
       if (t->sparse() && glossy)
         throw Error("opengl renderer: sparse glossy transfer is not supported");
+      // Vertex attributes are read for every drawn vertex: sizes must agree.
+      if (t->vertices() != static_cast<Eigen::Index>(mesh.vertex_count()))
+        throw Error("opengl renderer: the transfer has " + std::to_string(t->vertices()) +
+                    " vertices, the mesh " + std::to_string(mesh.vertex_count()));
       cluster_of_vertex_.upload(GL_R32I, t->cluster_of_vertex.data(),
                                 t->cluster_of_vertex.size() * sizeof(std::int32_t));
       weights_.upload(GL_R32F, t->weights.data(), t->weights.size() * sizeof(float));
