@@ -30,18 +30,20 @@ void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int
 }
 
 // constants(i, 3 r + c) = (vector_i read as rows x N_i) l, for the cluster's
-// mean (i = 0) and its n'_k representatives, into `out` ((n'_k + 1) rows x 3 rows).
+// mean (i = 0) and its n'_k representatives, into `out` ((n'_k + 1) rows x 3
+// rows): dots of each stored row with the light's three columns (lazy: no
+// packing of operands that are read once).
 void cluster_constants_into(const CompressedTransfer& t, Eigen::Index k, int rows,
                             const Eigen::MatrixX3f& l, float* out) {
   const Eigen::Index n_i = l.rows();
   const int n_k = t.components_of(k);
   Eigen::Map<Rows3>(out, rows, 3).noalias() =
-      Eigen::Map<const MatrixXfRow>(t.means.row(k).data(), rows, n_i) * l;
+      Eigen::Map<const MatrixXfRow>(t.means.row(k).data(), rows, n_i).lazyProduct(l);
   // Row-major n'_k x (rows N_i) is the same memory as (n'_k rows) x N_i.
   if (n_k > 0)
     Eigen::Map<Rows3>(out + 3 * rows, Eigen::Index(n_k) * rows, 3).noalias() =
-        Eigen::Map<const MatrixXfRow>(t.representatives[k].data(), Eigen::Index(n_k) * rows, n_i) *
-        l;
+        Eigen::Map<const MatrixXfRow>(t.representatives[k].data(), Eigen::Index(n_k) * rows, n_i)
+            .lazyProduct(l);
 }
 
 // out_c[j] = C_0c + sum_i w_i[j] C_ic for `count` <= kBlock vertices whose
@@ -165,7 +167,6 @@ template <class Sums>
 void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scratch_floats,
                                      const Sums& sums) const {
   const CompressedTransfer& t = *transfer_;
-  const Eigen::Index n_i = l.rows();
   const int width = 3 * rows_;  // floats of one stored vector's constant
   // One parallel pass (a second would cost a wake-up of the other cores per
   // frame): each cluster's constants, then its vertices' sums.
@@ -181,15 +182,7 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
           for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
             const std::int64_t begin = cluster_begin_[k], size = cluster_begin_[k + 1] - begin;
             if (size == 0) continue;
-            // Dots of each stored row with the light's three columns (lazy: no
-            // packing of operands that are read once).
-            const Eigen::Index n_k = t.components_of(k);
-            Eigen::Map<Rows3>(constants.data(), rows_, 3).noalias() =
-                Eigen::Map<const MatrixXfRow>(t.means.row(k).data(), rows_, n_i).lazyProduct(l);
-            if (n_k > 0)
-              Eigen::Map<Rows3>(constants.data() + width, n_k * rows_, 3).noalias() =
-                  Eigen::Map<const MatrixXfRow>(t.representatives[k].data(), n_k * rows_, n_i)
-                      .lazyProduct(l);
+            cluster_constants_into(t, k, rows_, l, constants.data());
             sums(k, constants.data(), vertex_order_.data() + begin, size,
                  weights_.data() + weight_begin_[k], scratch.data());
           }
