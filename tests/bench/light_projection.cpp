@@ -21,6 +21,7 @@
 #include "prt/progress.hpp"
 #include "prt/sh.hpp"
 #include "prt/sh_rotation.hpp"
+#include "timing.hpp"
 
 #ifndef PRT_SOURCE_DIR
 #define PRT_SOURCE_DIR "."
@@ -28,18 +29,7 @@
 
 namespace {
 
-using Clock = prt::Stopwatch;
-
-double median_of(int repeats, const auto& run) {
-  std::vector<double> t;
-  for (int r = 0; r < repeats; ++r) {
-    Clock clock;
-    run();
-    t.push_back(clock.seconds());
-  }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
-}
+using prt::bench::median_seconds;
 
 // (3 x pixels) * (pixels x n) in float, blocked over pixels on every core,
 // with a fixed-order reduction of the per-block results.
@@ -49,7 +39,7 @@ double gemm_seconds(Eigen::Index pixels, Eigen::Index n, int repeats) {
   constexpr Eigen::Index kBlock = 8192;
   const Eigen::Index blocks = (pixels + kBlock - 1) / kBlock;
   std::vector<Eigen::MatrixXf> partial(blocks);
-  return median_of(repeats, [&] {
+  return median_seconds(repeats, [&] {
     tbb::parallel_for(Eigen::Index(0), blocks, [&](Eigen::Index b) {
       const Eigen::Index begin = b * kBlock, count = std::min(kBlock, pixels - begin);
       partial[b].noalias() = texels.middleCols(begin, count) * values.middleRows(begin, count);
@@ -72,7 +62,7 @@ int main(int argc, char** argv) {
   const int repeats = 15;
   double worst = 0, worst_project = 0, worst_gemm = 0;
   auto row = [&](const std::string& name, int width, int height, const float* rgb) {
-    const double project = median_of(repeats, [&] {
+    const double project = median_seconds(repeats, [&] {
       const Eigen::MatrixX3d light = sh::project_equirect(order, width, height, rgb);
       if (!light.allFinite()) std::puts("non-finite");
     });
@@ -97,15 +87,16 @@ int main(int argc, char** argv) {
   const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(order * order, 3);
   Eigen::MatrixXd rotated(order * order, 3);
   double angle = 0;
-  const double turn = median_of(200, [&] {
+  const double turn = median_seconds(200, [&] {
     angle += 0.01;
     const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).matrix();
     sh::Rotation(order, r).apply(light, rotated);
   });
   std::printf("rotated light (viewer): %.3f ms of a 16.7 ms frame\n", 1e3 * turn);
-  std::printf("PERF|light projection, equirect -> SH order %d (worst map)|%.2f ms|GEMM of its "
-              "shape %.2f ms|%.3f|1.5|%s\n",
-              order, 1e3 * worst_project, 1e3 * worst_gemm, worst, worst <= 1.5 ? "PASS" : "FAIL");
+  std::printf(
+      "PERF|light projection, equirect -> SH order %d (worst map)|%.2f ms|GEMM of its "
+      "shape %.2f ms|%.3f|1.5|%s\n",
+      order, 1e3 * worst_project, 1e3 * worst_gemm, worst, worst <= 1.5 ? "PASS" : "FAIL");
   std::printf("PERF|rotated light in the viewer|%.4g ms|60 Hz frame 16.7 ms|%.4f|1|%s\n",
               1e3 * turn, turn / (1.0 / 60), turn <= 1.0 / 60 ? "PASS" : "FAIL");
   return 0;

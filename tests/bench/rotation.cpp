@@ -18,18 +18,15 @@
 #include "prt/progress.hpp"
 #include "prt/sh.hpp"
 #include "prt/sh_rotation.hpp"
+#include "timing.hpp"
 
 namespace {
 
+// Median nanoseconds per call, each sample a batch of 100 calls run(i).
 double median_ns(int repeats, const auto& run) {
-  std::vector<double> t;
-  for (int r = 0; r < repeats; ++r) {
-    prt::Stopwatch clock;
-    for (int i = 0; i < 100; ++i) run(i);
-    t.push_back(clock.seconds() * 1e9 / 100);
-  }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
+  return 1e9 / 100 * prt::bench::median_seconds(repeats, [&] {
+           for (int i = 0; i < 100; ++i) run(i);
+         });
 }
 
 }  // namespace

@@ -27,6 +27,7 @@
 #include "prt/progress.hpp"
 #include "prt/relight.hpp"
 #include "prt/renderer.hpp"
+#include "timing.hpp"
 
 #ifndef PRT_SOURCE_DIR
 #define PRT_SOURCE_DIR "."
@@ -34,10 +35,7 @@
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using prt::bench::median;
 
 // The time to stream `bytes` of per-vertex data once on every core: each of
 // `vertices` reads its share of one array and writes three floats, as a
@@ -49,9 +47,7 @@ double stream_seconds(Eigen::Index vertices, double bytes, int repeats) {
   const Eigen::Index per_vertex = std::max<Eigen::Index>(1, in_floats / vertices);
   std::vector<float> in(static_cast<std::size_t>(per_vertex * vertices), 1.f);
   std::vector<float> out(static_cast<std::size_t>(out_floats));
-  std::vector<double> times;
-  for (int r = 0; r < repeats; ++r) {
-    prt::Stopwatch clock;
+  const double seconds = prt::bench::median_seconds(repeats, [&] {
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, vertices, 1024), [&](const auto& range) {
       for (Eigen::Index p = range.begin(); p < range.end(); ++p) {
         float sum = 0;
@@ -61,10 +57,9 @@ double stream_seconds(Eigen::Index vertices, double bytes, int repeats) {
         out[2 * vertices + p] = sum;
       }
     });
-    times.push_back(clock.seconds());
-  }
+  });
   if (out[0] < 0) std::puts("");
-  return median(times);
+  return seconds;
 }
 
 }  // namespace

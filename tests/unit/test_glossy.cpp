@@ -7,11 +7,11 @@
 #include "prt/basis.hpp"
 #include "prt/brdf.hpp"
 #include "prt/glossy.hpp"
-#include "prt/relight.hpp"
 #include "prt/hemisphere.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/registry.hpp"
+#include "prt/relight.hpp"
 #include "prt/sh.hpp"
 #include "prt/transport.hpp"
 
