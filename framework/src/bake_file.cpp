@@ -276,6 +276,8 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_number(transfer, "subsurface", data.subsurface ? 1 : 0);
       write_number(transfer, "exit_rows", data.transfer.exit_rows);
       write_matrix(transfer, "coefficients", data.transfer.coefficients);
+      if (data.direct.coefficients.size())
+        write_matrix(transfer, "direct_coefficients", data.direct.coefficients);
 
       const CompressedTransfer& c = data.compressed;
       H5::Group compressed = create_group(h5, "compressed");
@@ -368,6 +370,14 @@ BakeData read_bake(const fs::path& file) {
     if (data.transfer.coefficients.rows() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
       throw Error("the transfer has " + std::to_string(data.transfer.coefficients.rows()) +
                   " rows for " + std::to_string(data.mesh.vertex_count()) + " vertices");
+    if (data.bounces > 0 && transfer.nameExists("direct_coefficients")) {
+      data.direct.kind = data.transfer.kind;
+      data.direct.exit_rows = data.transfer.exit_rows;
+      data.direct.coefficients = read_matrix(transfer, "direct_coefficients");
+      if (data.direct.coefficients.rows() != data.transfer.coefficients.rows() ||
+          data.direct.coefficients.cols() != data.transfer.coefficients.cols())
+        throw Error("the direct transfer's shape differs from the transfer's");
+    }
 
     H5::Group compressed = h5.openGroup("compressed");
     CompressedTransfer& c = data.compressed;

@@ -6,17 +6,22 @@
 
 namespace prt {
 
+Frame tangent_frame(const Eigen::Vector3d& normal) {
+  const Eigen::Vector3d n = normal.normalized();
+  const Eigen::Vector3d axis =
+      std::abs(n.y()) < 0.999 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d t = (axis - axis.dot(n) * n).normalized();
+  Frame frame;
+  frame.row(0) = t;
+  frame.row(1) = n.cross(t);
+  frame.row(2) = n;
+  return frame;
+}
+
 std::vector<Frame> tangent_frames(const Mesh& mesh) {
   std::vector<Frame> frames(mesh.vertex_count());
-  for (std::size_t v = 0; v < frames.size(); ++v) {
-    const Eigen::Vector3d n = mesh.normals[v].cast<double>().normalized();
-    const Eigen::Vector3d axis =
-        std::abs(n.y()) < 0.999 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
-    const Eigen::Vector3d t = (axis - axis.dot(n) * n).normalized();
-    frames[v].row(0) = t;
-    frames[v].row(1) = n.cross(t);
-    frames[v].row(2) = n;
-  }
+  for (std::size_t v = 0; v < frames.size(); ++v)
+    frames[v] = tangent_frame(mesh.normals[v].cast<double>());
   return frames;
 }
 

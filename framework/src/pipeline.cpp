@@ -11,6 +11,7 @@
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
+#include "prt/glossy_interreflection.hpp"
 #include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
 #include "prt/log.hpp"
@@ -266,7 +267,7 @@ void add_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set
 TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
                               const DirectionSet& set, TransportResult result,
                               const RunOptions& options, StageTimes& times,
-                              std::map<std::string, double>& metrics) {
+                              std::map<std::string, double>& metrics, TransferSignal* direct) {
   Stopwatch clock;
   if (plan.fit) {
     plan.basis->fit({&mesh, &set, &result.visibility});
@@ -280,7 +281,8 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     result.transfer = project_visibility(mesh, set, result.visibility, *plan.basis);
     times.add("project", clock.seconds());
   }
-  if (plan.bounces > 0) {
+  if (plan.bounces > 0 && !plan.glossy) {
+    if (direct) *direct = result.transfer;
     clock = Stopwatch();
     add_bounces(plan, mesh, set, result, options, metrics);
     times.add("inter-reflection (" + std::to_string(plan.bounces) + " bounces)", clock.seconds());
@@ -298,8 +300,9 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
   const GlossyOperator& glossy = plan.glossy_operator;
   clock = Stopwatch();
   Progress progress("glossy matrices", double(mesh.vertex_count()), "", options.quiet);
+  const std::vector<Frame> frames = tangent_frames(mesh);
   TransferSignal transfer = glossy_transfer(mesh, set, result.visibility, *plan.basis, glossy,
-                                            tangent_frames(mesh), plan.glossy_method, &progress);
+                                            frames, plan.glossy_method, &progress);
   times.add("glossy matrices (" + std::to_string(glossy.rows()) + "x" +
                 std::to_string(plan.basis->size()) + ")",
             clock.seconds());
@@ -310,6 +313,28 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     for (int r = 0; r < glossy.rows(); ++r)
       transfer.coefficients.middleCols(r * n_i, n_i) +=
           static_cast<float>(glossy.constant[r]) * scattered;
+  }
+  if (plan.bounces > 0) {
+    if (direct) *direct = transfer;
+    clock = Stopwatch();
+    Progress bounce_progress("glossy inter-reflection", plan.bounces, "", options.quiet);
+    GlossyInterreflection light = glossy_interreflect(
+        mesh, set, result.hits, transfer.coefficients, *plan.exit, glossy, plan.basis->size(),
+        frames, plan.bounces, plan.bounce_albedo, &bounce_progress);
+    const double direct_norm = transfer.coefficients.cast<double>().norm();
+    transfer.coefficients = std::move(light.total);
+    char line[200];
+    std::snprintf(line, sizeof line, "glossy inter-reflection: %d bounces", plan.bounces);
+    std::string text = line;
+    for (std::size_t b = 0; b < light.bounce_norms.size(); ++b) {
+      metrics["bounce_" + std::to_string(b + 1) + "_norm"] = light.bounce_norms[b];
+      std::snprintf(line, sizeof line, "%s bounce %zu %.2f%%", b ? "," : ";", b + 1,
+                    100 * light.bounce_norms[b] / std::max(direct_norm, 1e-300));
+      text += line;
+    }
+    options.message(text + " of the direct transfer's norm");
+    times.add("glossy inter-reflection (" + std::to_string(plan.bounces) + " bounces)",
+              clock.seconds());
   }
   return transfer;
 }
@@ -346,8 +371,8 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   TransportResult traced = trace_stage(plan, data.mesh, set, options);
   const auto rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
-  data.transfer =
-      transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times, data.metrics);
+  data.transfer = transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times,
+                                 data.metrics, plan.bounces > 0 ? &data.direct : nullptr);
 
   clock = Stopwatch();
   data.compressed = options.compress || plan.sparse_terms > 0
@@ -550,10 +575,17 @@ Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
     radiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress, reflectance);
   }
   if (const int bounces = static_cast<int>(scene.transport.get_int("bounces")); bounces > 0) {
-    Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
-                      options.quiet);
-    radiance = ground_truth_bounces(mesh, radiance, bounces, scene.bounce_albedo(), samples, seed,
-                                    &progress);
+    if (brdf.glossy()) {  // view-dependent: paths from each vertex
+      Progress progress("ground truth glossy bounces", double(mesh.vertex_count()), "rays",
+                        options.quiet);
+      radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, views, bounces,
+                                              scene.bounce_albedo(), samples, seed, &progress);
+    } else {
+      Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
+                        options.quiet);
+      radiance = ground_truth_bounces(mesh, radiance, bounces, scene.bounce_albedo(), samples, seed,
+                                      &progress);
+    }
   }
   const Eigen::Vector3f albedo = scene.albedo();
   for (int c = 0; c < 3; ++c) radiance.col(c) *= albedo[c];

@@ -69,7 +69,7 @@ const ParamSchema& transport_schema() {
        integer("rays", "1024", 1, 4194304, "directions per vertex over the sphere"),
        boolean("shadowed", "true", "trace visibility (false: unshadowed transfer)"),
        integer("bounces", "0", 0, 64,
-               "diffuse inter-reflection bounces gathered from the shadow rays' hits"),
+               "inter-reflection bounces (diffuse or glossy) gathered from the shadow rays' hits"),
        integer("seed", "1", 0, 9.2e18, "seed of stratified directions")}};
   return s;
 }
@@ -474,11 +474,6 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                 "section [lighting]: give exactly one of \"environment\" or \"constant\"");
 
   const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
-  if (bounces > 0 && scene.glossy())
-    throw Error(scene.transport.location("bounces"),
-                "section [transport]: inter-reflection is implemented for diffuse transfer only; "
-                "use bounces = 0 with brdf = \"" +
-                    scene.material.get_string("brdf") + "\"");
   if (bounces > 0 && !scene.transport.get_bool("shadowed"))
     throw Error(scene.transport.location("bounces"),
                 "section [transport]: bounces gather light from the shadow rays' hits; they need "

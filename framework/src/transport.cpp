@@ -111,7 +111,8 @@ void RayCaster::occluded(const float* origins, const float* directions, std::siz
 }
 
 void RayCaster::intersect(const Mesh& mesh, const float* origins, const float* directions,
-                          std::size_t count, std::int64_t* triangle, float* u, float* v) const {
+                          std::size_t count, std::int64_t* triangle, float* u, float* v,
+                          std::uint8_t* escaped) const {
   constexpr std::size_t kChunk = 256;
   RTCRayHit rays[kChunk];
   RTCIntersectContext context;
@@ -128,6 +129,7 @@ void RayCaster::intersect(const Mesh& mesh, const float* origins, const float* d
                        front_face(mesh, h.primID, h.u, h.v, direction_of_ray(rays[i].ray));
       triangle[begin + i] = hit ? std::int64_t(h.primID) : -1;
       u[begin + i] = h.u, v[begin + i] = h.v;
+      if (escaped) escaped[begin + i] = h.geomID == RTC_INVALID_GEOMETRY_ID;
     }
   }
 }

@@ -33,6 +33,9 @@ struct BakeData {
   int bounces = 0;                        // inter-reflection bounces included
   bool subsurface = false;                // subsurface term included
   TransferSignal transfer;
+  // bounces > 0: the transfer without inter-reflection (same shape), kept so
+  // that prt render --compare can show what the bounces bring; else empty.
+  TransferSignal direct;
   CompressedTransfer compressed;
   BasisState basis_state;
   BasisState exit_state;                  // glossy only

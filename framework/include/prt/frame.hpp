@@ -11,6 +11,8 @@ namespace prt {
 // frame * world = local. The tangent is world +y projected onto the tangent
 // plane (+x near the poles), which fixes the axis of anisotropic BRDFs.
 using Frame = Eigen::Matrix3d;
+// The frame of one normal (any length), by the rule above.
+Frame tangent_frame(const Eigen::Vector3d& normal);
 std::vector<Frame> tangent_frames(const Mesh& mesh);
 
 // Clamps a local direction to the upper hemisphere and normalises it: exit

@@ -35,3 +35,24 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
                                        const Reflectance& reflectance = nullptr);
 
 }  // namespace prt
+
+namespace prt {
+
+struct Brdf;
+
+// The glossy ground truth's inter-reflected light, independent of any basis
+// and of the bake's directions: per vertex `samples` paths (stratified
+// cosine-weighted first directions) that hit the mesh and continue for up to
+// `bounces` reflections, each hit point q shading with the BRDF in its own
+// frame (interpolated normal) toward where the path came from, times the
+// bounce albedo. At each hit, the environment's light is gathered by two
+// strategies (cosine and the map's importance sampling) combined by the
+// balance heuristic. Returns the radiance the bounces add toward each
+// vertex's local view (v x 3, albedo 1); the direct light is
+// ground_truth_radiance's.
+Eigen::MatrixX3f ground_truth_glossy_bounces(const Mesh& mesh, const Environment& environment,
+                                             const Brdf& brdf, const Eigen::MatrixXd& local_views,
+                                             int bounces, double albedo, int samples,
+                                             std::uint64_t seed, Progress* progress);
+
+}  // namespace prt

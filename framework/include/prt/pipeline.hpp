@@ -82,11 +82,13 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry);
 TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                             const RunOptions& options);
 // 2. Transfer: fit (data-driven bases), project, bounces, subsurface, glossy
-//    matrices. Consumes the visibility and hits; metrics gets its figures.
+//    matrices, glossy bounces. Consumes the visibility and hits; metrics
+//    gets its figures; `direct` (optional) the transfer before any bounce.
 TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
                               const DirectionSet& set, TransportResult traced,
                               const RunOptions& options, StageTimes& times,
-                              std::map<std::string, double>& metrics);
+                              std::map<std::string, double>& metrics,
+                              TransferSignal* direct = nullptr);
 // 3. Compression (or the basis's sparse approximation).
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where);

@@ -68,9 +68,10 @@ class RayCaster {
                 std::uint8_t* escaped) const;
 
   // First hits: `triangle` gets the hit triangle or -1 where the ray escapes
-  // or hits a back face; u, v the barycentrics.
+  // or hits a back face; u, v the barycentrics; `escaped` (optional) 1 where
+  // the ray hit nothing at all.
   void intersect(const Mesh& mesh, const float* origins, const float* directions, std::size_t count,
-                 std::int64_t* triangle, float* u, float* v) const;
+                 std::int64_t* triangle, float* u, float* v, std::uint8_t* escaped = nullptr) const;
 
   // Visibility of `count` vertices over `s` directions (xyz floats): for each
   // vertex, bits of (s + 63) / 64 words; a bit is set where the direction lies

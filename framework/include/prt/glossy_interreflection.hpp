@@ -1,0 +1,44 @@
+// Glossy inter-reflection (Sloan, Kautz, Snyder 2002 §5; Sloan 2003 §3):
+// each pass gathers, at every vertex p, the light that arrives along the
+// shadow pass's blocked rays. A ray along s that hits q brings q's exit
+// radiance toward p, read from q's transfer of the previous pass:
+//   r(s) = sum_c beta_c y_exit(F_c (-s))^T M_c^{b-1}        (1 x N_i)
+// interpolated over the hit triangle's corners c (each in its own frame).
+// That incident radiance, linear in the light, replaces b(s)^T V_p(s) in
+// the direct glossy transfer:
+//   M_p^b = a G R_M(F_p) sum_k w_k y_M(s_k) r(s_k)
+// with a the bounce albedo (the grey tint of the material). Corners that see
+// the ray from below their tangent plane send nothing.
+#pragma once
+#include <vector>
+
+#include "prt/basis.hpp"
+#include "prt/direction_set.hpp"
+#include "prt/frame.hpp"
+#include "prt/glossy.hpp"
+#include "prt/mesh.hpp"
+#include "prt/transfer.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+class Progress;
+
+// One pass: `previous` (v x N_r N_i glossy transfer) -> the transfer of the
+// light it sends on (same shape).
+MatrixXfRow glossy_bounce(const Mesh& mesh, const DirectionSet& directions, const HitLists& hits,
+                          const MatrixXfRow& previous, const Basis& exit_basis,
+                          const GlossyOperator& glossy, int light_size,
+                          const std::vector<Frame>& frames, double albedo);
+
+struct GlossyInterreflection {
+  MatrixXfRow total;                 // direct + every bounce
+  std::vector<double> bounce_norms;  // Frobenius norm of each bounce's transfer
+};
+GlossyInterreflection glossy_interreflect(const Mesh& mesh, const DirectionSet& directions,
+                                          const HitLists& hits, const MatrixXfRow& direct,
+                                          const Basis& exit_basis, const GlossyOperator& glossy,
+                                          int light_size, const std::vector<Frame>& frames,
+                                          int bounces, double albedo, Progress* progress);
+
+}  // namespace prt
