@@ -92,6 +92,17 @@ int render(Context& context, const RenderArgs& args) {
           " 99th percentile %.6g, max %.6g\n",
           static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms,
           e.p99, e.max);
+      if (!scene.point_lights.empty()) {  // the nearest-direction rule against its reference
+        Relighting brute(scene, data, context.registry);
+        brute.use_brute_force(256);
+        const Relit reprojected = brute.relight(
+            data.compressed, brute.light(scene.load_environment()), scene.make_camera(data.mesh));
+        const ErrorStats b = vertex_error(reprojected.vertex_radiance, truth.vertex_radiance);
+        std::printf(
+            "error of brute-force re-projection of the point lights (%s) against the same "
+            "ground truth: RMS per vertex %.6g (relative %.4f)\n",
+            brute.point_light_rule().c_str(), b.rms, b.relative_rms);
+      }
       if (data.direct.coefficients.size()) {  // what the bounces bring
         const Relighting relighting(scene, data, context.registry);
         const Relit direct =

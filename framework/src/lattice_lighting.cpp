@@ -60,24 +60,28 @@ Eigen::MatrixX3d rotate_lattice_lighting(const Eigen::MatrixX3d& samples, int re
   return out;
 }
 
-Eigen::MatrixX3f point_light_radiance(const Mesh& mesh, const CompressedTransfer& transfer,
-                                      const Basis& basis, int resolution,
-                                      const Eigen::Vector3d& position,
-                                      const Eigen::Vector3f& intensity) {
-  const DirectionSet lattice = DirectionSet::cubemap(resolution);
-  // Basis values at every lattice direction, once: s x n.
-  const Eigen::MatrixXd values = basis.evaluate(lattice.directions);
-  const MatrixXfRow t = transfer.decode();
-  Eigen::MatrixX3f out(static_cast<Eigen::Index>(mesh.vertex_count()), 3);
-  tbb::parallel_for(std::size_t(0), mesh.vertex_count(), [&](std::size_t p) {
-    const Eigen::Vector3d toward = position - mesh.positions[p].cast<double>();
-    const double length = toward.norm();
-    const int k = cubemap_texel(
-        length > 0 ? Eigen::Vector3d(toward / length) : Eigen::Vector3d::UnitY(), resolution);
-    const float e = static_cast<float>(t.row(p).cast<double>().dot(values.row(k)));
-    out.row(p) = e * intensity.transpose();
-  });
+std::optional<LatticeRotation> LatticeRotation::of(const Basis& basis,
+                                                   const Environment& environment) {
+  if (basis.can_rotate()) return std::nullopt;
+  const std::optional<DirectionSet> native = basis.native_directions();
+  if (!native || native->kind != "cubemap") return std::nullopt;
+  LatticeRotation out;
+  out.basis_ = &basis;
+  out.resolution_ = static_cast<int>(std::lround(std::sqrt(native->size() / 6.0)));
+  if (6 * out.resolution_ * out.resolution_ != native->size()) return std::nullopt;
+  out.lattice_ = *native;
+  out.canonical_ = lattice_lighting(environment, out.resolution_);
   return out;
+}
+
+Eigen::MatrixX3d LatticeRotation::light(const Eigen::Matrix3d& rotation) const {
+  const Eigen::MatrixX3d samples = rotation.isIdentity(1e-12)
+                                       ? canonical_
+                                       : rotate_lattice_lighting(canonical_, resolution_, rotation);
+  const Eigen::MatrixXd light = basis_->project(samples.transpose(), lattice_).transpose();
+  if (light.rows() != basis_->size() || light.cols() != 3 || !light.allFinite())
+    throw Error("lattice rotation: the basis's projection gave the wrong shape or NaN/Inf");
+  return light;
 }
 
 }  // namespace prt

@@ -480,6 +480,29 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
                                   std::to_string(exit_->size()) + " functions; bake again");
     frames_ = tangent_frames(data.mesh);
   }
+  point_lights_ = scene.point_lights;
+  projector_ = std::make_unique<PointLightProjector>(
+      *basis_, static_cast<int>(scene.lighting.get_int("nearest")));
+}
+
+void Relighting::use_brute_force(int cap_samples) {
+  projector_ =
+      std::make_unique<PointLightProjector>(PointLightProjector::brute_force(*basis_, cap_samples));
+}
+
+std::string Relighting::point_light_rule() const {
+  return point_lights_.empty() ? "" : projector_->describe();
+}
+
+Eigen::MatrixX3f Relighting::point_radiance(const CompressedTransfer& transfer,
+                                            const MatrixXfRow* exit_values) const {
+  const auto v = static_cast<Eigen::Index>(data_.mesh.vertex_count());
+  if (point_lights_.empty()) return Eigen::MatrixX3f::Zero(v, 3);
+  Eigen::MatrixX3f radiance =
+      point_light_radiance(data_.mesh, transfer, data_.transfer.exit_rows, *projector_,
+                           point_lights_, exit_ ? exit_values : nullptr);
+  for (int c = 0; c < 3; ++c) radiance.col(c) *= data_.albedo[c];
+  return radiance;
 }
 
 Eigen::MatrixX3d Relighting::light(const Environment& environment) const {
@@ -497,6 +520,10 @@ Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& l
   // The renderers' own relight path (RelightKernel), so CPU results are theirs.
   out.vertex_radiance = kernel.radiance(light, exit_ ? &out.exit_values : nullptr);
   for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data_.albedo[c];
+  if (!point_lights_.empty()) {
+    out.vertex_radiance += point_radiance(kernel.transfer(), &out.exit_values);
+    out.point_lit = true;
+  }
   return out;
 }
 
@@ -514,6 +541,10 @@ RenderInput Relighting::input(const CompressedTransfer& transfer, const Relit& r
   input.albedo = data_.albedo;
   input.camera = camera;
   if (exit_) input.exit_values = &relit.exit_values;
+  if (relit.point_lit) {  // per-vertex light: the renderer draws the sums made here
+    input.vertex_radiance = &relit.vertex_radiance;
+    input.albedo = Eigen::Vector3f::Ones();
+  }
   return input;
 }
 
@@ -537,6 +568,9 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
         !warning.empty())
       options.warn(warning);
 
+  if (!scene.point_lights.empty())
+    options.message("point lights (" + std::to_string(scene.point_lights.size()) +
+                    "): " + relighting.point_light_rule());
   clock = Stopwatch();
   Rendered out;
   const Relit relit = relighting.relight(data.compressed, light, camera);
@@ -586,6 +620,11 @@ Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
       radiance = ground_truth_bounces(mesh, radiance, bounces, scene.bounce_albedo(), samples, seed,
                                       &progress);
     }
+  }
+  if (!scene.point_lights.empty()) {  // direct light only, as traced up to each light
+    Progress progress("ground truth point lights", double(mesh.vertex_count()), "", options.quiet);
+    radiance +=
+        ground_truth_point_lights(mesh, scene.point_lights, samples, seed, reflectance, &progress);
   }
   const Eigen::Vector3f albedo = scene.albedo();
   for (int c = 0; c < 3; ++c) radiance.col(c) *= albedo[c];

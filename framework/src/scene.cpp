@@ -9,6 +9,7 @@
 
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
+#include "prt/lattice_lighting.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
@@ -81,7 +82,20 @@ const ParamSchema& lighting_schema() {
        real("intensity", "1", 0, kBig, "radiance scale"),
        real("rotation", "0", -3600, 3600, "rotation of the environment about +y, degrees"),
        choice("window", "none", "none|hanning|lanczos",
-              "SH bases: sigma factors on the light's bands against ringing (negative light)")}};
+              "SH bases: sigma factors on the light's bands against ringing (negative light)"),
+       integer("nearest", "1", 1, 64,
+               "point lights on a lattice basis (eigen, haar): lattice directions nearest to "
+               "the light that share it (k)")}};
+  return s;
+}
+const ParamSchema& point_light_schema() {
+  static const ParamSchema s{
+      "[[lighting.point]]",
+      {reals("position", "", 3, -kBig, kBig, "the light's position (mesh units)"),
+       reals("colour", "1", 3, 0, kBig, "RGB colour (RGB or grey)"),
+       real("intensity", "1", 0, kBig,
+            "exit radiance of a lit white vertex facing it is intensity / pi (no falloff)"),
+       real("radius", "0", 0, kBig, "radius of a spherical light (0: an ideal point)")}};
   return s;
 }
 const ParamSchema& camera_schema() {
@@ -408,6 +422,37 @@ void toml_assumption_broken(const char* what) {
   throw Error(std::string("malformed TOML (the parser's check \"") + what + "\" failed)");
 }
 
+namespace {
+
+// [[lighting.point]]: an array of tables, each validated like a section.
+std::vector<PointLight> read_point_lights(const toml::table* lighting, const fs::path& file) {
+  std::vector<PointLight> lights;
+  if (!lighting) return lights;
+  const toml::node* node = lighting->get("point");
+  if (!node) return lights;
+  const toml::array* array = node->as_array();
+  if (!array || !array->is_array_of_tables())
+    throw Error(location_of(node->source(), file),
+                "section [lighting]: \"point\" must be an array of tables, written "
+                "[[lighting.point]] with position = [x, y, z] under it");
+  for (const toml::node& item : *array) {
+    const toml::table& table = *item.as_table();
+    const SourceLocation where = location_of(table.source(), file);
+    Params params = read_table(&table, where, file);
+    params.validate(point_light_schema());
+    if (!params.has("position")) throw Error(where, "[[lighting.point]]: \"position\" is required");
+    PointLight light;
+    light.position = Eigen::Vector3d(params.get_reals("position").data());
+    light.colour = Eigen::Vector3d(params.get_reals("colour").data());
+    light.intensity = params.get_real("intensity");
+    light.radius = params.get_real("radius");
+    lights.push_back(light);
+  }
+  return lights;
+}
+
+}  // namespace
+
 SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                            const PluginRegistry& registry) {
   SceneSpec scene;
@@ -437,12 +482,13 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     if (!node.is_table()) throw Error(where, "[" + name + "] must be a table");
   }
 
-  auto section = [&](const std::string& name, const ParamSchema& schema) {
+  auto section = [&](const std::string& name, const ParamSchema& schema,
+                     const std::string& skip = "") {
     const toml::table* table = root[name].as_table();
     // A missing section's errors point at the file's start.
     const SourceLocation where =
         table ? location_of(table->source(), file) : SourceLocation{file.string(), 1, 1};
-    Params params = read_table(table, where, file);
+    Params params = read_table(table, where, file, skip);
     params.validate(schema);
     resolve_paths(params, schema, scene);
     return params;
@@ -458,7 +504,8 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
   scene.mesh = section("mesh", mesh_schema());
   scene.material = section("material", material_schema());
   scene.transport = section("transport", transport_schema());
-  scene.lighting = section("lighting", lighting_schema());
+  scene.lighting = section("lighting", lighting_schema(), "point");
+  scene.point_lights = read_point_lights(root["lighting"].as_table(), file);
   scene.camera = section("camera", camera_schema());
   scene.output = section("output", output_schema());
   scene.ground_truth = section("ground_truth", ground_truth_schema());
@@ -469,9 +516,13 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     throw Error(scene.mesh.location(),
                 "section [mesh]: give exactly one of \"file\" or \"generate\"");
   const bool has_map = !scene.lighting.get_string("environment").empty();
-  if (has_map == scene.lighting.has("constant"))
+  if (has_map && scene.lighting.has("constant"))
     throw Error(scene.lighting.location(),
-                "section [lighting]: give exactly one of \"environment\" or \"constant\"");
+                "section [lighting]: give one of \"environment\" or \"constant\", not both");
+  if (!has_map && !scene.lighting.has("constant") && scene.point_lights.empty())
+    throw Error(scene.lighting.location(),
+                "section [lighting]: give \"environment\", \"constant\" or [[lighting.point]] "
+                "lights");
 
   const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
   if (bounces > 0 && !scene.transport.get_bool("shadowed"))
@@ -526,10 +577,12 @@ DirectionSet SceneSpec::directions() const {
 
 Environment SceneSpec::load_environment() const {
   const std::string map = lighting.get_string("environment");
-  Environment environment =
-      map.empty() ? Environment::constant(
-                        Eigen::Vector3d(lighting.get_reals("constant").data()).cast<float>())
-                  : Environment::load(map);
+  // Point lights alone: a black environment.
+  const Eigen::Vector3f constant =
+      lighting.has("constant")
+          ? Eigen::Vector3f(Eigen::Vector3d(lighting.get_reals("constant").data()).cast<float>())
+          : Eigen::Vector3f::Zero();
+  Environment environment = map.empty() ? Environment::constant(constant) : Environment::load(map);
   environment.set_intensity(static_cast<float>(lighting.get_real("intensity")));
   environment.set_rotation(rotation_about_up(lighting.get_real("rotation")));
   return environment;
@@ -537,7 +590,11 @@ Environment SceneSpec::load_environment() const {
 
 Eigen::MatrixX3d SceneSpec::project_light(const Environment& environment,
                                           const Basis& basis) const {
-  Eigen::MatrixX3d light = environment.project(basis);
+  // A basis on a lattice rotates the light by rotating the lattice (as the
+  // viewer does, frame after frame); any other projects the map.
+  const std::optional<LatticeRotation> lattice = LatticeRotation::of(basis, environment);
+  Eigen::MatrixX3d light =
+      lattice ? lattice->light(environment.rotation()) : environment.project(basis);
   const std::string kind = lighting.get_string("window");
   if (kind == "none") return light;
   check_window(basis);

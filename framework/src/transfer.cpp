@@ -9,22 +9,21 @@
 
 namespace prt {
 
+void CompressedTransfer::decode_row(Eigen::Index p, Eigen::Ref<Eigen::RowVectorXf> out) const {
+  const int k = cluster_of_vertex[p];
+  out = means.row(k);
+  if (sparse()) {
+    for (int j = 0; j < components; ++j) out[weight_index[p * components + j]] += weights(p, j);
+    return;
+  }
+  const int n_k = components_of(k);
+  if (n_k > 0) out.noalias() += weights.row(p).head(n_k) * representatives[k];
+}
+
 MatrixXfRow CompressedTransfer::decode() const {
   MatrixXfRow out(vertices(), dimension);
-  if (sparse()) {
-    for (Eigen::Index p = 0; p < vertices(); ++p) {
-      out.row(p) = means.row(cluster_of_vertex[p]);
-      for (int j = 0; j < components; ++j)
-        out(p, weight_index[p * components + j]) += weights(p, j);
-    }
-    return out;
-  }
-  for (Eigen::Index p = 0; p < vertices(); ++p) {
-    const int k = cluster_of_vertex[p];
-    out.row(p) = means.row(k);
-    const int n_k = components_of(k);
-    if (n_k > 0) out.row(p) += weights.row(p).head(n_k) * representatives[k];
-  }
+  tbb::parallel_for(Eigen::Index(0), vertices(),
+                    [&](Eigen::Index p) { decode_row(p, out.row(p)); });
   return out;
 }
 

@@ -95,7 +95,7 @@ Eigen::Vector3f direction_of_ray(const RTCRay& r) {
 }  // namespace
 
 void RayCaster::occluded(const float* origins, const float* directions, std::size_t count,
-                         std::uint8_t* escaped) const {
+                         std::uint8_t* escaped, const float* far) const {
   constexpr std::size_t kChunk = 256;
   RTCRay rays[kChunk];
   RTCIntersectContext context;
@@ -105,6 +105,8 @@ void RayCaster::occluded(const float* origins, const float* directions, std::siz
     const std::size_t n = std::min(kChunk, count - begin);
     for (std::size_t i = 0; i < n; ++i)
       fill_ray(rays[i], origins + 3 * (begin + i), directions + 3 * (begin + i));
+    if (far)
+      for (std::size_t i = 0; i < n; ++i) rays[i].tfar = far[begin + i];
     rtcOccluded1M(impl_->scene, &context, rays, static_cast<unsigned>(n), sizeof(RTCRay));
     for (std::size_t i = 0; i < n; ++i) escaped[begin + i] = rays[i].tfar >= 0.f;
   }

@@ -3,6 +3,7 @@
 
 #include "prt/compressor.hpp"
 #include "prt/lattice_lighting.hpp"
+#include "prt/point_lights.hpp"
 #include "prt/registry.hpp"
 #include "prt/sh.hpp"
 
@@ -67,11 +68,15 @@ TEST_CASE("a point light shades with the transport at the nearest lattice direct
   t.coefficients = haar->project(samples, lattice).cast<float>();
   Params none;
   auto exact = registry.create<Compressor>("none", none)->encode(t, nullptr);
-  const Eigen::Vector3d light(0, 50, 0);
-  const Eigen::MatrixX3f e =
-      point_light_radiance(sphere, exact, *haar, 8, light, Eigen::Vector3f(2, 2, 2));
+  PointLight light;
+  light.position = Eigen::Vector3d(0, 50, 0);
+  light.intensity = 2;
+  const PointLightProjector projector(*haar, 1);
+  REQUIRE(projector.rule() == PointLightProjector::Rule::nearest);
+  const Eigen::MatrixX3f e = point_light_radiance(sphere, exact, 1, projector, {light});
   for (std::size_t v = 0; v < sphere.vertex_count(); ++v) {
-    const Eigen::Vector3d toward = (light - sphere.positions[v].cast<double>()).normalized();
+    const Eigen::Vector3d toward =
+        (light.position - sphere.positions[v].cast<double>()).normalized();
     const int k = cubemap_texel(toward, 8);
     CHECK(e(v, 0) == Approx(2 * samples(v, k)).margin(1e-5));
   }

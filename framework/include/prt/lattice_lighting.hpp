@@ -1,9 +1,10 @@
 // Lighting on a cube-map lattice, for bases that live on one (eigentransport,
 // Haar): distant light rotated by rotating the lattice with bilinear
-// interpolation of the canonical samples (Nowrouzezahrai et al. §5), and local
-// point lights by the nearest lattice direction per vertex (§4.2.1).
+// interpolation of the canonical samples (Nowrouzezahrai et al. §5). Local
+// point lights are prt/point_lights.hpp.
 #pragma once
 #include <Eigen/Core>
+#include <optional>
 
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
@@ -23,13 +24,24 @@ Eigen::MatrixX3d lattice_lighting(const Environment& environment, int resolution
 Eigen::MatrixX3d rotate_lattice_lighting(const Eigen::MatrixX3d& samples, int resolution,
                                          const Eigen::Matrix3d& rotation);
 
-// Exit radiance (v x 3, albedo 1) from a point light at `position` of
-// `intensity` (no falloff, as the paper): each vertex looks up the lattice
-// direction nearest to the light, so its light vector is intensity x the basis
-// functions there: e_p = t_p . (I b(w_k(p))).
-Eigen::MatrixX3f point_light_radiance(const Mesh& mesh, const CompressedTransfer& transfer,
-                                      const Basis& basis, int resolution,
-                                      const Eigen::Vector3d& position,
-                                      const Eigen::Vector3f& intensity);
+// Distant light for a basis that lives on a cube-map lattice and cannot
+// rotate its coefficients (eigentransport, Haar): the canonical samples are
+// made once, and each rotation resamples them on the lattice and projects
+// with the basis's own projection (§5), instead of re-sampling the map.
+class LatticeRotation {
+ public:
+  // Nothing unless the basis's native directions are a cube map and it has
+  // no rotation capability.
+  static std::optional<LatticeRotation> of(const Basis& basis, const Environment& environment);
+  // The light vector (n x 3) of the environment rotated by `rotation`.
+  Eigen::MatrixX3d light(const Eigen::Matrix3d& rotation) const;
+  int resolution() const { return resolution_; }
+
+ private:
+  const Basis* basis_ = nullptr;
+  int resolution_ = 0;
+  DirectionSet lattice_;
+  Eigen::MatrixX3d canonical_;
+};
 
 }  // namespace prt

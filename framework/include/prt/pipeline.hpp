@@ -13,6 +13,7 @@
 #include "prt/frame.hpp"
 #include "prt/glossy.hpp"
 #include "prt/image.hpp"
+#include "prt/point_lights.hpp"
 #include "prt/registry.hpp"
 #include "prt/relight.hpp"
 #include "prt/renderer.hpp"
@@ -122,6 +123,7 @@ struct Rendered {
 struct Relit {
   MatrixXfRow exit_values;  // glossy only: v x N_r
   Eigen::MatrixX3f vertex_radiance;
+  bool point_lit = false;  // point lights added: renderers take vertex_radiance
 };
 
 // What viewing a bake needs, made once: its light basis (fitted state loaded)
@@ -145,6 +147,17 @@ class Relighting {
   // Glossy: the exit basis toward the camera at each vertex (v x N_r); empty
   // for diffuse transfer.
   MatrixXfRow exit_values_toward(const Camera& camera) const;
+  // The scene's point lights ([[lighting.point]]), which relight() adds.
+  const std::vector<PointLight>& point_lights() const { return point_lights_; }
+  void set_point_lights(std::vector<PointLight> lights) { point_lights_ = std::move(lights); }
+  // From now on, point lights by brute-force re-projection of their caps
+  // (`cap_samples` directions per vertex): the reference of the rule.
+  void use_brute_force(int cap_samples);
+  // How the light basis receives them (one line for logs); empty without lights.
+  std::string point_light_rule() const;
+  // What the point lights add (v x 3, albedo included); zero without lights.
+  Eigen::MatrixX3f point_radiance(const CompressedTransfer& transfer,
+                                  const MatrixXfRow* exit_values) const;
   // The renderer's input; points into the bake, `transfer` and `relit`.
   RenderInput input(const CompressedTransfer& transfer, const Relit& relit,
                     const Eigen::MatrixX3d& light, const Camera& camera) const;
@@ -154,6 +167,8 @@ class Relighting {
   const BakeData& data_;
   std::shared_ptr<Basis> basis_, exit_;
   std::vector<Frame> frames_;
+  std::vector<PointLight> point_lights_;
+  std::unique_ptr<PointLightProjector> projector_;
 };
 
 // Light projection -> per-cluster constants -> per-vertex sums -> image.

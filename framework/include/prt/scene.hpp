@@ -9,6 +9,7 @@
 #include "prt/camera.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/params.hpp"
+#include "prt/point_lights.hpp"
 #include "prt/subsurface.hpp"
 #include "prt/transfer.hpp"
 
@@ -32,6 +33,7 @@ struct SceneSpec {
   Params mesh, material, transport, lighting, camera, output, ground_truth;
   PluginChoice basis, compressor, renderer;
   PluginChoice exit;  // [exit]: the hemisphere basis of glossy exit radiance (glossy only)
+  std::vector<PointLight> point_lights;  // [[lighting.point]]
 
   // Parses and validates the whole scene, plug-in parameters included.
   // Throws prt::Error with file:line:column on the first problem.

@@ -58,6 +58,8 @@ struct CompressedTransfer {
 
   // Reconstructs the v x n signal (for error measurement).
   MatrixXfRow decode() const;
+  // Reconstructs vertex p's row into `out` (n floats).
+  void decode_row(Eigen::Index p, Eigen::Ref<Eigen::RowVectorXf> out) const;
   // Throws prt::Error unless the sizes and cluster indices agree with each
   // other and with `vertex_count`.
   void validate(Eigen::Index vertex_count) const;

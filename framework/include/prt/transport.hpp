@@ -62,10 +62,11 @@ class RayCaster {
 
   // Origin offset (world units) that keeps rays off their own surface.
   float offset() const { return offset_; }
-  // True where the ray from origin toward direction hits nothing. Batched
-  // through Embree's stream API.
+  // True where the ray from origin toward direction hits nothing (within
+  // `far`, per ray, when given: the distance to a light). Batched through
+  // Embree's stream API.
   void occluded(const float* origins, const float* directions, std::size_t count,
-                std::uint8_t* escaped) const;
+                std::uint8_t* escaped, const float* far = nullptr) const;
 
   // First hits: `triangle` gets the hit triangle or -1 where the ray escapes
   // or hits a back face; u, v the barycentrics; `escaped` (optional) 1 where
