@@ -4,8 +4,11 @@
 //
 //   left drag: orbit     right drag or shift + left drag: rotate the light
 //   scroll: zoom         Left/Right: rotate the light by 15 degrees
+//   ctrl + left drag, J/L (x), U/O (y), I/K (z): move the selected point light
 //   E: next encoding (compressed, exact)   H: error heat-map   M: method
 //   P: screenshot        Esc or Q: quit
+// An ImGui panel shows the plug-ins, encodings, lights and timings, and edits
+// the lights.
 #include <epoxy/gl.h>
 // epoxy before GLFW: it provides the GL declarations.
 #include <GLFW/glfw3.h>
@@ -14,6 +17,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "panel.hpp"
 #include "prt/error.hpp"
 #include "prt/image.hpp"
 #include "prt/output_file.hpp"
@@ -28,8 +32,28 @@ void apply(prt::view::Viewer& viewer, const prt::view::Input& input, bool& quit,
   viewer.orbit(-0.3 * input.orbit_x, -0.3 * input.orbit_y);
   if (input.light_drag != 0) viewer.rotate_light(0.5 * input.light_drag);
   if (input.zoom != 0) viewer.zoom(input.zoom);
+  if (input.point_x != 0 || input.point_y != 0)
+    viewer.drag_point_light(input.point_x, input.point_y);
   for (int key : input.keys) {
     switch (key) {
+      case GLFW_KEY_J:
+        viewer.move_point_light({-1, 0, 0});
+        break;
+      case GLFW_KEY_L:
+        viewer.move_point_light({1, 0, 0});
+        break;
+      case GLFW_KEY_U:
+        viewer.move_point_light({0, 1, 0});
+        break;
+      case GLFW_KEY_O:
+        viewer.move_point_light({0, -1, 0});
+        break;
+      case GLFW_KEY_I:
+        viewer.move_point_light({0, 0, -1});
+        break;
+      case GLFW_KEY_K:
+        viewer.move_point_light({0, 0, 1});
+        break;
       case GLFW_KEY_LEFT:
         viewer.rotate_light(-15);
         break;
@@ -74,6 +98,13 @@ int main(int argc, char** argv) {
   app.add_option("--light-step", light_step,
                  "scripted light rotation per frame, degrees (default 360 / frames)");
   app.add_option("--orbit-step", orbit_step, "scripted camera orbit per frame, degrees");
+  std::vector<double> point_step;
+  app.add_option("--point-step", point_step,
+                 "scripted move of the first point light per frame: x y z, in key presses "
+                 "(5% of the mesh's size each)")
+      ->expected(3);
+  bool no_panel = false;
+  app.add_flag("--no-panel", no_panel, "hide the ImGui panel");
   app.add_option("--screenshot", screenshot_file, "PNG written after the scripted frames (or P)");
   app.add_option("--method", options.method, "single-pass or per-cluster")
       ->check(CLI::IsMember({"single-pass", "per-cluster"}));
@@ -96,18 +127,26 @@ int main(int argc, char** argv) {
     prt::check_output({screenshot_file, prt::FileKind::png, "screenshot"}, inputs);
     const auto& camera = scene.camera;
     prt::view::Window window(static_cast<int>(camera.get_int("width")),
-                             static_cast<int>(camera.get_int("height")), "prt-view");
+                             static_cast<int>(camera.get_int("height")),
+                             "prt-view  " + scene.file.filename().string());
+    if (!options.quiet) std::cout << "OpenGL: " << window.renderer() << "\n";
     prt::view::Viewer viewer(registry, options);
     if (frames > 0 && light_step < 0) light_step = 360.0 / frames;
     bool quit = false, screenshot = false;
     for (int frame = 0; window.open() && !quit; ++frame) {
       if (frames > 0) {
         if (frame == frames) break;
-        if (frame > 0) viewer.rotate_light(light_step), viewer.orbit(orbit_step, 0);
+        if (frame > 0) {
+          viewer.rotate_light(light_step), viewer.orbit(orbit_step, 0);
+          if (!point_step.empty())
+            viewer.move_point_light({point_step[0], point_step[1], point_step[2]});
+        }
       }
       const prt::Image image = viewer.render();
-      window.show(image, viewer.exposure());
-      window.set_title(viewer.status());
+      if (no_panel)
+        window.show(image, viewer.exposure());
+      else
+        window.show(image, viewer.exposure(), [&] { prt::view::draw_panel(viewer); });
       apply(viewer, window.poll(), quit, screenshot);
       if (frames > 0 && !options.quiet) std::cout << viewer.status() << "\n";
       if (screenshot || (frames > 0 && frame == frames - 1)) {

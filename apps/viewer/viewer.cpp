@@ -35,13 +35,18 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
     std::cerr << "prt-view: " << bake_file.string() << " does not exist; baking it\n";
     check_output({bake_file, FileKind::bake, "bake file", true}, scene_.input_files());
     StageTimes times;
-    data_ = bake(scene_, registry_, {options.quiet}, times);
+    data_ = prt::bake(scene_, registry_, {options.quiet}, times);
     write_bake(bake_file, data_);
   }
   relighting_ = std::make_unique<Relighting>(scene_, data_, registry_);
   environment_ = scene_.load_environment();
   scene_rotation_ = environment_.rotation();
   base_light_ = relighting_->light(environment_);
+  lattice_ = LatticeRotation::of(relighting_->basis(), environment_);
+  lights_ = scene_.point_lights;
+  Eigen::Vector3f low = data_.mesh.positions.front(), high = low;
+  for (const auto& p : data_.mesh.positions) low = low.cwiseMin(p), high = high.cwiseMax(p);
+  light_step_ = 0.05 * double((high - low).norm());
   encodings_.push_back({data_.compressor.name, data_.compressed, nullptr});
   encodings_.push_back({"exact", exact_form(data_.transfer), nullptr});
   for (auto& encoding : encodings_)
@@ -78,6 +83,41 @@ void Viewer::rotate_light(double degrees) {
   light_dirty_ = true;
 }
 
+void Viewer::set_light_degrees(double degrees) {
+  light_degrees_ = degrees;
+  light_dirty_ = true;
+}
+
+void Viewer::move_point_light(const Eigen::Vector3d& offset) {
+  if (lights_.empty()) return;
+  selected_ = std::min(selected_, lights_.size() - 1);
+  lights_[selected_].position += light_step_ * offset;
+  point_lights_changed();
+}
+
+void Viewer::drag_point_light(double dx, double dy) {
+  if (lights_.empty()) return;
+  const Camera c = camera();
+  const Eigen::Vector3d forward = (c.target - c.position).cast<double>().normalized();
+  const Eigen::Vector3d right = forward.cross(c.up.cast<double>()).normalized();
+  const Eigen::Vector3d up = right.cross(forward);
+  move_point_light(0.1 * (dx * right - dy * up));
+}
+
+std::vector<std::string> Viewer::encoding_names() const {
+  std::vector<std::string> names;
+  for (const auto& e : encodings_) names.push_back(e.name);
+  return names;
+}
+
+std::string Viewer::light_rotation_rule() const {
+  if (relighting_->basis().can_rotate()) return "rotation of the basis's coefficients";
+  if (lattice_)
+    return "rotation of the " + std::to_string(lattice_->resolution()) +
+           "^2 x 6 lattice samples (Nowrouzezahrai et al. 5)";
+  return "re-projection of the rotated map";
+}
+
 void Viewer::orbit(double yaw, double pitch) {
   yaw_ += yaw;
   pitch_ = std::clamp(pitch_ + pitch, -85.0, 85.0);
@@ -104,7 +144,8 @@ Camera Viewer::camera() const {
 }
 
 // Light rotation through the basis's rotation capability when it has one,
-// otherwise by projecting the rotated map again.
+// by rotating the lattice for a lattice basis, otherwise by projecting the
+// rotated map again.
 void Viewer::update_light() {
   if (!light_dirty_) return;
   Stopwatch clock;
@@ -112,6 +153,7 @@ void Viewer::update_light() {
   environment_.set_rotation(turn * scene_rotation_);
   const Basis& basis = relighting_->basis();
   light_ = basis.can_rotate() ? Eigen::MatrixX3d(basis.rotation_matrix(turn) * base_light_)
+           : lattice_         ? lattice_->light(environment_.rotation())
                               : relighting_->light(environment_);
   light_ms_ = 1000 * clock.seconds();
   light_dirty_ = false;
@@ -137,7 +179,13 @@ Image Viewer::render() {
   const Camera cam = camera();
   // The exit basis toward this camera (glossy); the sums themselves run on the GPU.
   Relit relit;
-  relit.exit_values = relighting_->exit_values_toward(cam);
+  if (lights_.empty()) {
+    relit.exit_values = relighting_->exit_values_toward(cam);
+  } else {  // per-vertex light vectors: summed here, drawn by the GPU
+    Stopwatch relight_clock;
+    relit = relighting_->relight(*encodings_[current_].kernel, light_, cam);
+    point_ms_ = 1000 * relight_clock.seconds();
+  }
   RenderInput input = relighting_->input(encodings_[current_].transfer, relit, light_, cam);
   input.background = background_ ? &environment_ : nullptr;
   Eigen::MatrixX3f colours;
@@ -154,7 +202,7 @@ Image Viewer::render() {
     const auto it = stats.find(key);
     return it == stats.end() ? 0.0 : it->second;
   };
-  relight_ms_ = 1000 * stat("relight_seconds");
+  relight_ms_ = lights_.empty() ? 1000 * stat("relight_seconds") : point_ms_;
   overdraw_ = stat("overdraw");
   frame_ms_ = 1000 * clock.seconds();
   return image;
@@ -168,7 +216,14 @@ std::string Viewer::status() const {
                 scene_.file.filename().string().c_str(), encodings_[current_].name.c_str(),
                 heatmap_ ? " error heat-map" : "", method_.c_str(), frame_ms_, relight_ms_,
                 light_ms_, overdraw_, light_degrees_);
-  return text;
+  std::string line = text;
+  if (!lights_.empty()) {
+    const Eigen::Vector3d& p = lights_[std::min(selected_, lights_.size() - 1)].position;
+    std::snprintf(text, sizeof text, " | point light %zu at (%.3f, %.3f, %.3f)",
+                  std::min(selected_, lights_.size() - 1) + 1, p.x(), p.y(), p.z());
+    line += text;
+  }
+  return line;
 }
 
 }  // namespace prt::view

@@ -2,11 +2,13 @@
 // OpenGL renderer plug-in; one call renders one frame.
 #pragma once
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
+#include "prt/lattice_lighting.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/renderer.hpp"
 #include "prt/scene.hpp"
@@ -36,10 +38,34 @@ class Viewer {
   void next_encoding();
   void toggle_heatmap() { heatmap_ = !heatmap_; }
   void toggle_method();
+  void set_light_degrees(double degrees);
+  // Moves the selected point light by `offset` (mesh units); nothing without lights.
+  void move_point_light(const Eigen::Vector3d& offset);
+  // Moves it in the camera's image plane by a mouse drag (pixels).
+  void drag_point_light(double dx, double dy);
+  // After the panel edited point_lights() in place.
+  void point_lights_changed() { relighting_->set_point_lights(lights_); }
 
   const SceneSpec& scene() const { return scene_; }
+  const BakeData& bake() const { return data_; }
   float exposure() const { return heatmap_ ? 1.f : exposure_; }
-  std::string status() const;  // for the title bar and the log
+  std::string status() const;  // for the log of scripted runs
+
+  // What the panel shows and edits.
+  std::vector<std::string> encoding_names() const;
+  std::size_t encoding() const { return current_; }
+  void set_encoding(std::size_t index) { current_ = index % encodings_.size(); }
+  bool heatmap() const { return heatmap_; }
+  const std::string& method() const { return method_; }
+  double light_degrees() const { return light_degrees_; }
+  std::vector<PointLight>& point_lights() { return lights_; }
+  std::size_t& selected_light() { return selected_; }
+  std::string point_light_rule() const { return relighting_->point_light_rule(); }
+  std::string light_rotation_rule() const;
+  struct Timings {
+    double frame_ms, relight_ms, light_ms, overdraw;
+  };
+  Timings timings() const { return {frame_ms_, relight_ms_, light_ms_, overdraw_}; }
 
  private:
   struct Encoding {
@@ -61,6 +87,10 @@ class Viewer {
   Environment environment_;
   Eigen::Matrix3d scene_rotation_;
   Eigen::MatrixX3d base_light_, light_;
+  std::optional<LatticeRotation> lattice_;  // lattice bases: rotation by the lattice
+  std::vector<PointLight> lights_;
+  std::size_t selected_ = 0;
+  double light_step_ = 0.05;  // of the mesh's bounding-box diagonal, per key press
   double light_degrees_ = 0;
   bool light_dirty_ = true, heatmap_ = false, background_ = true;
   std::vector<Encoding> encodings_;
@@ -68,7 +98,7 @@ class Viewer {
   Camera home_;
   double yaw_ = 0, pitch_ = 0, distance_scale_ = 1;
   float exposure_ = 1;
-  double frame_ms_ = 0, relight_ms_ = 0, light_ms_ = 0, overdraw_ = 0;
+  double frame_ms_ = 0, relight_ms_ = 0, light_ms_ = 0, overdraw_ = 0, point_ms_ = 0;
 };
 
 }  // namespace prt::view

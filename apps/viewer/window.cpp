@@ -1,6 +1,9 @@
 #include "window.hpp"
 // epoxy before GLFW: it provides the GL declarations.
 #include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
 
 #include "display_shaders.hpp"
 #include "gl_context.hpp"
@@ -32,11 +35,21 @@ Window::Window(int width, int height, const std::string& title) {
   glBindTexture(GL_TEXTURE_2D, texture_);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  // ImGui after our callbacks: its GLFW back end calls them on.
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the user's folder
+  ImGui::StyleColorsDark();
+  if (!ImGui_ImplGlfw_InitForOpenGL(window_, true) || !ImGui_ImplOpenGL3_Init("#version 330"))
+    throw Error("prt-view: cannot set up the ImGui panel on this OpenGL context");
 }
 
 Window::~Window() {
   if (window_) {
     make_current();
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
     glDeleteTextures(1, &texture_);
     glDeleteVertexArrays(1, &vao_);
     glDeleteProgram(program_);
@@ -53,7 +66,7 @@ void Window::make_current() {
   glfwMakeContextCurrent(window_);
 }
 
-void Window::show(const Image& image, float exposure) {
+void Window::show(const Image& image, float exposure, const std::function<void()>& panel) {
   make_current();
   int width = 0, height = 0;
   glfwGetFramebufferSize(window_, &width, &height);
@@ -66,7 +79,21 @@ void Window::show(const Image& image, float exposure) {
   glUniform1f(glGetUniformLocation(program_, "exposure"), exposure);
   glBindVertexArray(vao_);
   glDrawArrays(GL_TRIANGLES, 0, 3);
+  if (panel) {
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    panel();
+    ImGui::Render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  }
   glfwSwapBuffers(window_);
+}
+
+std::string Window::renderer() const {
+  const auto* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  return std::string(name ? name : "?") + " | " + (version ? version : "?");
 }
 
 void Window::set_title(const std::string& title) {
@@ -88,11 +115,17 @@ void Window::on_cursor(GLFWwindow* w, double x, double y) {
     self->have_cursor_ = true;
     return;
   }
+  if (ImGui::GetIO().WantCaptureMouse) return;  // dragging in the panel
   const bool left = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
   const bool right = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
   const bool shift = glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
                      glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
-  if (right || (left && shift)) {
+  const bool control = glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+                       glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+  if (left && control) {
+    self->pending_.point_x += dx;
+    self->pending_.point_y += dy;
+  } else if (right || (left && shift)) {
     self->pending_.light_drag += dx;
   } else if (left) {
     self->pending_.orbit_x += dx;
@@ -101,10 +134,12 @@ void Window::on_cursor(GLFWwindow* w, double x, double y) {
 }
 
 void Window::on_scroll(GLFWwindow* w, double, double dy) {
+  if (ImGui::GetIO().WantCaptureMouse) return;
   static_cast<Window*>(glfwGetWindowUserPointer(w))->pending_.zoom += dy;
 }
 
 void Window::on_key(GLFWwindow* w, int key, int, int action, int) {
+  if (ImGui::GetIO().WantCaptureKeyboard) return;  // typing into the panel
   if (action == GLFW_PRESS || action == GLFW_REPEAT)
     static_cast<Window*>(glfwGetWindowUserPointer(w))->pending_.keys.push_back(key);
 }

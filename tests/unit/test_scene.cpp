@@ -86,7 +86,10 @@ TEST_CASE("scene errors name the place and the valid choices", "[scene]") {
   CHECK_THROWS_WITH(parse("[mesh]\n[lighting]\nconstant = 1\n"),
                     Catch::Contains("exactly one of \"file\" or \"generate\""));
   CHECK_THROWS_WITH(parse("[mesh]\ngenerate = \"sphere\"\n"),
-                    Catch::Contains("exactly one of \"environment\" or \"constant\""));
+                    Catch::Contains("give \"environment\", \"constant\" or [[lighting.point]]"));
+  CHECK_THROWS_WITH(parse("[mesh]\ngenerate = \"sphere\"\n[lighting]\nconstant = 1\nenvironment = "
+                          "\"x.exr\"\n"),
+                    Catch::Contains("not both") || Catch::Contains("not found"));
   CHECK_THROWS_WITH(parse("[mesh\ngenerate = 1\n"), Catch::Contains("scene.toml:1"));
   CHECK_THROWS_WITH(SceneSpec::load("/no/such/scene.toml", registry()),
                     Catch::Contains("scene file not found"));
