@@ -626,6 +626,25 @@ Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
     radiance +=
         ground_truth_point_lights(mesh, scene.point_lights, samples, seed, reflectance, &progress);
   }
+  if (scene.material.get_bool("subsurface")) {
+    // The dipole over every pair of vertices, from Monte Carlo irradiance
+    // (a glossy material's own radiance is not irradiance: trace it apart).
+    Eigen::MatrixX3f irradiance = radiance;
+    if (brdf.glossy()) {
+      Progress progress("ground truth irradiance", double(mesh.vertex_count()), "rays",
+                        options.quiet);
+      irradiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress);
+      if (!scene.point_lights.empty())
+        irradiance += ground_truth_point_lights(mesh, scene.point_lights, samples, seed);
+    }
+    Stopwatch clock;
+    radiance += subsurface_direct(mesh, irradiance, scene.subsurface());
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "ground truth: the dipole summed over all %zu^2 vertex pairs in %.1f s",
+                  mesh.vertex_count(), clock.seconds());
+    options.message(line);
+  }
   const Eigen::Vector3f albedo = scene.albedo();
   for (int c = 0; c < 3; ++c) radiance.col(c) *= albedo[c];
   return radiance;

@@ -1,5 +1,6 @@
 #include "prt/subsurface.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
@@ -163,6 +164,38 @@ MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
       }
     }
     out.row(p) = (f_dt * f_dt * sum).cast<float>();
+  });
+  return out;
+}
+
+Eigen::MatrixX3f subsurface_direct(const Mesh& mesh, const Eigen::MatrixX3f& irradiance,
+                                   const SubsurfaceMaterial& m) {
+  check(m);
+  const auto v = static_cast<Eigen::Index>(mesh.vertex_count());
+  if (irradiance.rows() != v) throw Error("subsurface: irradiance rows do not match the mesh");
+  const Dipole profile(m);
+  const double scale = m.mm_per_unit, f_dt = 1.0 - diffuse_fresnel_reflectance(m.eta);
+  const std::vector<double> area = vertex_areas(mesh);
+  Eigen::Array3Xd position(3, v);
+  Eigen::MatrixX3d weighted(v, 3);  // A_q (mm^2) E_q / pi
+  for (Eigen::Index q = 0; q < v; ++q) {
+    position.col(q) = mesh.positions[q].cast<double>() * scale;
+    weighted.row(q) = area[q] * scale * scale * irradiance.row(q).cast<double>();
+  }
+  const double z_r = profile.z_r, z_v = profile.z_v, sigma_tr = profile.sigma_tr;
+  Eigen::MatrixX3f out(v, 3);
+  // Every pair, in vectorised rows: R_d(|x_p - x_q|) for all q at once.
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, v, 64), [&](const auto& range) {
+    Eigen::ArrayXd r2(v), d_r(v), d_v(v), rd(v);
+    for (Eigen::Index p = range.begin(); p < range.end(); ++p) {
+      r2 = (position.colwise() - position.col(p)).square().colwise().sum().transpose();
+      d_r = (r2 + z_r * z_r).sqrt();
+      d_v = (r2 + z_v * z_v).sqrt();
+      rd = profile.alpha / (4 * M_PI) *
+           (z_r * (sigma_tr * d_r + 1) * (-sigma_tr * d_r).exp() / d_r.cube() +
+            z_v * (sigma_tr * d_v + 1) * (-sigma_tr * d_v).exp() / d_v.cube());
+      out.row(p) = (f_dt * f_dt * (rd.matrix().transpose() * weighted)).cast<float>();
+    }
   });
   return out;
 }

@@ -6,6 +6,8 @@
 #  - point lights with eigentransport: scenes/bunny_eigen_point.toml renders,
 #    prints its error against the ground truth and against brute-force
 #    re-projection (the light alone, and with the environment), both small;
+#  - the subsurface bunny (scenes/bunny_subsurface.toml) matches a ground
+#    truth that sums the same dipole over every vertex pair;
 #  - prt-view moves the point light (--point-step): the printed position
 #    changes and so does the screenshot.
 #   papers.sh <prt> <prt-view> <source dir>
@@ -56,7 +58,16 @@ brute=$(relative "error of brute-force re-projection" "$out")
 echo "eigentransport, point light alone: nearest rule $rule, brute force $brute"
 below "$rule" 0.35 && below "$brute" 0.35 || { echo "FAIL: point-light error too large"; exit 1; }
 
-# 3. The viewer moves the light.
+# 3. Subsurface against a ground truth that sums the dipole over all vertex pairs.
+local_scene bunny_subsurface.toml subsurface
+sed -i 's/^samples = 256$/samples = 128/' "$work/subsurface.toml"
+"$prt" -q bake "$work/subsurface.toml" >/dev/null
+out=$("$prt" -q render "$work/subsurface.toml" --compare)
+error=$(relative "error against ground truth" "$out")
+echo "subsurface bunny against the pair-sum ground truth: relative RMS $error"
+below "$error" 0.08 || { echo "FAIL: subsurface error too large"; echo "$out"; exit 1; }
+
+# 4. The viewer moves the light.
 command -v xvfb-run >/dev/null || { echo "FAIL: xvfb-run missing; run scripts/setup.sh" >&2; exit 1; }
 x() { xvfb-run -a -s "-screen 0 1024x768x24" "$@"; }
 cd "$work"

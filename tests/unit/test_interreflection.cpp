@@ -131,3 +131,35 @@ TEST_CASE("subsurface: a lit plane reflects the dipole's total diffuse reflectan
   CHECK(dipole_total_reflectance(absorbing) < dipole_total_reflectance(m));
   CHECK(std::isfinite(dipole_profile(m, 0.0)));
 }
+
+TEST_CASE(
+    "subsurface ground truth: the direct pair sum matches the plane's total reflectance "
+    "and the transfer's hierarchy",
+    "[subsurface][ground-truth]") {
+  SubsurfaceMaterial m;
+  m.sigma_a = 0.01, m.sigma_s = 0.1, m.eta = 1.3;
+  m.mm_per_unit = 250;
+  const Mesh plane = make_plane(120);
+  Eigen::MatrixX3f irradiance = Eigen::MatrixX3f::Ones(plane.vertex_count(), 3);
+  irradiance.col(2) *= 0.5f;
+  const Eigen::MatrixX3f s = subsurface_direct(plane, irradiance, m);
+  std::size_t centre = 0;
+  for (std::size_t v = 0; v < plane.vertex_count(); ++v)
+    if (plane.positions[v].norm() < plane.positions[centre].norm()) centre = v;
+  const double f_dt = 1 - diffuse_fresnel_reflectance(m.eta);
+  CHECK(s(centre, 0) == Approx(f_dt * f_dt * dipole_total_reflectance(m)).epsilon(0.05));
+  CHECK(s(centre, 2) == Approx(0.5 * s(centre, 0)).epsilon(1e-5));
+  CHECK(s.allFinite());
+  // The bake's hierarchy with every group opened is the same sum.
+  SubsurfaceMaterial exact = m;
+  exact.error = 0;
+  const Mesh sphere = make_sphere(3);
+  MatrixXfRow lit(sphere.vertex_count(), 1);
+  Eigen::MatrixX3f lit3(sphere.vertex_count(), 3);
+  for (std::size_t v = 0; v < sphere.vertex_count(); ++v)
+    lit(v, 0) = lit3(v, 0) = lit3(v, 1) = lit3(v, 2) = std::max(0.f, sphere.normals[v].y());
+  const MatrixXfRow hierarchy = subsurface_transfer(sphere, lit, exact);
+  const Eigen::MatrixX3f direct = subsurface_direct(sphere, lit3, exact);
+  CHECK((hierarchy.col(0) - direct.col(0)).norm() / direct.col(0).norm() < 1e-4);
+  CHECK(direct.col(0).minCoeff() > 0);  // light reaches the unlit side
+}

@@ -35,6 +35,13 @@ double dipole_total_reflectance(const SubsurfaceMaterial& m);
 MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& irradiance_transfer,
                                 const SubsurfaceMaterial& material);
 
+// The ground truth's multiple scattering: the same dipole summed directly
+// over every pair of vertices (no hierarchy, no basis), from the irradiance
+// each vertex receives given as E / pi (v x 3: the exit radiance of a white
+// Lambertian surface, e.g. Monte Carlo with visibility). Returns v x 3.
+Eigen::MatrixX3f subsurface_direct(const Mesh& mesh, const Eigen::MatrixX3f& irradiance,
+                                   const SubsurfaceMaterial& material);
+
 // A third of the area of each triangle around each vertex (mesh units^2).
 std::vector<double> vertex_areas(const Mesh& mesh);
 
