@@ -73,7 +73,7 @@ summed over all vertices, as in the paper. Glossy rows: Phong (kd 0.4, ks
 0.6, exponent 12) for gloss-iso, Ward (alpha 0.1 x 0.3) for gloss-anis, both
 with the hemispherical SH exit basis of the row's size (16 = order 4, 24 =
 order 5 reduced, 25 = order 5); subsurface adds the Jensen-Buhler dipole
-(marble, 100 mm per unit).
+(marble, each mesh scaled to 100 mm across).
 
 ## This tool
 

@@ -179,9 +179,9 @@ Image Viewer::render() {
   const Camera cam = camera();
   // The exit basis toward this camera (glossy); the sums themselves run on the GPU.
   Relit relit;
-  if (lights_.empty()) {
+  if (lights_.empty() && data_.transfer.channel_groups == 1) {
     relit.exit_values = relighting_->exit_values_toward(cam);
-  } else {  // per-vertex light vectors: summed here, drawn by the GPU
+  } else {  // point lights or channel transfers: summed here, drawn by the GPU
     Stopwatch relight_clock;
     relit = relighting_->relight(*encodings_[current_].kernel, light_, cam);
     point_ms_ = 1000 * relight_clock.seconds();
@@ -202,7 +202,7 @@ Image Viewer::render() {
     const auto it = stats.find(key);
     return it == stats.end() ? 0.0 : it->second;
   };
-  relight_ms_ = lights_.empty() ? 1000 * stat("relight_seconds") : point_ms_;
+  relight_ms_ = relit.summed ? point_ms_ : 1000 * stat("relight_seconds");
   overdraw_ = stat("overdraw");
   frame_ms_ = 1000 * clock.seconds();
   return image;

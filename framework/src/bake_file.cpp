@@ -275,6 +275,10 @@ void write_bake(const fs::path& file, const BakeData& data) {
       write_number(transfer, "bounces", data.bounces);
       write_number(transfer, "subsurface", data.subsurface ? 1 : 0);
       write_number(transfer, "exit_rows", data.transfer.exit_rows);
+      write_number(transfer, "channel_groups", data.transfer.channel_groups);
+      for (int c = 0; c < 3; ++c)
+        write_number(transfer, std::string("group_of_channel_") + "rgb"[c],
+                     data.transfer.group_of_channel[std::size_t(c)]);
       write_matrix(transfer, "coefficients", data.transfer.coefficients);
       if (data.direct.coefficients.size())
         write_matrix(transfer, "direct_coefficients", data.direct.coefficients);
@@ -366,6 +370,21 @@ BakeData read_bake(const fs::path& file) {
       throw Error("transfer kind \"" + data.transfer.kind + "\" with " +
                   std::to_string(data.transfer.exit_rows) + " exit rows");
     if (data.transfer.glossy()) data.exit = read_plugin(root, "exit_basis");
+    if (transfer.attrExists("channel_groups")) {  // colour materials (absent: one transfer)
+      data.transfer.channel_groups = static_cast<int>(read_count(transfer, "channel_groups", 3));
+      if (data.transfer.channel_groups < 1)
+        throw Error("the transfer has " + std::to_string(data.transfer.channel_groups) +
+                    " channel groups");
+      for (int c = 0; c < 3; ++c) {
+        const auto group =
+            static_cast<int>(read_count(transfer, std::string("group_of_channel_") + "rgb"[c], 2));
+        if (group >= data.transfer.channel_groups)
+          throw Error("colour channel " + std::to_string(c) + " reads transfer " +
+                      std::to_string(group) + " of " +
+                      std::to_string(data.transfer.channel_groups));
+        data.transfer.group_of_channel[std::size_t(c)] = group;
+      }
+    }
     data.transfer.coefficients = read_matrix(transfer, "coefficients");
     if (data.transfer.coefficients.rows() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
       throw Error("the transfer has " + std::to_string(data.transfer.coefficients.rows()) +
@@ -373,6 +392,8 @@ BakeData read_bake(const fs::path& file) {
     if (data.bounces > 0 && transfer.nameExists("direct_coefficients")) {
       data.direct.kind = data.transfer.kind;
       data.direct.exit_rows = data.transfer.exit_rows;
+      data.direct.channel_groups = data.transfer.channel_groups;
+      data.direct.group_of_channel = data.transfer.group_of_channel;
       data.direct.coefficients = read_matrix(transfer, "direct_coefficients");
       if (data.direct.coefficients.rows() != data.transfer.coefficients.rows() ||
           data.direct.coefficients.cols() != data.transfer.coefficients.cols())
@@ -398,7 +419,7 @@ BakeData read_bake(const fs::path& file) {
     if (columns != c.dimension)
       throw Error("the transfer has " + std::to_string(columns) +
                   " columns but the compressed dimension is " + std::to_string(c.dimension));
-    if (columns % data.transfer.exit_rows != 0)
+    if (columns % (Eigen::Index(data.transfer.exit_rows) * data.transfer.channel_groups) != 0)
       throw Error("the transfer's " + std::to_string(columns) +
                   " columns are not a whole number of exit-basis rows (" +
                   std::to_string(data.transfer.exit_rows) + ")");

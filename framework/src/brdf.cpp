@@ -20,11 +20,11 @@ BrdfModel brdf_model(const std::string& name) {
   throw Error("unknown BRDF \"" + name + "\"; valid: lambert, phong, ward, cook-torrance");
 }
 
-Brdf Brdf::from_material(const Params& material) {
+Brdf Brdf::from_material(const Params& material, int channel) {
   Brdf b;
   b.model = brdf_model(material.get_string("brdf"));
-  b.kd = material.get_real("diffuse");
-  b.ks = b.glossy() ? material.get_real("specular") : 0.0;
+  b.kd = material.get_reals("diffuse")[std::size_t(channel)];
+  b.ks = b.glossy() ? material.get_reals("specular")[std::size_t(channel)] : 0.0;
   b.exponent = material.get_real("exponent");
   const auto ward = material.get_reals("anisotropic_roughness");
   b.alpha_x = ward[0];

@@ -1,5 +1,6 @@
 #include "prt/pipeline.hpp"
 
+#include <tbb/parallel_for.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -202,6 +203,8 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
       throw Error(exit.where, e.what());
     }
   }
+  plan.subsurface_material = scene.subsurface();
+  plan.channels = scene.channels();
   plan.keep_visibility = plan.fit || plan.glossy;
   return plan;
 }
@@ -290,7 +293,7 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
   MatrixXfRow scattered;
   if (plan.subsurface) {
     clock = Stopwatch();
-    scattered = subsurface_transfer(mesh, result.transfer.coefficients, scene.subsurface());
+    scattered = subsurface_transfer(mesh, result.transfer.coefficients, plan.subsurface_material);
     times.add("subsurface (hierarchical diffusion)", clock.seconds());
   }
   if (!plan.glossy) {
@@ -339,6 +342,60 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
   return transfer;
 }
 
+namespace {
+
+// Blocks side by side: row p = [parts[0].row(p) | parts[1].row(p) | ...].
+TransferSignal stack_channels(const std::vector<TransferSignal>& parts,
+                              const MaterialChannels& channels) {
+  TransferSignal out = parts.front();
+  Eigen::Index width = 0;
+  for (const auto& part : parts) width += part.dimension();
+  out.coefficients.resize(parts.front().vertices(), width);
+  Eigen::Index at = 0;
+  for (const auto& part : parts) {
+    out.coefficients.middleCols(at, part.dimension()) = part.coefficients;
+    at += part.dimension();
+  }
+  out.channel_groups = static_cast<int>(parts.size());
+  out.group_of_channel = channels.group_of_channel;
+  return out;
+}
+
+}  // namespace
+
+TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                                 const DirectionSet& set, TransportResult traced,
+                                 const RunOptions& options, StageTimes& times,
+                                 std::map<std::string, double>& metrics, TransferSignal* direct) {
+  const MaterialChannels& channels = plan.channels;
+  std::string which;
+  for (int c = 0; c < 3; ++c)
+    which += std::string(c ? ", " : "") + "RGB"[c] + " -> " +
+             std::to_string(channels.group_of_channel[std::size_t(c)] + 1);
+  options.message("colour material: " + std::to_string(channels.groups.size()) +
+                  " transfers, one per distinct channel (" + which + ")");
+  std::vector<TransferSignal> parts, directs;
+  for (std::size_t g = 0; g < channels.groups.size(); ++g) {
+    BakePlan channel = plan;
+    const ChannelMaterial& material = channels.groups[g];
+    channel.brdf = material.brdf;
+    channel.bounce_albedo = material.bounce_albedo;
+    channel.subsurface_material = material.subsurface;
+    if (channel.glossy)
+      channel.glossy_operator =
+          GlossyOperator::make(channel.brdf, *channel.exit, channel.incident_order,
+                               channel.least_squares, channel.cutoff);
+    // The rays are traced once; every channel but the last works on a copy.
+    TransportResult rays = g + 1 < channels.groups.size() ? traced : std::move(traced);
+    TransferSignal channel_direct;
+    parts.push_back(transfer_stage(channel, scene, mesh, set, std::move(rays), options, times,
+                                   metrics, direct ? &channel_direct : nullptr));
+    if (direct) directs.push_back(std::move(channel_direct));
+  }
+  if (direct) *direct = stack_channels(directs, channels);
+  return stack_channels(parts, channels);
+}
+
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where) {
   try {
@@ -371,8 +428,14 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   TransportResult traced = trace_stage(plan, data.mesh, set, options);
   const auto rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
-  data.transfer = transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times,
-                                 data.metrics, plan.bounces > 0 ? &data.direct : nullptr);
+  if (plan.channels.groups.size() == 1) {
+    data.transfer = transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times,
+                                   data.metrics, plan.bounces > 0 ? &data.direct : nullptr);
+  } else {
+    data.transfer =
+        channel_transfers(plan, scene, data.mesh, set, std::move(traced), options, times,
+                          data.metrics, plan.bounces > 0 ? &data.direct : nullptr);
+  }
 
   clock = Stopwatch();
   data.compressed = options.compress || plan.sparse_terms > 0
@@ -451,13 +514,17 @@ void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
 }
 
 void check_bake_dimension(const BakeData& data, const Basis& basis) {
-  const Eigen::Index expected = Eigen::Index(basis.size()) * data.transfer.exit_rows;
+  const Eigen::Index expected =
+      Eigen::Index(basis.size()) * data.transfer.exit_rows * data.transfer.channel_groups;
   if (data.transfer.dimension() != expected)
     throw Error(data.scene_file + ": the bake's transfer has " +
                 std::to_string(data.transfer.dimension()) + " columns, but basis \"" +
                 data.basis.name + "\" has " + std::to_string(basis.size()) + " coefficients" +
                 (data.transfer.glossy()
                      ? " x " + std::to_string(data.transfer.exit_rows) + " exit rows"
+                     : std::string()) +
+                (data.transfer.channel_groups > 1
+                     ? " x " + std::to_string(data.transfer.channel_groups) + " channel transfers"
                      : std::string()) +
                 "; the bake file does not match its plug-ins (bake again)");
 }
@@ -481,6 +548,11 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
     frames_ = tangent_frames(data.mesh);
   }
   point_lights_ = scene.point_lights;
+  if (!point_lights_.empty() && data.transfer.channel_groups > 1)
+    throw Error(scene.material.location(),
+                "point lights need one transfer for all colour channels; this material's "
+                "channels differ (coloured diffuse/specular with glossy or bounces, or coloured "
+                "subsurface): use grey coefficients with point lights");
   projector_ = std::make_unique<PointLightProjector>(
       *basis_, static_cast<int>(scene.lighting.get_int("nearest")));
 }
@@ -510,19 +582,48 @@ Eigen::MatrixX3d Relighting::light(const Environment& environment) const {
 }
 
 RelightKernel Relighting::prepare(const CompressedTransfer& transfer) const {
-  return RelightKernel(transfer, data_.transfer.exit_rows);
+  return RelightKernel(transfer, data_.transfer.exit_rows * data_.transfer.channel_groups);
 }
+
+namespace {
+
+// Colour channels from stacked channel transfers: channel c of the exit
+// coefficients of block group_of_channel[c], read toward the camera (glossy).
+Eigen::MatrixX3f channel_radiance(const RelightKernel& kernel, const Eigen::MatrixX3d& light,
+                                  const TransferSignal& layout, const MatrixXfRow* exit_values) {
+  const MatrixXfRow e = kernel.exit_coefficients(light);  // v x 3 (G N_r), RGB interleaved
+  const int n_r = layout.exit_rows;
+  Eigen::MatrixX3f out(e.rows(), 3);
+  tbb::parallel_for(Eigen::Index(0), e.rows(), [&](Eigen::Index p) {
+    for (int c = 0; c < 3; ++c) {
+      const int first = layout.group_of_channel[std::size_t(c)] * n_r;
+      float sum = 0;
+      for (int r = 0; r < n_r; ++r)
+        sum += (exit_values ? (*exit_values)(p, r) : 1.f) * e(p, 3 * (first + r) + c);
+      out(p, c) = sum;
+    }
+  });
+  return out;
+}
+
+}  // namespace
 
 Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& light,
                           const Camera& camera) const {
   Relit out;
   out.exit_values = exit_values_toward(camera);  // empty for diffuse transfer
   // The renderers' own relight path (RelightKernel), so CPU results are theirs.
-  out.vertex_radiance = kernel.radiance(light, exit_ ? &out.exit_values : nullptr);
+  const MatrixXfRow* exit_values = exit_ ? &out.exit_values : nullptr;
+  if (data_.transfer.channel_groups > 1) {  // per-channel transfers: summed here
+    out.vertex_radiance = channel_radiance(kernel, light, data_.transfer, exit_values);
+    out.summed = true;
+  } else {
+    out.vertex_radiance = kernel.radiance(light, exit_values);
+  }
   for (int c = 0; c < 3; ++c) out.vertex_radiance.col(c) *= data_.albedo[c];
   if (!point_lights_.empty()) {
     out.vertex_radiance += point_radiance(kernel.transfer(), &out.exit_values);
-    out.point_lit = true;
+    out.summed = true;
   }
   return out;
 }
@@ -541,7 +642,7 @@ RenderInput Relighting::input(const CompressedTransfer& transfer, const Relit& r
   input.albedo = data_.albedo;
   input.camera = camera;
   if (exit_) input.exit_values = &relit.exit_values;
-  if (relit.point_lit) {  // per-vertex light: the renderer draws the sums made here
+  if (relit.summed) {  // point lights or channel transfers: the renderer draws the sums made here
     input.vertex_radiance = &relit.vertex_radiance;
     input.albedo = Eigen::Vector3f::Ones();
   }
@@ -586,16 +687,19 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   return out;
 }
 
-Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
-                                       const Environment& lighting, const Camera& camera,
-                                       const RunOptions& options) {
+namespace {
+
+// The ground truth (albedo 1) of one colour channel's material.
+Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
+                                      const Environment& lighting, const Camera& camera,
+                                      const RunOptions& options, const ChannelMaterial& material) {
   const int samples = static_cast<int>(scene.ground_truth.get_int("samples"));
   const auto seed = static_cast<std::uint64_t>(scene.ground_truth.get_int("seed"));
   // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
   Reflectance reflectance;
   std::vector<Frame> frames;
   Eigen::MatrixXd views;
-  const Brdf brdf = scene.brdf();
+  const Brdf& brdf = material.brdf;
   if (brdf.glossy()) {
     frames = tangent_frames(mesh);
     views = local_view_directions(mesh, frames, camera.position);
@@ -613,12 +717,12 @@ Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
       Progress progress("ground truth glossy bounces", double(mesh.vertex_count()), "rays",
                         options.quiet);
       radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, views, bounces,
-                                              scene.bounce_albedo(), samples, seed, &progress);
+                                              material.bounce_albedo, samples, seed, &progress);
     } else {
       Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
                         options.quiet);
-      radiance = ground_truth_bounces(mesh, radiance, bounces, scene.bounce_albedo(), samples, seed,
-                                      &progress);
+      radiance = ground_truth_bounces(mesh, radiance, bounces, material.bounce_albedo, samples,
+                                      seed, &progress);
     }
   }
   if (!scene.point_lights.empty()) {  // direct light only, as traced up to each light
@@ -638,12 +742,30 @@ Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
         irradiance += ground_truth_point_lights(mesh, scene.point_lights, samples, seed);
     }
     Stopwatch clock;
-    radiance += subsurface_direct(mesh, irradiance, scene.subsurface());
+    radiance += subsurface_direct(mesh, irradiance, material.subsurface);
     char line[160];
     std::snprintf(line, sizeof line,
                   "ground truth: the dipole summed over all %zu^2 vertex pairs in %.1f s",
                   mesh.vertex_count(), clock.seconds());
     options.message(line);
+  }
+  return radiance;
+}
+
+}  // namespace
+
+Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
+                                       const Environment& lighting, const Camera& camera,
+                                       const RunOptions& options) {
+  // One Monte Carlo run per distinct channel material; each channel takes its own.
+  const MaterialChannels channels = scene.channels();
+  Eigen::MatrixX3f radiance(static_cast<Eigen::Index>(mesh.vertex_count()), 3);
+  for (std::size_t g = 0; g < channels.groups.size(); ++g) {
+    const Eigen::MatrixX3f truth =
+        channel_ground_truth(scene, mesh, lighting, camera, options, channels.groups[g]);
+    for (int c = 0; c < 3; ++c)
+      if (channels.group_of_channel[std::size_t(c)] == static_cast<int>(g))
+        radiance.col(c) = truth.col(c);
   }
   const Eigen::Vector3f albedo = scene.albedo();
   for (int c = 0; c < 3; ++c) radiance.col(c) *= albedo[c];

@@ -38,8 +38,8 @@ const ParamSchema& material_schema() {
       {reals("albedo", "0.8", 3, 0, 1, "RGB tint of the whole reflectance (RGB or grey)"),
        choice("brdf", "lambert", "lambert|phong|ward|cook-torrance",
               "reflectance model: lambert bakes vectors, the others glossy matrices"),
-       real("diffuse", "1", 0, 1, "kd: weight of the Lambertian part"),
-       real("specular", "0.5", 0, 1, "ks: weight of the glossy lobe"),
+       reals("diffuse", "1", 3, 0, 1, "kd: weight of the Lambertian part (RGB or grey)"),
+       reals("specular", "0.5", 3, 0, 1, "ks: weight of the glossy lobe (RGB or grey)"),
        // Lobe limits: the BRDF matrix's 48 x 98 quadrature resolves them (and
        // order-5..12 SH cannot hold sharper lobes anyway).
        real("exponent", "32", 0, 1000, "phong: lobe exponent"),
@@ -55,8 +55,14 @@ const ParamSchema& material_schema() {
        real("cutoff", "1e-10", 0, 1,
             "glossy least squares: singular values of A below this x the largest are dropped"),
        boolean("subsurface", "false", "add Jensen-Buhler multiple scattering"),
-       real("sigma_a", "0.0041", 1e-9, 1e6, "subsurface: absorption coefficient, 1/mm"),
-       real("sigma_s", "2.62", 1e-9, 1e6, "subsurface: reduced scattering coefficient, 1/mm"),
+       reals("sigma_a", "0.0041", 3, 1e-9, 1e6,
+             "subsurface: absorption coefficient, 1/mm (RGB or grey)"),
+       reals("sigma_s", "2.62", 3, 1e-9, 1e6,
+             "subsurface: reduced scattering coefficient, 1/mm (RGB or grey)"),
+       choice("preset", "",
+              "apple|chicken1|chicken2|cream|ketchup|marble|potato|skimmilk|skin1|skin2|wholemilk",
+              "subsurface: Jensen et al. 2001's measured sigma_a and sigma_s (RGB) and eta 1.3, "
+              "instead of those keys"),
        real("eta", "1.5", 1.0, 4.0, "subsurface: relative index of refraction"),
        real("mm_per_unit", "100", 1e-9, 1e9, "subsurface: millimetres per mesh unit"),
        real("subsurface_error", "0.3", 0, 10,
@@ -503,6 +509,14 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                         "order = 5, reduced = true");
   scene.mesh = section("mesh", mesh_schema());
   scene.material = section("material", material_schema());
+  if (!scene.material.get_string("preset").empty()) {  // measured coefficients replace the keys
+    const toml::table* table = root["material"].as_table();
+    for (const char* key : {"sigma_a", "sigma_s"})
+      if (table->get(key))
+        throw Error(scene.material.location(key),
+                    std::string("section [material]: give preset or ") + key + ", not both");
+    if (!table->get("eta")) scene.material.set("eta", 1.3);  // Jensen et al.'s measurements
+  }
   scene.transport = section("transport", transport_schema());
   scene.lighting = section("lighting", lighting_schema(), "point");
   scene.point_lights = read_point_lights(root["lighting"].as_table(), file);
@@ -629,8 +643,8 @@ Camera SceneSpec::make_camera(const Mesh& m) const {
   return c;
 }
 
-Brdf SceneSpec::brdf() const {
-  return Brdf::from_material(material);
+Brdf SceneSpec::brdf(int channel) const {
+  return Brdf::from_material(material, channel);
 }
 
 bool SceneSpec::glossy() const {
@@ -654,8 +668,10 @@ int SceneSpec::incident_order(const Basis& light_basis) const {
   return std::clamp(*std::max_element(bands.begin(), bands.end()) + 1, 1, kMaxIncidentOrder);
 }
 
-double SceneSpec::bounce_albedo() const {
-  return albedo().cast<double>().mean();  // lambert: albedo() includes kd
+double SceneSpec::bounce_albedo(int channel) const {
+  const double kd = glossy() ? 1.0 : material.get_reals("diffuse")[std::size_t(channel)];
+  const auto a = material.get_reals("albedo");
+  return kd * (a[0] + a[1] + a[2]) / 3.0;
 }
 
 std::string SceneSpec::material_description() const {
@@ -672,13 +688,56 @@ std::string SceneSpec::material_description() const {
                   m.sigma_s, m.eta, m.mm_per_unit, m.error);
     text += more;
   }
+  const MaterialChannels c = channels();
+  if (c.groups.size() > 1) {  // the other channels' materials
+    for (int channel = 1; channel < 3; ++channel) {
+      const ChannelMaterial& g = c.groups[std::size_t(c.group_of_channel[channel])];
+      char more[200];
+      std::snprintf(more, sizeof more, " | %c: kd=%g ks=%g sigma_a=%g sigma_s=%g", "rgb"[channel],
+                    g.brdf.kd, g.brdf.ks, g.subsurface.sigma_a, g.subsurface.sigma_s);
+      text += more;
+    }
+  }
   return text;
 }
 
-SubsurfaceMaterial SceneSpec::subsurface() const {
+MaterialChannels SceneSpec::channels() const {
+  MaterialChannels out;
+  const bool subsurface_on = material.get_bool("subsurface");
+  const bool bounces = transport.get_int("bounces") > 0;
+  // What a channel's transfer depends on; equal keys share a transfer.
+  auto key = [&](int c) {
+    const Brdf b = brdf(c);
+    const SubsurfaceMaterial m = subsurface(c);
+    const bool brdf_in_transfer = b.glossy() || bounces;
+    return std::array<double, 4>{brdf_in_transfer ? b.kd : 0, brdf_in_transfer ? b.ks : 0,
+                                 subsurface_on ? m.sigma_a : 0, subsurface_on ? m.sigma_s : 0};
+  };
+  std::vector<std::array<double, 4>> keys;
+  for (int c = 0; c < 3; ++c) {
+    const auto k = key(c);
+    const auto found = std::find(keys.begin(), keys.end(), k);
+    if (found != keys.end()) {
+      out.group_of_channel[std::size_t(c)] = static_cast<int>(found - keys.begin());
+      continue;
+    }
+    out.group_of_channel[std::size_t(c)] = static_cast<int>(keys.size());
+    keys.push_back(k);
+    out.groups.push_back({brdf(c), subsurface(c), bounce_albedo(c)});
+  }
+  return out;
+}
+
+SubsurfaceMaterial SceneSpec::subsurface(int channel) const {
   SubsurfaceMaterial m;
-  m.sigma_a = material.get_real("sigma_a");
-  m.sigma_s = material.get_real("sigma_s");
+  const auto c = std::size_t(channel);
+  if (const SubsurfacePreset* preset = subsurface_preset(material.get_string("preset"))) {
+    m.sigma_a = preset->sigma_a[c];
+    m.sigma_s = preset->sigma_s[c];
+  } else {
+    m.sigma_a = material.get_reals("sigma_a")[c];
+    m.sigma_s = material.get_reals("sigma_s")[c];
+  }
   m.eta = material.get_real("eta");
   m.mm_per_unit = material.get_real("mm_per_unit");
   m.error = material.get_real("subsurface_error");
@@ -689,8 +748,10 @@ Eigen::Vector3f SceneSpec::albedo() const {
   const auto a = material.get_reals("albedo");
   // A Lambertian transfer vector carries no reflectance: kd scales the tint.
   // A glossy matrix carries the whole BRDF, kd included.
-  const float kd = glossy() ? 1.f : static_cast<float>(material.get_real("diffuse"));
-  return kd * Eigen::Vector3f(float(a[0]), float(a[1]), float(a[2]));
+  const Eigen::Vector3f tint = Eigen::Vector3d(a[0], a[1], a[2]).cast<float>();
+  if (glossy()) return tint;
+  const auto kd = material.get_reals("diffuse");
+  return tint.cwiseProduct(Eigen::Vector3f(float(kd[0]), float(kd[1]), float(kd[2])));
 }
 
 }  // namespace prt

@@ -74,6 +74,10 @@ struct BakePlan {
   double cutoff = 1e-10;
   GlossyMethod glossy_method = GlossyMethod::rotate_sh;
   GlossyOperator glossy_operator;  // made by plan_bake
+  SubsurfaceMaterial subsurface_material;
+  // Colour channels that need transfers of their own (one group: the scene's
+  // channels agree, and the fields above are its material).
+  MaterialChannels channels;
 };
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry);
 
@@ -90,6 +94,13 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
                               const RunOptions& options, StageTimes& times,
                               std::map<std::string, double>& metrics,
                               TransferSignal* direct = nullptr);
+// 2'. The same per distinct colour-channel material (plan.channels), the
+//    rays traced once; the transfers stacked in each row.
+TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                                 const DirectionSet& set, TransportResult traced,
+                                 const RunOptions& options, StageTimes& times,
+                                 std::map<std::string, double>& metrics,
+                                 TransferSignal* direct = nullptr);
 // 3. Compression (or the basis's sparse approximation).
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where);
@@ -123,7 +134,9 @@ struct Rendered {
 struct Relit {
   MatrixXfRow exit_values;  // glossy only: v x N_r
   Eigen::MatrixX3f vertex_radiance;
-  bool point_lit = false;  // point lights added: renderers take vertex_radiance
+  // Point lights or per-channel transfers: the sums are made here, and
+  // renderers draw vertex_radiance.
+  bool summed = false;
 };
 
 // What viewing a bake needs, made once: its light basis (fitted state loaded)

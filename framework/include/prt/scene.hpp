@@ -1,6 +1,7 @@
 // The scene description (TOML): which mesh, material, lighting and plug-ins a
 // run uses. Every key is validated before any work starts.
 #pragma once
+#include <array>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -19,6 +20,21 @@ class PluginRegistry;
 struct Mesh;
 class Environment;
 class Basis;
+
+// One colour channel's material: what that channel's transfer depends on.
+struct ChannelMaterial {
+  Brdf brdf;                      // the channel's kd and ks
+  SubsurfaceMaterial subsurface;  // the channel's sigma_a and sigma_s
+  double bounce_albedo = 1;       // reflectance of inter-reflected light
+};
+
+// The distinct channel materials of a scene (Sloan 2003 keeps one transfer
+// and tints it; channels whose transfers differ get their own): channels
+// that share a material share a transfer.
+struct MaterialChannels {
+  std::vector<ChannelMaterial> groups;
+  std::array<int, 3> group_of_channel{0, 0, 0};
+};
 
 struct PluginChoice {
   std::string name;
@@ -58,16 +74,22 @@ struct SceneSpec {
   Camera make_camera(const Mesh& mesh) const;
   // RGB factor applied to the transfer's radiance: albedo (x diffuse for lambert).
   Eigen::Vector3f albedo() const;
-  Brdf brdf() const;
+  // The BRDF of colour channel `channel` (0 red, 1 green, 2 blue).
+  Brdf brdf(int channel = 0) const;
   bool glossy() const;  // a glossy BRDF: bake matrices, not vectors
   // Throws unless [lighting] window is "none" or the basis has frequency bands.
   void check_window(const Basis& light_basis) const;
   // The SH order M of the BRDF's incident side for this light basis.
   int incident_order(const Basis& light_basis) const;
-  // The scalar reflectance of inter-reflected light: diffuse x mean albedo
-  // (transfer is monochrome; the RGB albedo tints the final radiance).
-  double bounce_albedo() const;
-  SubsurfaceMaterial subsurface() const;
+  // The reflectance of inter-reflected light in a channel: its diffuse (for
+  // lambert) x the mean albedo (the RGB albedo tints the final radiance).
+  double bounce_albedo(int channel = 0) const;
+  // A channel's subsurface coefficients ([material] preset or sigma_a, sigma_s).
+  SubsurfaceMaterial subsurface(int channel = 0) const;
+  // Which channels need transfers of their own: a coloured diffuse or
+  // specular where the transfer holds the BRDF (glossy, or bounces), or
+  // coloured subsurface coefficients. One group when the channels agree.
+  MaterialChannels channels() const;
   // Everything about the material a bake depends on (recorded in bake files).
   std::string material_description() const;
 };

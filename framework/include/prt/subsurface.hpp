@@ -10,6 +10,7 @@
 // albedo tints the result like the rest of the transfer.
 #pragma once
 #include <Eigen/Core>
+#include <string>
 
 #include "prt/mesh.hpp"
 #include "prt/transfer.hpp"
@@ -23,6 +24,15 @@ struct SubsurfaceMaterial {
   double mm_per_unit = 100;  // millimetres per mesh unit
   double error = 0.3;        // hierarchy: radius / distance below which a group is one point
 };
+
+// Jensen et al. 2001 (Fig. 5): measured reduced scattering sigma_s' and
+// absorption sigma_a, 1/mm, per RGB channel, with eta = 1.3.
+struct SubsurfacePreset {
+  const char* name;
+  double sigma_s[3], sigma_a[3];
+};
+// The named preset ("marble", "skin1", "ketchup", ...), or nullptr.
+const SubsurfacePreset* subsurface_preset(const std::string& name);
 
 // Diffuse Fresnel reflectance F_dr(eta) (polynomial fit of Jensen et al. 2001).
 double diffuse_fresnel_reflectance(double eta);

@@ -2,6 +2,7 @@
 // stage to compression and on to rendering.
 #pragma once
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -15,11 +16,16 @@ using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::
 // and the exit radiance is row . light (per colour channel of the light). For
 // glossy transfer each row is the N_r x N_i matrix M_p, row-major, mapping the
 // light vector to exit-radiance coefficients in the scene's exit basis. The
-// material's RGB albedo multiplies the result.
+// material's RGB albedo multiplies the result. Colour materials whose
+// channels need different transfers stack one block per distinct channel
+// material in each row (channel_groups blocks of exit_rows x N_i); colour
+// channel c reads block group_of_channel[c].
 struct TransferSignal {
   MatrixXfRow coefficients;
   std::string kind = "diffuse";  // "diffuse" (vectors) or "glossy" (matrices)
   int exit_rows = 1;             // N_r: 1 for diffuse transfer
+  int channel_groups = 1;
+  std::array<int, 3> group_of_channel{0, 0, 0};
 
   bool glossy() const { return kind == "glossy"; }
   Eigen::Index vertices() const { return coefficients.rows(); }
