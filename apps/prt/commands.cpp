@@ -198,15 +198,6 @@ int compress(Context& context, const CompressArgs& args) {
   return 0;
 }
 
-// "sh 1.0.0 (order = 6)", every parameter on the one line ("a = 1, b = 2").
-std::string one_line(const PluginRecord& plugin) {
-  std::string parameters = plugin.parameters;
-  while (!parameters.empty() && parameters.back() == '\n') parameters.pop_back();
-  for (std::size_t at; (at = parameters.find('\n')) != std::string::npos;)
-    parameters.replace(at, 1, ", ");
-  return plugin.name + " " + plugin.version + (parameters.empty() ? "" : " (" + parameters + ")");
-}
-
 int info(const std::string& file) {
   const BakeData data = read_bake(file);
   const CompressedTransfer& c = data.compressed;

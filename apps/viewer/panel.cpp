@@ -10,15 +10,6 @@ namespace prt::view {
 
 namespace {
 
-// "sh 1.0.0 (order = 6)": a plug-in's name, version and parameters on one line.
-std::string one_line(const PluginRecord& plugin) {
-  std::string parameters = plugin.parameters;
-  while (!parameters.empty() && parameters.back() == '\n') parameters.pop_back();
-  for (std::size_t at; (at = parameters.find('\n')) != std::string::npos;)
-    parameters.replace(at, 1, ", ");
-  return plugin.name + " " + plugin.version + (parameters.empty() ? "" : " (" + parameters + ")");
-}
-
 void plugins_section(const Viewer& viewer) {
   const BakeData& data = viewer.bake();
   ImGui::Text("scene  %s", viewer.scene().file.filename().string().c_str());
@@ -79,7 +70,9 @@ void lights_section(Viewer& viewer) {
     ImGui::PopID();
   }
   if (changed) viewer.point_lights_changed();
+  ImGui::PushTextWrapPos(0.f);
   ImGui::TextDisabled("keys J/L, U/O, I/K or ctrl + drag move the selected light");
+  ImGui::PopTextWrapPos();
 }
 
 void timings_section(const Viewer& viewer) {
@@ -94,17 +87,19 @@ void timings_section(const Viewer& viewer) {
 
 void draw_panel(Viewer& viewer) {
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(380, 0), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowBgAlpha(0.75f);
   if (!ImGui::Begin("prt-view")) {
     ImGui::End();
     return;
   }
+  ImGui::PushItemWidth(-150);  // room for the labels
   if (ImGui::CollapsingHeader("plug-ins", ImGuiTreeNodeFlags_DefaultOpen)) plugins_section(viewer);
   if (ImGui::CollapsingHeader("encodings", ImGuiTreeNodeFlags_DefaultOpen))
     encodings_section(viewer);
   if (ImGui::CollapsingHeader("lights", ImGuiTreeNodeFlags_DefaultOpen)) lights_section(viewer);
   if (ImGui::CollapsingHeader("timings", ImGuiTreeNodeFlags_DefaultOpen)) timings_section(viewer);
+  ImGui::PopItemWidth();
   ImGui::End();
 }
 

@@ -240,6 +240,14 @@ PluginRecord read_plugin(const H5::H5Object& object, const std::string& prefix) 
 
 }  // namespace
 
+std::string one_line(const PluginRecord& plugin) {
+  std::string parameters = plugin.parameters;
+  while (!parameters.empty() && parameters.back() == '\n') parameters.pop_back();
+  for (std::size_t at; (at = parameters.find('\n')) != std::string::npos;)
+    parameters.replace(at, 1, ", ");
+  return plugin.name + " " + plugin.version + (parameters.empty() ? "" : " (" + parameters + ")");
+}
+
 void write_bake(const fs::path& file, const BakeData& data) {
   H5::Exception::dontPrint();
   data.mesh.validate("bake data");

@@ -21,6 +21,8 @@ constexpr int kBakeFormatVersion = 4;
 struct PluginRecord {
   std::string name, version, parameters;
 };
+// "sh 1.0.0 (order = 6)": name, version and every parameter on one line.
+std::string one_line(const PluginRecord& plugin);
 
 struct BakeData {
   std::string scene_file, scene_text;
