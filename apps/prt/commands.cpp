@@ -209,7 +209,16 @@ int info(const std::string& file) {
             << "basis:        " << one_line(data.basis) << "\n"
             << (data.transfer.glossy() ? "exit basis:   " + one_line(data.exit) + "\n" : "")
             << "transfer:     " << data.transfer.kind << ", "
-            << describe_shape(data.transfer.vertices(), data.transfer.dimension()) << "\n"
+            << describe_shape(data.transfer.vertices(), data.transfer.dimension())
+            << (data.transfer.channel_groups > 1
+                    ? ", " + std::to_string(data.transfer.channel_groups) +
+                          " channel transfers (R, G, B read " +
+                          std::to_string(data.transfer.group_of_channel[0] + 1) + ", " +
+                          std::to_string(data.transfer.group_of_channel[1] + 1) + ", " +
+                          std::to_string(data.transfer.group_of_channel[2] + 1) + ")"
+                    : std::string())
+            << (data.bounces > 0 ? ", " + std::to_string(data.bounces) + " bounces" : "") << "\n"
+            << "material:     " << data.material << "\n"
             << "compressor:   " << one_line(data.compressor) << ": " << c.clusters()
             << " cluster(s), " << c.components << " component(s), " << c.stored_floats()
             << " floats stored\n"
