@@ -90,7 +90,7 @@ Iterative CPCA has lower SE than static on {ordered} of {len(rows)} rows.
 
 ## Where and why they differ
 
-- **SE ordering** is the paper's: iterative below static on every row here
+- **SE ordering** {"is the paper's: iterative below static on every row here" if ordered == len(rows) else "departs from the paper's on " + str(len(rows) - ordered) + " rows: iterative below static"}
   ({ordered}/{len(rows)}), by a factor {min(reductions):.2f}-{max(reductions):.2f}
   (the paper: 0.21-0.88). Iterative CPCA re-assigns vertices to the cluster
   whose affine subspace reconstructs them best, which static CPCA (clusters
@@ -104,10 +104,7 @@ Iterative CPCA has lower SE than static on {ordered} of {len(rows)} rows.
   against 5-45x in the paper; both are minutes to hours faster in absolute
   terms (two 2020s cores against a 2003 Pentium IV, and CPCA's per-cluster
   eigen-solves in Eigen; docs/performance.md).
-- **Frame rates** here come from a software rasteriser when no GPU is
-  present (Mesa llvmpipe, two cores): they measure the same per-vertex
-  weighted sums and per-cluster constants as the paper's, but are not a
-  GPU's numbers. Glossy rows are slower than diffuse, as in the paper,
+- **Frame rates** {"come from a software rasteriser (Mesa llvmpipe on the CPU cores, no GPU): they measure the same per-vertex weighted sums and per-cluster constants as the paper's, but are not a GPU's numbers, and they vary with other load on the machine" if "llvmpipe" in opengl else "are " + opengl + "'s"}. Glossy rows are slower than diffuse, as in the paper,
   because each vertex reads N_r exit-basis values and sums N_r x n' products.
 """)
 
