@@ -99,14 +99,18 @@ void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& me
   const double v = double(mesh.vertex_count()), d = double(set.size()),
                n = double(plan.basis->size());
   const double rows = plan.glossy ? double(plan.exit->size()) : 1.0;
-  const double dimension = rows * n;
+  const double groups =
+      std::max<double>(1, double(plan.channels.groups.size()));  // channel transfers
+  const double dimension = rows * n * groups;
   // The basis at every direction: the projection matrix (unless a fast
   // transform projects), and glossy transfer's weighted light values.
   const double projection = plan.basis->has_fast_projection(set) ? 0 : d * n * sizeof(double);
   const double glossy_light = plan.glossy ? d * n * sizeof(double) : 0;
   // The transfer twice: exact, and its compressed (or exact) form.
   const double bytes = 2 * v * dimension * sizeof(float) + projection + glossy_light +
-                       (keep_visibility ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0);
+                       // Channel transfers each work on a copy of the rays' results.
+                       (groups > 1 ? 2 : 1) *
+                           ((keep_visibility ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0));
   const double available = available_memory();
   if (bytes > available) {
     char message[400];
@@ -428,7 +432,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   TransportResult traced = trace_stage(plan, data.mesh, set, options);
   const auto rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
-  if (plan.channels.groups.size() == 1) {
+  if (plan.channels.groups.size() <= 1) {
     data.transfer = transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times,
                                    data.metrics, plan.bounces > 0 ? &data.direct : nullptr);
   } else {
