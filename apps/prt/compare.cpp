@@ -169,7 +169,7 @@ int compare_bases(Context& context, const CompareArgs& args) {
                        : data.compressed.sparse() ? data.compressed.components
                                                   : relighting.basis().size();
     row.bytes = 4 * data.compressed.stored_floats();
-    if (!data.transfer.glossy())
+    if (!data.transfer.glossy() && data.transfer.channel_groups == 1)  // one transport per vertex
       row.transport_error = transport_error(mesh, set, traced, data, relighting.basis());
     const Eigen::MatrixX3f radiance =
         relighting.relight(data.compressed, relighting.light(environment), camera).vertex_radiance;

@@ -430,7 +430,8 @@ BakeData read_bake(const fs::path& file) {
     if (columns % (Eigen::Index(data.transfer.exit_rows) * data.transfer.channel_groups) != 0)
       throw Error("the transfer's " + std::to_string(columns) +
                   " columns are not a whole number of exit-basis rows (" +
-                  std::to_string(data.transfer.exit_rows) + ")");
+                  std::to_string(data.transfer.exit_rows) + ") x channel transfers (" +
+                  std::to_string(data.transfer.channel_groups) + ")");
     if (static_cast<Eigen::Index>(counts.size()) != c.clusters() || total != stacked.rows() ||
         stacked.cols() != c.dimension || data.transfer.coefficients.rows() != c.vertices())
       throw Error("compressed transfer has inconsistent sizes");

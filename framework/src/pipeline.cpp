@@ -106,8 +106,10 @@ void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& me
   // transform projects), and glossy transfer's weighted light values.
   const double projection = plan.basis->has_fast_projection(set) ? 0 : d * n * sizeof(double);
   const double glossy_light = plan.glossy ? d * n * sizeof(double) : 0;
-  // The transfer twice: exact, and its compressed (or exact) form.
-  const double bytes = 2 * v * dimension * sizeof(float) + projection + glossy_light +
+  // The transfer twice: exact, and its compressed (or exact) form; channel
+  // transfers also hold their parts and direct parts while they are stacked.
+  const double copies = groups > 1 ? 4 : 2;
+  const double bytes = copies * v * dimension * sizeof(float) + projection + glossy_light +
                        // Channel transfers each work on a copy of the rays' results.
                        (groups > 1 ? 2 : 1) *
                            ((keep_visibility ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0));
@@ -289,7 +291,12 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     times.add("project", clock.seconds());
   }
   if (plan.bounces > 0 && !plan.glossy) {
-    if (direct) *direct = result.transfer;
+    if (direct) {  // without bounces, as the bake would be with bounces = 0
+      *direct = result.transfer;
+      if (plan.subsurface)
+        direct->coefficients +=
+            subsurface_transfer(mesh, direct->coefficients, plan.subsurface_material);
+    }
     clock = Stopwatch();
     add_bounces(plan, mesh, set, result, options, metrics);
     times.add("inter-reflection (" + std::to_string(plan.bounces) + " bounces)", clock.seconds());
@@ -313,16 +320,21 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
   times.add("glossy matrices (" + std::to_string(glossy.rows()) + "x" +
                 std::to_string(plan.basis->size()) + ")",
             clock.seconds());
-  if (plan.subsurface) {
-    // The subsurface term is view-independent exit radiance: the constant
-    // function's exit coefficients times the scattered transfer vector.
+  // The subsurface term is view-independent exit radiance: the constant
+  // function's exit coefficients times the scattered transfer vector. It is
+  // added after the bounces: subsurface light does not bounce (nor in the
+  // ground truth).
+  auto add_subsurface = [&](TransferSignal& t) {
+    if (!plan.subsurface) return;
     const Eigen::Index n_i = scattered.cols();
     for (int r = 0; r < glossy.rows(); ++r)
-      transfer.coefficients.middleCols(r * n_i, n_i) +=
-          static_cast<float>(glossy.constant[r]) * scattered;
-  }
+      t.coefficients.middleCols(r * n_i, n_i) += static_cast<float>(glossy.constant[r]) * scattered;
+  };
   if (plan.bounces > 0) {
-    if (direct) *direct = transfer;
+    if (direct) {
+      *direct = transfer;
+      add_subsurface(*direct);
+    }
     clock = Stopwatch();
     Progress bounce_progress("glossy inter-reflection", plan.bounces, "", options.quiet);
     GlossyInterreflection light = glossy_interreflect(
@@ -343,6 +355,7 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     times.add("glossy inter-reflection (" + std::to_string(plan.bounces) + " bounces)",
               clock.seconds());
   }
+  add_subsurface(transfer);
   return transfer;
 }
 
@@ -381,6 +394,7 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
   std::vector<TransferSignal> parts, directs;
   for (std::size_t g = 0; g < channels.groups.size(); ++g) {
     BakePlan channel = plan;
+    channel.fit = plan.fit && g == 0;  // the basis is shared: fitted once, to the same rays
     const ChannelMaterial& material = channels.groups[g];
     channel.brdf = material.brdf;
     channel.bounce_albedo = material.bounce_albedo;
@@ -403,8 +417,10 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where) {
   try {
-    return plan.sparse_terms > 0 ? keep_largest(transfer, plan.sparse_terms)
-                                 : plan.compressor->encode(transfer, &mesh);
+    // A sparse approximation keeps its terms per channel transfer.
+    return plan.sparse_terms > 0
+               ? keep_largest(transfer, plan.sparse_terms * transfer.channel_groups)
+               : plan.compressor->encode(transfer, &mesh);
   } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
     throw Error(where, "out of memory while compressing the " +
                            std::to_string(transfer.vertices()) + " x " +
@@ -557,8 +573,16 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
                 "point lights need one transfer for all colour channels; this material's "
                 "channels differ (coloured diffuse/specular with glossy or bounces, or coloured "
                 "subsurface): use grey coefficients with point lights");
-  projector_ = std::make_unique<PointLightProjector>(
-      *basis_, static_cast<int>(scene.lighting.get_int("nearest")));
+  if (!point_lights_.empty())
+    projector_ = std::make_unique<PointLightProjector>(
+        *basis_, static_cast<int>(scene.lighting.get_int("nearest")));
+}
+
+void Relighting::set_point_lights(std::vector<PointLight> lights) {
+  point_lights_ = std::move(lights);
+  if (!point_lights_.empty() && !projector_)
+    projector_ = std::make_unique<PointLightProjector>(
+        *basis_, static_cast<int>(scene_.lighting.get_int("nearest")));
 }
 
 void Relighting::use_brute_force(int cap_samples) {

@@ -58,7 +58,6 @@ PointLightProjector::PointLightProjector(const Basis& basis, int nearest)
   if (lattice_) {
     rule_ = Rule::nearest;
     nearest_ = std::min<int>(nearest, static_cast<int>(lattice_->size()));
-    lattice_values_ = basis.evaluate(lattice_->directions);
   }
 }
 
@@ -88,45 +87,48 @@ Eigen::MatrixXd PointLightProjector::light_vectors(const Mesh& mesh,
                                                    const PointLight& light) const {
   const auto v = static_cast<Eigen::Index>(mesh.vertex_count());
   const int n = basis_->size();
-  Eigen::MatrixXd out(v, n);
-  if (rule_ == Rule::exact) {
-    Directions directions(v, 3);
-    for (Eigen::Index p = 0; p < v; ++p)
-      directions.row(p) = toward(mesh.positions[p], light.position).transpose();
-    out = basis_->evaluate(directions);
-  } else if (rule_ == Rule::nearest) {
-    const Directions& lattice = lattice_->directions;
-    tbb::parallel_for(Eigen::Index(0), v, [&](Eigen::Index p) {
-      const Eigen::Vector3d w = toward(mesh.positions[p], light.position);
+  // Directions per vertex: m of them, averaged after evaluating the basis.
+  const int m = rule_ == Rule::nearest                           ? nearest_
+                : rule_ == Rule::brute_force && light.radius > 0 ? cap_samples_
+                                                                 : 1;
+  auto directions_of = [&](Eigen::Index p, Directions& out, Eigen::Index row) {
+    const Eigen::Vector3d w = toward(mesh.positions[p], light.position);
+    if (rule_ == Rule::exact) {
+      out.row(row) = w.transpose();
+    } else if (rule_ == Rule::nearest) {
+      const Directions& lattice = lattice_->directions;
       if (nearest_ == 1 && lattice_->kind == "cubemap") {
         const int r = static_cast<int>(std::lround(std::sqrt(lattice.rows() / 6.0)));
-        out.row(p) = lattice_values_.row(cubemap_texel(w, r));
+        out.row(row) = lattice.row(cubemap_texel(w, r));
         return;
       }
       std::vector<std::pair<double, Eigen::Index>> by_angle(lattice.rows());
       for (Eigen::Index k = 0; k < lattice.rows(); ++k)
         by_angle[k] = {-lattice.row(k).dot(w.transpose()), k};
       std::partial_sort(by_angle.begin(), by_angle.begin() + nearest_, by_angle.end());
-      out.row(p).setZero();
-      for (int j = 0; j < nearest_; ++j) out.row(p) += lattice_values_.row(by_angle[j].second);
-      out.row(p) /= nearest_;
-    });
-  } else {  // brute force: the cap resampled per vertex (a fixed spiral of directions)
-    const int m = light.radius > 0 ? cap_samples_ : 1;
-    Directions directions(v * m, 3);
-    tbb::parallel_for(Eigen::Index(0), v, [&](Eigen::Index p) {
-      const Eigen::Vector3d axis = toward(mesh.positions[p], light.position);
-      const Eigen::Matrix3d frame = frame_about(axis);
+      for (int j = 0; j < nearest_; ++j) out.row(row + j) = lattice.row(by_angle[j].second);
+    } else {  // brute force: the cap resampled per vertex (a fixed spiral)
+      const Eigen::Matrix3d frame = frame_about(w);
       const double cos_max = cap_cosine(mesh.positions[p].cast<double>(), light);
       for (int k = 0; k < m; ++k)
-        directions.row(p * m + k) =
+        out.row(row + k) =
             cap_direction(frame, cos_max, (k + 0.5) / m, std::fmod(0.618034 * k, 1.0)).transpose();
-    });
+    }
+  };
+  // Blocks of vertices keep the evaluated basis small (at most 2^16 rows).
+  const Eigen::Index block = std::max<Eigen::Index>(1, (Eigen::Index(1) << 16) / m);
+  Eigen::MatrixXd out(v, n);
+  for (Eigen::Index begin = 0; begin < v; begin += block) {
+    const Eigen::Index count = std::min(block, v - begin);
+    Directions directions(count * m, 3);
+    tbb::parallel_for(Eigen::Index(0), count,
+                      [&](Eigen::Index i) { directions_of(begin + i, directions, i * m); });
     const Eigen::MatrixXd values = basis_->evaluate(directions);
-    for (Eigen::Index p = 0; p < v; ++p) out.row(p) = values.middleRows(p * m, m).colwise().mean();
+    if (values.rows() != count * m || values.cols() != n || !values.allFinite())
+      throw Error("point lights: the basis gave values of the wrong shape or with NaN/Inf");
+    for (Eigen::Index i = 0; i < count; ++i)
+      out.row(begin + i) = values.middleRows(i * m, m).colwise().mean();
   }
-  if (out.rows() != v || out.cols() != n || !out.allFinite())
-    throw Error("point lights: the basis gave light vectors of the wrong shape or with NaN/Inf");
   return out;
 }
 

@@ -539,6 +539,15 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                 "lights");
 
   const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  if (!scene.point_lights.empty() && bounces > 0)
+    throw Error(scene.transport.location("bounces"),
+                "section [transport]: point lights shade direct light only (the transfer's "
+                "bounces assume distant light); use bounces = 0 with [[lighting.point]]");
+  if (!scene.point_lights.empty() && scene.channels().groups.size() > 1)
+    throw Error(scene.material.location(),
+                "section [material]: point lights need one transfer for all colour channels; this "
+                "material's channels differ (coloured diffuse/specular with glossy or bounces, or "
+                "coloured subsurface): use grey coefficients with [[lighting.point]]");
   if (bounces > 0 && !scene.transport.get_bool("shadowed"))
     throw Error(scene.transport.location("bounces"),
                 "section [transport]: bounces gather light from the shadow rays' hits; they need "

@@ -156,4 +156,8 @@ TEST_CASE("[[lighting.point]] tables are read, checked and may stand alone",
              Catch::Contains("brightness"));
   CHECK_THAT(message("point = 3\n"), Catch::Contains("[[lighting.point]]"));
   CHECK_THAT(message("window = \"none\"\n"), Catch::Contains("[[lighting.point]] lights"));
+  const std::string point = "[[lighting.point]]\nposition = [1, 2, 3]\n";
+  CHECK_THAT(message(point + "[transport]\nbounces = 1\n"), Catch::Contains("direct light only"));
+  CHECK_THAT(message(point + "[material]\nbrdf = \"phong\"\ndiffuse = [1, 0.5, 0.5]\n"),
+             Catch::Contains("grey coefficients"));
 }

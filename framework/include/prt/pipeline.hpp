@@ -162,7 +162,7 @@ class Relighting {
   MatrixXfRow exit_values_toward(const Camera& camera) const;
   // The scene's point lights ([[lighting.point]]), which relight() adds.
   const std::vector<PointLight>& point_lights() const { return point_lights_; }
-  void set_point_lights(std::vector<PointLight> lights) { point_lights_ = std::move(lights); }
+  void set_point_lights(std::vector<PointLight> lights);
   // From now on, point lights by brute-force re-projection of their caps
   // (`cap_samples` directions per vertex): the reference of the rule.
   void use_brute_force(int cap_samples);

@@ -56,7 +56,6 @@ class PointLightProjector {
   Rule rule_ = Rule::exact;
   int nearest_ = 1, cap_samples_ = 1;
   std::optional<DirectionSet> lattice_;
-  Eigen::MatrixXd lattice_values_;  // s x n: the basis at its lattice
 };
 
 // Exit radiance (v x 3, albedo 1) from the lights: t_p . l_p per vertex, with
