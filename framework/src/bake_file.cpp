@@ -254,6 +254,16 @@ void write_bake(const fs::path& file, const BakeData& data) {
   data.compressed.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
   if (data.transfer.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
     throw Error(file.string() + ": transfer rows do not match the mesh's vertices");
+  const TransferSignal& t = data.transfer;
+  bool channels_ok = t.channel_groups >= 1 && t.channel_groups <= 3 && t.exit_rows >= 1 &&
+                     t.dimension() % (Eigen::Index(t.exit_rows) * t.channel_groups) == 0;
+  for (int group : t.group_of_channel)
+    channels_ok = channels_ok && group >= 0 && group < t.channel_groups;
+  if (!channels_ok)
+    throw Error(file.string() + ": the transfer's " + std::to_string(t.dimension()) + " columns, " +
+                std::to_string(t.exit_rows) + " exit rows and " + std::to_string(t.channel_groups) +
+                " channel transfers do not fit together (or a colour channel reads a missing "
+                "transfer); nothing written");
   write_atomically(file, [&](const fs::path& temporary) {
     try {
       H5::FileCreatPropList creation;

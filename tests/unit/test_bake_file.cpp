@@ -88,6 +88,21 @@ TEST_CASE("a failed write leaves neither the file nor a temporary", "[bake]") {
   CHECK_FALSE(leftovers(file));
 }
 
+TEST_CASE("channel transfers that do not fit their columns are never written", "[bake][colour]") {
+  const fs::path file = temp_dir("channels") / "channels.h5";
+  fs::remove(file);
+  BakeData d = sample_bake();
+  d.transfer.channel_groups = 2;
+  d.transfer.group_of_channel = {0, 1, 1};
+  if (d.transfer.dimension() % 2 == 0) d.transfer.channel_groups = 3;  // never divides evenly
+  CHECK_THROWS_WITH(write_bake(file, d), Catch::Contains("do not fit together"));
+  d.transfer.channel_groups = 1;
+  d.transfer.group_of_channel = {0, 0, 1};  // channel 2 reads a missing transfer
+  CHECK_THROWS_WITH(write_bake(file, d), Catch::Contains("missing"));
+  CHECK_FALSE(fs::exists(file));
+  CHECK_FALSE(leftovers(file));
+}
+
 TEST_CASE("a failed rewrite keeps the previous complete file", "[bake]") {
   const fs::path file = temp_dir("keep") / "keep.h5";
   write_bake(file, sample_bake());
