@@ -52,7 +52,17 @@ int bake(Context& context, const BakeArgs& args) {
 
 void parse_parameter(const std::string& text, std::size_t index, Params& params);
 
-void print_error_budget(const SceneSpec& scene, const BakeData& data, const Eigen::MatrixX3f& truth,
+// What the comparisons of one render share, made once.
+struct Comparison {
+  const SceneSpec& scene;
+  const BakeData& data;
+  const Relighting& relighting;
+  const Environment& environment;
+  const Eigen::MatrixX3d& light;
+  const Camera& camera;
+};
+
+void print_error_budget(const Comparison& with, const Eigen::MatrixX3f& truth,
                         const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times);
 
 int render(Context& context, const RenderArgs& args) {
@@ -92,11 +102,15 @@ int render(Context& context, const RenderArgs& args) {
           " 99th percentile %.6g, max %.6g\n",
           static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms,
           e.p99, e.max);
+      // One relighting, light vector and camera for every comparison below.
+      const Relighting relighting(scene, data, context.registry);
+      const Environment environment = scene.load_environment();
+      const Eigen::MatrixX3d light = relighting.light(environment);
+      const Camera camera = scene.make_camera(data.mesh);
       if (!scene.point_lights.empty()) {  // the nearest-direction rule against its reference
         Relighting brute(scene, data, context.registry);
         brute.use_brute_force(256);
-        const Relit reprojected = brute.relight(
-            data.compressed, brute.light(scene.load_environment()), scene.make_camera(data.mesh));
+        const Relit reprojected = brute.relight(data.compressed, light, camera);
         const ErrorStats b = vertex_error(reprojected.vertex_radiance, truth.vertex_radiance);
         std::printf(
             "error of brute-force re-projection of the point lights (%s) against the same "
@@ -104,18 +118,15 @@ int render(Context& context, const RenderArgs& args) {
             brute.point_light_rule().c_str(), b.rms, b.relative_rms);
       }
       if (data.direct.coefficients.size()) {  // what the bounces bring
-        const Relighting relighting(scene, data, context.registry);
-        const Relit direct =
-            relighting.relight(exact_form(data.direct), relighting.light(scene.load_environment()),
-                               scene.make_camera(data.mesh));
+        const Relit direct = relighting.relight(exact_form(data.direct), light, camera);
         const ErrorStats d = vertex_error(direct.vertex_radiance, truth.vertex_radiance);
         std::printf(
             "error of the same transfer without its %d bounces (exact, no compression) against "
             "the same ground truth: RMS per vertex %.6g (relative %.4f)\n",
             data.bounces, d.rms, d.relative_rms);
       }
-      print_error_budget(scene, data, truth.vertex_radiance, result.vertex_radiance, context,
-                         times);
+      print_error_budget({scene, data, relighting, environment, light, camera},
+                         truth.vertex_radiance, result.vertex_radiance, context, times);
     }
   }
   clock = Stopwatch();
@@ -135,12 +146,9 @@ int render(Context& context, const RenderArgs& args) {
 // (ground truth under the band-limited light against the full one), the
 // transfer's projection (exact PRT against the band-limited truth) and the
 // compression (compressed against exact PRT). RMS per vertex, as above.
-void print_error_budget(const SceneSpec& scene, const BakeData& data, const Eigen::MatrixX3f& truth,
+void print_error_budget(const Comparison& with, const Eigen::MatrixX3f& truth,
                         const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times) {
-  const Relighting relighting(scene, data, context.registry);
-  const Environment environment = scene.load_environment();
-  const Eigen::MatrixX3d light = relighting.light(environment);
-  const Camera camera = scene.make_camera(data.mesh);
+  const auto& [scene, data, relighting, environment, light, camera] = with;
   const Environment band_limited = environment.band_limited(relighting.basis(), light);
   Stopwatch clock;
   const Eigen::MatrixX3f limited_truth =

@@ -567,15 +567,12 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
                                   std::to_string(exit_->size()) + " functions; bake again");
     frames_ = tangent_frames(data.mesh);
   }
-  point_lights_ = scene.point_lights;
-  if (!point_lights_.empty() && data.transfer.channel_groups > 1)
+  if (!scene.point_lights.empty() && data.transfer.channel_groups > 1)
     throw Error(scene.material.location(),
                 "point lights need one transfer for all colour channels; this material's "
                 "channels differ (coloured diffuse/specular with glossy or bounces, or coloured "
                 "subsurface): use grey coefficients with point lights");
-  if (!point_lights_.empty())
-    projector_ = std::make_unique<PointLightProjector>(
-        *basis_, static_cast<int>(scene.lighting.get_int("nearest")));
+  set_point_lights(scene.point_lights);
 }
 
 void Relighting::set_point_lights(std::vector<PointLight> lights) {
