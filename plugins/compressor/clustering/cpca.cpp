@@ -12,6 +12,7 @@
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
+#include "prt/row_blocks.hpp"
 
 namespace prt::clustering {
 
@@ -47,25 +48,27 @@ double classify(const MatrixXfRow& x, const std::vector<ClusterModel>& models,
           static_cast<float>(models[j].basis.row(i).dot(models[j].mean));
     }
   }
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 512), [&](const auto& r) {
-    const Eigen::Index rows = r.end() - r.begin();
-    const auto block = x.middleRows(r.begin(), rows);
-    const Eigen::MatrixXf dots = block * means_t;
-    Eigen::MatrixXf projections = block * basis_t;
-    projections.rowwise() -= mean_projections;
-    for (Eigen::Index i = 0; i < rows; ++i) {
-      const float row_norm = block.row(i).squaredNorm();
-      float best = std::numeric_limits<float>::infinity();
-      int best_label = 0;
-      for (int j = 0; j < k; ++j) {
-        float e = row_norm - 2.f * dots(i, j) + mean_norms[j];
-        const Eigen::Index count = offset[j + 1] - offset[j];
-        if (count) e -= projections.row(i).segment(offset[j], count).squaredNorm();
-        if (e < best) best = e, best_label = j;
-      }
-      labels[r.begin() + i] = best_label;
-    }
-  });
+  for_each_row_block(Eigen::Index(0), x.rows(), Eigen::Index(512),
+                     [&](Eigen::Index begin, Eigen::Index end) {
+                       const Eigen::Index rows = end - begin;
+                       const auto block = x.middleRows(begin, rows);
+                       const Eigen::MatrixXf dots = block * means_t;
+                       Eigen::MatrixXf projections = block * basis_t;
+                       projections.rowwise() -= mean_projections;
+                       for (Eigen::Index i = 0; i < rows; ++i) {
+                         const float row_norm = block.row(i).squaredNorm();
+                         float best = std::numeric_limits<float>::infinity();
+                         int best_label = 0;
+                         for (int j = 0; j < k; ++j) {
+                           float e = row_norm - 2.f * dots(i, j) + mean_norms[j];
+                           const Eigen::Index count = offset[j + 1] - offset[j];
+                           if (count)
+                             e -= projections.row(i).segment(offset[j], count).squaredNorm();
+                           if (e < best) best = e, best_label = j;
+                         }
+                         labels[begin + i] = best_label;
+                       }
+                     });
   // Errors in double on every core; their sum in vertex order (the same
   // figure whatever the number of cores).
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 1024), [&](const auto& r) {

@@ -11,6 +11,7 @@
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
+#include "prt/row_blocks.hpp"
 
 namespace prt::clustering {
 
@@ -24,17 +25,18 @@ void nearest_means(const MatrixXfRow& x, const RowMatrixXd& means, std::vector<s
                    std::vector<double>& distance) {
   const Eigen::MatrixXf mt = means.transpose().cast<float>();  // n x k
   const Eigen::RowVectorXf mean_norms = mt.colwise().squaredNorm();
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), kRowBlock), [&](const auto& r) {
-    const Eigen::Index rows = r.end() - r.begin();
-    const Eigen::MatrixXf dots = x.middleRows(r.begin(), rows) * mt;
-    for (Eigen::Index i = 0; i < rows; ++i) {
-      const float row_norm = x.row(r.begin() + i).squaredNorm();
-      Eigen::Index best = 0;
-      const float d = (mean_norms - 2.f * dots.row(i)).minCoeff(&best);
-      label[r.begin() + i] = static_cast<std::int32_t>(best);
-      distance[r.begin() + i] = std::max(0.0, double(d) + row_norm);
-    }
-  });
+  for_each_row_block(Eigen::Index(0), x.rows(), kRowBlock,
+                     [&](Eigen::Index begin, Eigen::Index end) {
+                       const Eigen::Index rows = end - begin;
+                       const Eigen::MatrixXf dots = x.middleRows(begin, rows) * mt;
+                       for (Eigen::Index i = 0; i < rows; ++i) {
+                         const float row_norm = x.row(begin + i).squaredNorm();
+                         Eigen::Index best = 0;
+                         const float d = (mean_norms - 2.f * dots.row(i)).minCoeff(&best);
+                         label[begin + i] = static_cast<std::int32_t>(best);
+                         distance[begin + i] = std::max(0.0, double(d) + row_norm);
+                       }
+                     });
 }
 
 // Chen's E_ij = |x_i - mean_j| + alpha * min_{k in j, k != i} |P_i - P_k|, with
@@ -49,34 +51,36 @@ void nearest_coherent(const MatrixXfRow& x, const RowMatrixXd& means, const Mesh
   const Eigen::MatrixXf mt = means.transpose().cast<float>();
   const Eigen::RowVectorXf mean_norms = mt.colwise().squaredNorm();
   const std::vector<std::int32_t> previous = label;
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), kRowBlock), [&](const auto& r) {
-    const Eigen::Index rows = r.end() - r.begin();
-    const Eigen::MatrixXf dots = x.middleRows(r.begin(), rows) * mt;
-    std::vector<std::pair<double, std::int32_t>> order(means.rows());
-    for (Eigen::Index i = 0; i < rows; ++i) {
-      const Eigen::Index p = r.begin() + i;
-      const float row_norm = x.row(p).squaredNorm();
-      for (Eigen::Index j = 0; j < means.rows(); ++j)
-        order[j] = {std::sqrt(std::max(0.0, double(mean_norms[j] - 2.f * dots(i, j) + row_norm))),
-                    static_cast<std::int32_t>(j)};
-      std::sort(order.begin(), order.end());
-      double best = std::numeric_limits<double>::infinity();
-      std::int32_t best_label = previous[p];
-      for (const auto& [signal, j] : order) {
-        if (signal >= best) break;
-        double geometric = std::numeric_limits<double>::infinity();
-        for (std::uint32_t k : members[j])
-          if (k != p)
-            geometric =
-                std::min(geometric, double((mesh.positions[k] - mesh.positions[p]).squaredNorm()));
-        const double e = signal + alpha * std::sqrt(geometric) * scale;
-        if (e < best) best = e, best_label = j;
-      }
-      label[p] = best_label;
-      const double d = (x.row(p).cast<double>() - means.row(best_label)).squaredNorm();
-      distance[p] = d;
-    }
-  });
+  for_each_row_block(
+      Eigen::Index(0), x.rows(), kRowBlock, [&](Eigen::Index begin, Eigen::Index end) {
+        const Eigen::Index rows = end - begin;
+        const Eigen::MatrixXf dots = x.middleRows(begin, rows) * mt;
+        std::vector<std::pair<double, std::int32_t>> order(means.rows());
+        for (Eigen::Index i = 0; i < rows; ++i) {
+          const Eigen::Index p = begin + i;
+          const float row_norm = x.row(p).squaredNorm();
+          for (Eigen::Index j = 0; j < means.rows(); ++j)
+            order[j] = {
+                std::sqrt(std::max(0.0, double(mean_norms[j] - 2.f * dots(i, j) + row_norm))),
+                static_cast<std::int32_t>(j)};
+          std::sort(order.begin(), order.end());
+          double best = std::numeric_limits<double>::infinity();
+          std::int32_t best_label = previous[p];
+          for (const auto& [signal, j] : order) {
+            if (signal >= best) break;
+            double geometric = std::numeric_limits<double>::infinity();
+            for (std::uint32_t k : members[j])
+              if (k != p)
+                geometric = std::min(geometric,
+                                     double((mesh.positions[k] - mesh.positions[p]).squaredNorm()));
+            const double e = signal + alpha * std::sqrt(geometric) * scale;
+            if (e < best) best = e, best_label = j;
+          }
+          label[p] = best_label;
+          const double d = (x.row(p).cast<double>() - means.row(best_label)).squaredNorm();
+          distance[p] = d;
+        }
+      });
 }
 
 RowMatrixXd hyperbox_init(const MatrixXfRow& x, int k, std::mt19937_64& rng) {
