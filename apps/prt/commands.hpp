@@ -36,6 +36,13 @@ struct CompressArgs {
 };
 int compress(Context& context, const CompressArgs& args);
 
+struct SubdivideArgs {
+  std::string input, output, scheme = "loop";
+  std::size_t vertices = 0;
+  bool force = false;
+};
+int subdivide(const SubdivideArgs& args);
+
 struct AnalyzeArgs {
   int order = 5;
   double cutoff = 1e-10;

@@ -125,6 +125,20 @@ int main(int argc, char** argv) {
   auto* plugins_cmd =
       app.add_subcommand("plugins", "list plug-ins: kind, name, version, parameters");
 
+  prt::cli::SubdivideArgs subdivide;
+  auto* subdivide_cmd = app.add_subcommand(
+      "subdivide", "make a large test mesh: Loop or midpoint subdivision to a vertex count");
+  subdivide_cmd->add_option("mesh", subdivide.input, "input mesh (.off, .ply, .obj, .stl)")
+      ->required();
+  subdivide_cmd
+      ->add_option("-o,--output", subdivide.output, "output mesh (.ply binary, .off, .obj)")
+      ->required();
+  subdivide_cmd->add_option("-n,--vertices", subdivide.vertices, "vertex count of the result")
+      ->required();
+  subdivide_cmd->add_option("--scheme", subdivide.scheme, "loop (smooth) or midpoint (flat)")
+      ->capture_default_str();
+  subdivide_cmd->add_flag("--force", subdivide.force, kForceHelp);
+
   prt::cli::DemoArgs demo;
   auto* demo_cmd = app.add_subcommand("demo", "bake and render the default scene");
   demo_cmd->add_option("scene", demo.scene, "scene (default: scenes/bunny.toml)");
@@ -147,6 +161,7 @@ int main(int argc, char** argv) {
     if (*diff_cmd) return prt::cli::image_diff(diff_images[0], diff_images[1]);
     if (*plugins_cmd) return prt::cli::plugins(context);
     if (*demo_cmd) return prt::cli::demo(context, demo);
+    if (*subdivide_cmd) return prt::cli::subdivide(subdivide);
   } catch (...) {
     std::cerr << "prt: " << prt::current_error_line() << "\n";
     return 1;
