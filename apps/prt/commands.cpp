@@ -38,9 +38,20 @@ int bake(Context& context, const BakeArgs& args) {
   const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
   check_output({output, FileKind::bake, "bake file", args.output.empty()}, scene.input_files(),
                args.force);
-  BakeData data = bake(scene, context.registry, {context.quiet}, times);
+  // A killed bake rerun with the same command resumes from its checkpoint.
+  const BakePlan plan = plan_bake(scene, context.registry);
+  const fs::path checkpoint_folder = CheckpointStore::folder_for(output);
+  if (args.restart) fs::remove_all(checkpoint_folder);
+  const CheckpointStore checkpoint(output, bake_key(scene, plan),
+                                   "prt bake " + scene.file.string() + " -> " + output.string());
+  checkpoint.remove_temporaries();
+  RunOptions options{context.quiet};
+  options.checkpoint = &checkpoint;
+  options.slab_vertices = args.slab_vertices;
+  BakeData data = bake(scene, context.registry, options, times);
   clock = Stopwatch();
   write_bake(output, data);
+  checkpoint.remove();
   times.add("write bake file", clock.seconds());
   std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << data.transfer.dimension()
             << " coefficients (" << data.basis.name << ", " << data.transport << ") -> "

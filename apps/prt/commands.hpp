@@ -16,7 +16,9 @@ struct Context {
 
 struct BakeArgs {
   std::string scene, output;
-  bool force = false;  // replace an existing output of another kind
+  bool force = false;                 // replace an existing output of another kind
+  bool restart = false;               // discard a checkpoint left by an earlier run
+  std::size_t slab_vertices = 65536;  // vertices per checkpointed slab
 };
 int bake(Context& context, const BakeArgs& args);
 

@@ -21,6 +21,13 @@ int main(int argc, char** argv) {
   bake_cmd->add_option("scene", bake.scene, "scene description (.toml)")->required();
   bake_cmd->add_option("-o,--output", bake.output, "bake file (default: from the scene)");
   bake_cmd->add_flag("--force", bake.force, kForceHelp);
+  bake_cmd->add_flag("--restart", bake.restart,
+                     "discard the checkpoint an interrupted run left (default: resume from it)");
+  bake_cmd
+      ->add_option("--slab-vertices", bake.slab_vertices,
+                   "vertices traced per checkpointed slab (a killed bake loses at most one)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
 
   prt::cli::RenderArgs render;
   auto* render_cmd = app.add_subcommand("render", "relight a bake and write an image");

@@ -58,11 +58,12 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
                                const VisibilityBits& visibility, const Basis& light_basis,
                                const GlossyOperator& glossy, const std::vector<Frame>& frames,
-                               GlossyMethod method, Progress* progress) {
+                               GlossyMethod method, Progress* progress, std::size_t first_vertex) {
   const int n_i = light_basis.size(), n_r = glossy.rows(), order = glossy.incident_order;
   if (light_basis.domain() != Domain::sphere)
     throw Error("glossy transfer: the light basis must be a sphere basis");
-  if (visibility.vertices() != mesh.vertex_count() ||
+  const std::size_t count = visibility.vertices();
+  if (first_vertex + count > mesh.vertex_count() ||
       visibility.directions() != static_cast<std::size_t>(set.size()) ||
       frames.size() != mesh.vertex_count())
     throw Error("glossy transfer: visibility or frames do not match the mesh and directions");
@@ -74,37 +75,36 @@ TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
   TransferSignal out;
   out.kind = "glossy";
   out.exit_rows = n_r;
-  out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), n_r * n_i);
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), 64), [&](const auto& range) {
-        Eigen::MatrixXd visible_light, visible_incident, projected, rotated;
-        std::vector<std::uint32_t> seen;
-        for (std::size_t v = range.begin(); v < range.end(); ++v) {
-          visible_directions(visibility, v, words, seen);
-          const auto count = static_cast<Eigen::Index>(seen.size());
-          visible_light.resize(count, n_i);
-          for (Eigen::Index j = 0; j < count; ++j) visible_light.row(j) = light.row(seen[j]);
-          RowMatrix m(n_r, n_i);
-          if (method == GlossyMethod::rotate_sh) {
-            visible_incident.resize(count, incident.cols());
-            for (Eigen::Index j = 0; j < count; ++j)
-              visible_incident.row(j) = incident.row(seen[j]);
-            // Block-diagonal rotation applied band by band (no dense M^2 x M^2).
-            projected.noalias() = visible_incident.transpose() * visible_light;
-            rotated.resize(projected.rows(), projected.cols());
-            sh::Rotation(order, frames[v]).apply(projected, rotated);
-            m.noalias() = glossy.matrix * rotated;
-          } else {
-            Directions local(count, 3);
-            for (Eigen::Index j = 0; j < count; ++j)
-              local.row(j) = (frames[v] * set.directions.row(seen[j]).transpose()).transpose();
-            m.noalias() = (glossy.matrix * sh::evaluate(order, local).transpose()) * visible_light;
-          }
-          out.coefficients.row(static_cast<Eigen::Index>(v)) =
-              Eigen::Map<const Eigen::RowVectorXd>(m.data(), n_r * n_i).cast<float>();
-        }
-        if (progress) progress->add(double(range.size()));
-      });
+  out.coefficients.resize(static_cast<Eigen::Index>(count), n_r * n_i);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
+    Eigen::MatrixXd visible_light, visible_incident, projected, rotated;
+    std::vector<std::uint32_t> seen;
+    for (std::size_t row = range.begin(); row < range.end(); ++row) {
+      const std::size_t v = first_vertex + row;
+      visible_directions(visibility, row, words, seen);
+      const auto count = static_cast<Eigen::Index>(seen.size());
+      visible_light.resize(count, n_i);
+      for (Eigen::Index j = 0; j < count; ++j) visible_light.row(j) = light.row(seen[j]);
+      RowMatrix m(n_r, n_i);
+      if (method == GlossyMethod::rotate_sh) {
+        visible_incident.resize(count, incident.cols());
+        for (Eigen::Index j = 0; j < count; ++j) visible_incident.row(j) = incident.row(seen[j]);
+        // Block-diagonal rotation applied band by band (no dense M^2 x M^2).
+        projected.noalias() = visible_incident.transpose() * visible_light;
+        rotated.resize(projected.rows(), projected.cols());
+        sh::Rotation(order, frames[v]).apply(projected, rotated);
+        m.noalias() = glossy.matrix * rotated;
+      } else {
+        Directions local(count, 3);
+        for (Eigen::Index j = 0; j < count; ++j)
+          local.row(j) = (frames[v] * set.directions.row(seen[j]).transpose()).transpose();
+        m.noalias() = (glossy.matrix * sh::evaluate(order, local).transpose()) * visible_light;
+      }
+      out.coefficients.row(static_cast<Eigen::Index>(row)) =
+          Eigen::Map<const Eigen::RowVectorXd>(m.data(), n_r * n_i).cast<float>();
+    }
+    if (progress) progress->add(double(range.size()));
+  });
   return out;
 }
 

@@ -445,17 +445,9 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   times.add("directions", clock.seconds());
 
   require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
-  TransportResult traced = trace_stage(plan, data.mesh, set, options);
-  const auto rays_cast = traced.rays_cast;
-  times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
-  if (plan.channels.groups.size() <= 1) {
-    data.transfer = transfer_stage(plan, scene, data.mesh, set, std::move(traced), options, times,
-                                   data.metrics, plan.bounces > 0 ? &data.direct : nullptr);
-  } else {
-    data.transfer =
-        channel_transfers(plan, scene, data.mesh, set, std::move(traced), options, times,
-                          data.metrics, plan.bounces > 0 ? &data.direct : nullptr);
-  }
+  std::uint64_t rays_cast = 0;
+  data.transfer = checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
+                                        plan.bounces > 0 ? &data.direct : nullptr, rays_cast);
 
   clock = Stopwatch();
   data.compressed = options.compress || plan.sparse_terms > 0

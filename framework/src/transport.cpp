@@ -19,6 +19,7 @@
 #include "prt/environment_sampler.hpp"
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
+#include "prt/row_blocks.hpp"
 
 namespace prt {
 
@@ -192,7 +193,9 @@ std::uint64_t RayCaster::trace_visibility(const Mesh& mesh, const std::uint32_t*
   return cast;
 }
 
-std::vector<std::uint32_t> morton_order(const Mesh& mesh) {
+std::vector<std::uint32_t> morton_order(const Mesh& mesh, std::size_t first, std::size_t last) {
+  last = std::min(last, mesh.vertex_count());
+  first = std::min(first, last);
   const Eigen::Vector3f lo = mesh.bounds_min();
   const Eigen::Vector3f extent = (mesh.bounds_max() - lo).cwiseMax(1e-30f);
   auto spread = [](std::uint64_t x) {  // 21 bits -> every third bit
@@ -204,10 +207,11 @@ std::vector<std::uint32_t> morton_order(const Mesh& mesh) {
     x = (x | x << 2) & 0x1249249249249249ull;
     return x;
   };
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(mesh.vertex_count());
-  for (std::size_t v = 0; v < keyed.size(); ++v) {
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(last - first);
+  for (std::size_t i = 0; i < keyed.size(); ++i) {
+    const std::size_t v = first + i;
     const Eigen::Vector3f q = ((mesh.positions[v] - lo).cwiseQuotient(extent) * 2097151.f);
-    keyed[v] = {spread(std::uint64_t(q.x())) | spread(std::uint64_t(q.y())) << 1 |
+    keyed[i] = {spread(std::uint64_t(q.x())) | spread(std::uint64_t(q.y())) << 1 |
                     spread(std::uint64_t(q.z())) << 2,
                 static_cast<std::uint32_t>(v)};
   }
@@ -250,7 +254,9 @@ using BlockProjection = std::function<Eigen::MatrixXf(
 TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eigen::Index n,
                                   const BlockProjection& project, const TransportOptions& options,
                                   Progress* progress) {
-  const std::size_t v_count = mesh.vertex_count();
+  const std::size_t last = std::min(options.last_vertex, mesh.vertex_count());
+  const std::size_t first = std::min(options.first_vertex, last);
+  const std::size_t v_count = last - first;
   const auto s = static_cast<std::size_t>(set.size());
   const std::size_t words = VisibilityBits::words_for(s);
   TransportResult result;
@@ -258,10 +264,12 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
   if (options.keep_visibility) result.visibility = VisibilityBits(v_count, s);
   if (options.keep_hits) result.hits.resize(v_count);
   Stopwatch clock;
-  std::optional<RayCaster> caster;
-  if (options.shadowed) caster.emplace(mesh);
+  std::optional<RayCaster> own_caster;
+  const RayCaster* caster = options.caster;
+  if (options.shadowed && !caster) caster = &own_caster.emplace(mesh);
+  if (!options.shadowed) caster = nullptr;
   const std::vector<float> dirs_f = to_float(set);
-  const std::vector<std::uint32_t> order = morton_order(mesh);
+  const std::vector<std::uint32_t> order = morton_order(mesh, first, last);
   std::atomic<std::uint64_t> rays{0};
 
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, kBlock), [&](const auto& range) {
@@ -281,10 +289,11 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
     }
     const Eigen::MatrixXf block = project(vertices, count, bits);
     for (std::size_t slot = 0; slot < count; ++slot) {
-      result.transfer.coefficients.row(vertices[slot]) = block.row(slot);
+      const std::size_t row = vertices[slot] - first;
+      result.transfer.coefficients.row(static_cast<Eigen::Index>(row)) = block.row(slot);
       if (options.keep_visibility)
-        std::copy_n(&bits[slot * words], words, result.visibility.words(vertices[slot]));
-      if (!hits.empty()) result.hits[vertices[slot]] = std::move(hits[slot]);
+        std::copy_n(&bits[slot * words], words, result.visibility.words(row));
+      if (!hits.empty()) result.hits[row] = std::move(hits[slot]);
     }
   });
   result.trace_seconds = clock.seconds();
@@ -460,11 +469,12 @@ TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
   out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), basis.size());
   const bool fast = basis.has_fast_projection(set);
   const Eigen::MatrixXd projection = fast ? Eigen::MatrixXd() : basis.projection_matrix(set);
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kBlock), [&](const auto& range) {
+  // Fixed blocks: a GEMM's rows depend on the block's shape (row_blocks.hpp).
+  for_each_row_block(
+      std::size_t(0), mesh.vertex_count(), kBlock, [&](std::size_t begin, std::size_t end) {
         Eigen::MatrixXd rows;
-        transport_rows(mesh, set, visibility, range.begin(), range.end(), rows);
-        out.coefficients.middleRows(range.begin(), range.size()) =
+        transport_rows(mesh, set, visibility, begin, end, rows);
+        out.coefficients.middleRows(begin, end - begin) =
             (fast ? basis.project(rows, set) : Eigen::MatrixXd(rows * projection)).cast<float>();
       });
   return out;

@@ -49,11 +49,13 @@ struct GlossyOperator {
 enum class GlossyMethod { rotate_sh, evaluate };
 
 // M_p for every vertex from stored visibility (directions above the tangent
-// plane whose rays escape), as rows of N_r x N_i, row-major.
+// plane whose rays escape), as rows of N_r x N_i, row-major. `visibility`
+// holds the vertices from `first_vertex` on (a slab); `frames` all of them.
 TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& directions,
                                const VisibilityBits& visibility, const Basis& light_basis,
                                const GlossyOperator& glossy, const std::vector<Frame>& frames,
-                               GlossyMethod method, Progress* progress);
+                               GlossyMethod method, Progress* progress,
+                               std::size_t first_vertex = 0);
 
 // The exit basis at each vertex's local view direction (v x N_r).
 MatrixXfRow exit_values(const Basis& exit_basis, const Eigen::MatrixXd& local_views);

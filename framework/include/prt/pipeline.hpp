@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "prt/bake_file.hpp"
+#include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
 #include "prt/frame.hpp"
 #include "prt/glossy.hpp"
@@ -29,6 +30,7 @@ struct StageTimes {
 };
 
 struct TransportResult;
+class RayCaster;
 
 // How a run reports: progress bars (off when quiet) and one-line messages
 // (summaries a user reads), through a callback the app provides.
@@ -43,6 +45,10 @@ struct RunOptions {
   // Where this run's messages go; unset: the process's log sink (prt/log.hpp),
   // info only when not quiet.
   std::function<void(const std::string&)> log;
+  // Finished parts are kept here and found again by a rerun (prt/checkpoint.hpp);
+  // transfers each vertex gets alone are then computed in slabs of vertices.
+  const CheckpointStore* checkpoint = nullptr;
+  std::size_t slab_vertices = 65536;
   void message(const std::string& text) const;
   void warn(const std::string& text) const;
 };
@@ -101,6 +107,25 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
                                  const RunOptions& options, StageTimes& times,
                                  std::map<std::string, double>& metrics,
                                  TransferSignal* direct = nullptr);
+// 2''. A transfer that each vertex gets alone (no fitted basis, bounces,
+//    subsurface light or per-channel transfers) in slabs of vertices:
+//    vertices [first, last) traced and projected (glossy: their matrices).
+bool per_vertex_transfer(const BakePlan& plan);
+TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                             const RayCaster* caster, const std::vector<Frame>& frames,
+                             std::size_t first, std::size_t last, std::uint64_t& rays_cast,
+                             Progress* progress = nullptr);
+// Stages 1-2 through options.checkpoint: slab by slab when the transfer is
+// per-vertex, else whole (with the fitted basis); parts already kept are
+// loaded, not computed. Without a checkpoint: trace_stage + transfer_stage.
+TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                                     const DirectionSet& set, const RunOptions& options,
+                                     StageTimes& times, std::map<std::string, double>& metrics,
+                                     TransferSignal* direct, std::uint64_t& rays_cast);
+// What a scene's bake depends on (scene text, mesh bytes, plug-ins, format):
+// the key of its checkpoint.
+std::string bake_key(const SceneSpec& scene, const BakePlan& plan);
+
 // 3. Compression (or the basis's sparse approximation).
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where);

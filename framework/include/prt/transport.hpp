@@ -94,6 +94,11 @@ struct TransportOptions {
   bool shadowed = true;  // false: unshadowed transfer (no rays cast)
   bool keep_visibility = false;
   bool keep_hits = false;  // record front-face hits of blocked rays (inter-reflection)
+  // Only vertices [first_vertex, last_vertex) (a slab of a streamed or
+  // distributed bake): the result's rows, bits and hits are theirs, in order.
+  std::size_t first_vertex = 0, last_vertex = static_cast<std::size_t>(-1);
+  // The mesh's ray caster, built once for many slabs; null: built here.
+  const RayCaster* caster = nullptr;
 };
 
 struct TransportResult {
@@ -114,7 +119,9 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& direction
 
 // Vertex indices sorted along a Morton curve of their positions, so that a
 // block of consecutive vertices traces rays through the same part of the BVH.
-std::vector<std::uint32_t> morton_order(const Mesh& mesh);
+// Only vertices [first, last), ordered by their place in the whole mesh's curve.
+std::vector<std::uint32_t> morton_order(const Mesh& mesh, std::size_t first = 0,
+                                        std::size_t last = static_cast<std::size_t>(-1));
 
 // The same through a basis: its fast projection when it has one for `set`,
 // otherwise its projection matrix.

@@ -1,0 +1,64 @@
+// Checkpoints of long runs: a folder beside the output, ".NAME.checkpoint",
+// holding the finished parts of a bake (vertex slabs of its transfer, a fitted
+// basis) as files, each written whole (temporary, fsync, rename) so that a
+// process killed at any moment leaves only complete parts. Rerunning the same
+// command finds them and computes only what is missing; a changed scene or
+// mesh is refused with a message. The folder is removed once the output is
+// in place. Ranks of a distributed run share it (it is also how their parts
+// reach the rank that writes the file).
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "prt/transfer.hpp"
+
+namespace prt {
+
+// 64-bit FNV-1a: a stable digest of what decides a result.
+class Digest {
+ public:
+  Digest& add(const void* data, std::size_t bytes);
+  Digest& add(const std::string& text);
+  Digest& add_file(const std::filesystem::path& file);
+  std::uint64_t value() const { return hash_; }
+  std::string hex() const;
+
+ private:
+  std::uint64_t hash_ = 0xcbf29ce484222325ull;
+};
+
+class CheckpointStore {
+ public:
+  // The folder for `output`, created when missing. `key` identifies the run
+  // (a digest of the scene, mesh and plug-ins); `description` is written
+  // beside it for people. A folder with another key throws prt::Error.
+  CheckpointStore(const std::filesystem::path& output, const std::string& key,
+                  const std::string& description);
+  static std::filesystem::path folder_for(const std::filesystem::path& output);
+
+  const std::filesystem::path& folder() const { return folder_; }
+  bool has(const std::string& name) const;
+  // Parts are float, double or int32 matrices; saved whole or not at all.
+  void save(const std::string& name, const MatrixXfRow& matrix) const;
+  void save(const std::string& name, const Eigen::MatrixXd& matrix) const;
+  void save(const std::string& name, const std::vector<std::int32_t>& values) const;
+  void save_text(const std::string& name, const std::string& text) const;
+  std::string load_text(const std::string& name) const;
+  MatrixXfRow load_floats(const std::string& name) const;
+  Eigen::MatrixXd load_doubles(const std::string& name) const;
+  std::vector<std::int32_t> load_ints(const std::string& name) const;
+  // Names of the parts present, sorted.
+  std::vector<std::string> parts() const;
+  // Removes temporaries that killed processes left (".tmp-PID" files).
+  void remove_temporaries() const;
+  // Deletes the folder (after the output is in place).
+  void remove() const;
+
+ private:
+  std::filesystem::path folder_;
+};
+
+}  // namespace prt

@@ -1,0 +1,210 @@
+// Stages 1-2 of a bake through a checkpoint: a per-vertex transfer slab by
+// slab, any other transfer whole with its fitted basis. Each finished part is
+// kept, so a killed bake rerun with the same command computes only the rest.
+#include <cinttypes>
+#include <cstdio>
+#include <optional>
+#include <sstream>
+
+#include "prt/error.hpp"
+#include "prt/frame.hpp"
+#include "prt/glossy.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/progress.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+namespace {
+
+std::string slab_name(const char* what, std::size_t slab) {
+  char name[64];
+  std::snprintf(name, sizeof name, "%s.slab-%06zu", what, slab);
+  return name;
+}
+
+// The kind and layout of a plan's transfer (what its rows mean).
+void set_shape(const BakePlan& plan, TransferSignal& signal) {
+  signal.kind = plan.glossy ? "glossy" : "diffuse";
+  signal.exit_rows = plan.glossy ? plan.glossy_operator.rows() : 1;
+  if (plan.channels.groups.size() > 1) {
+    signal.channel_groups = static_cast<int>(plan.channels.groups.size());
+    signal.group_of_channel = plan.channels.group_of_channel;
+  }
+}
+
+std::string metrics_text(const std::map<std::string, double>& metrics) {
+  std::string text;
+  char line[256];
+  for (const auto& [name, value] : metrics) {
+    std::snprintf(line, sizeof line, "%s %.17g\n", name.c_str(), value);
+    text += line;
+  }
+  return text;
+}
+
+void read_metrics(const std::string& text, std::map<std::string, double>& metrics) {
+  std::istringstream in(text);
+  std::string name;
+  double value = 0;
+  while (in >> name >> value) metrics[name] = value;
+}
+
+// Stages 1-2 as they run without a checkpoint.
+TransferSignal traced_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                               const DirectionSet& set, const RunOptions& options,
+                               StageTimes& times, std::map<std::string, double>& metrics,
+                               TransferSignal* direct, std::uint64_t& rays_cast) {
+  TransportResult traced = trace_stage(plan, mesh, set, options);
+  rays_cast = traced.rays_cast;
+  times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
+  if (plan.channels.groups.size() <= 1)
+    return transfer_stage(plan, scene, mesh, set, std::move(traced), options, times, metrics,
+                          direct);
+  return channel_transfers(plan, scene, mesh, set, std::move(traced), options, times, metrics,
+                           direct);
+}
+
+TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                                const RunOptions& options, StageTimes& times,
+                                std::uint64_t& rays_cast) {
+  const CheckpointStore& store = *options.checkpoint;
+  const std::size_t v = mesh.vertex_count();
+  const std::size_t slab = std::max<std::size_t>(1, options.slab_vertices);
+  const std::size_t slabs = (v + slab - 1) / slab;
+  std::size_t kept = 0;
+  for (std::size_t s = 0; s < slabs; ++s) kept += store.has(slab_name("transfer", s));
+  if (kept > 0)
+    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs) +
+                    " slabs of vertices kept in " + store.folder().string());
+  Stopwatch clock;
+  std::optional<RayCaster> caster;
+  if (plan.shadowed && kept < slabs) caster.emplace(mesh);
+  const std::vector<Frame> frames =
+      plan.glossy && kept < slabs ? tangent_frames(mesh) : std::vector<Frame>();
+  TransferSignal out;
+  set_shape(plan, out);
+  Progress progress("bake transfer", double(v), plan.shadowed ? "rays" : "", options.quiet);
+  rays_cast = 0;
+  for (std::size_t s = 0; s < slabs; ++s) {
+    const std::size_t first = s * slab, last = std::min(v, first + slab);
+    const std::string name = slab_name("transfer", s), rays_name = slab_name("rays", s);
+    MatrixXfRow rows;
+    std::uint64_t rays = 0;
+    if (store.has(name) && store.has(rays_name)) {
+      rows = store.load_floats(name);
+      rays = static_cast<std::uint64_t>(store.load_doubles(rays_name)(0, 0));
+      if (rows.rows() != static_cast<Eigen::Index>(last - first))
+        throw Error(store.folder().string() + "/" + name + ": holds " +
+                    std::to_string(rows.rows()) + " vertices, not the slab's " +
+                    std::to_string(last - first) + "; delete the folder or rerun with --restart");
+      progress.add(double(last - first), double(rays));
+    } else {
+      rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames, first, last, rays,
+                           &progress)
+                 .coefficients;
+      store.save(rays_name, Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
+      store.save(name, rows);  // last: its presence marks the slab done
+    }
+    if (out.coefficients.size() == 0)
+      out.coefficients.resize(static_cast<Eigen::Index>(v), rows.cols());
+    out.coefficients.middleRows(static_cast<Eigen::Index>(first), rows.rows()) = rows;
+    rays_cast += rays;
+  }
+  times.add(plan.glossy ? "trace + glossy matrices (slabs)" : "trace + project (slabs)",
+            clock.seconds());
+  return out;
+}
+
+TransferSignal whole_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                              const DirectionSet& set, const RunOptions& options, StageTimes& times,
+                              std::map<std::string, double>& metrics, TransferSignal* direct,
+                              std::uint64_t& rays_cast) {
+  const CheckpointStore& store = *options.checkpoint;
+  const std::string prefix = "basis_state.";
+  if (store.has("transfer")) {
+    options.message("resuming: the transfer kept in " + store.folder().string());
+    TransferSignal out;
+    set_shape(plan, out);
+    out.coefficients = store.load_floats("transfer");
+    if (direct) {
+      *direct = out;
+      direct->coefficients = store.load_floats("direct");
+    }
+    if (plan.fit) {
+      BasisState state;
+      for (const auto& part : store.parts())
+        if (part.rfind(prefix, 0) == 0)
+          state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
+      plan.basis->load(state);
+    }
+    read_metrics(store.load_text("metrics"), metrics);
+    rays_cast = static_cast<std::uint64_t>(store.load_doubles("rays")(0, 0));
+    return out;
+  }
+  TransferSignal out =
+      traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
+  if (plan.fit)
+    for (const auto& [name, matrix] : plan.basis->save().matrices)
+      store.save(prefix + name, matrix);
+  if (direct) store.save("direct", direct->coefficients);
+  store.save_text("metrics", metrics_text(metrics));
+  store.save("rays", Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays_cast))));
+  store.save("transfer", out.coefficients);  // last: its presence marks the stage done
+  return out;
+}
+
+}  // namespace
+
+bool per_vertex_transfer(const BakePlan& plan) {
+  return !plan.fit && plan.bounces == 0 && !plan.subsurface && plan.channels.groups.size() <= 1;
+}
+
+TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                             const RayCaster* caster, const std::vector<Frame>& frames,
+                             std::size_t first, std::size_t last, std::uint64_t& rays_cast,
+                             Progress* progress) {
+  if (!per_vertex_transfer(plan))
+    throw Error(
+        "bake: this transfer couples vertices (fitted basis, bounces, subsurface or "
+        "per-channel transfers) and cannot be computed in slabs");
+  TransportOptions transport;
+  transport.shadowed = plan.shadowed;
+  transport.keep_visibility = plan.keep_visibility;
+  transport.first_vertex = first;
+  transport.last_vertex = last;
+  transport.caster = caster;
+  TransportResult traced =
+      plan.keep_visibility
+          ? diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, progress)
+          : diffuse_transfer(mesh, set, *plan.basis, transport, progress);
+  rays_cast = traced.rays_cast;
+  if (!plan.glossy) return std::move(traced.transfer);
+  return glossy_transfer(mesh, set, traced.visibility, *plan.basis, plan.glossy_operator, frames,
+                         plan.glossy_method, nullptr, first);
+}
+
+TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                                     const DirectionSet& set, const RunOptions& options,
+                                     StageTimes& times, std::map<std::string, double>& metrics,
+                                     TransferSignal* direct, std::uint64_t& rays_cast) {
+  if (!options.checkpoint || options.traced)
+    return traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
+  if (per_vertex_transfer(plan))
+    return slabbed_transfer(plan, mesh, set, options, times, rays_cast);
+  return whole_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
+}
+
+std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {
+  Digest digest;
+  digest.add("prt bake format " + std::to_string(kBakeFormatVersion));
+  digest.add(scene.text);
+  for (const PluginRecord* record :
+       {&plan.basis_record, &plan.exit_record, &plan.compressor_record})
+    digest.add(one_line(*record));
+  const std::string mesh_file = scene.mesh.get_string("file");
+  if (!mesh_file.empty()) digest.add_file(mesh_file);  // else generated: the text says all
+  return digest.hex();
+}
+
+}  // namespace prt

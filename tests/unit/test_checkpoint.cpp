@@ -1,0 +1,156 @@
+// Checkpoints: parts are kept whole or not at all, damage and a changed run
+// are refused, and a bake through a checkpoint (in slabs, resumed after parts
+// were lost) equals the bake without one, bit for bit.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+
+#include "prt/checkpoint.hpp"
+#include "prt/error.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/progress.hpp"
+#include "prt/registry.hpp"
+
+using namespace prt;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path fresh_folder(const std::string& name) {
+  const fs::path folder = fs::temp_directory_path() / ("prt_checkpoint_" + name);
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  return folder;
+}
+
+SceneSpec scene(PluginRegistry& registry, const std::string& material, const std::string& basis) {
+  const std::string text = R"(
+[mesh]
+generate = "open-box"
+detail = 1
+[material]
+)" + material + R"(
+[transport]
+rays = 128
+[basis]
+)" + basis + R"(
+[exit]
+plugin = "hsh"
+order = 3
+[compressor]
+plugin = "cpca"
+clusters = 8
+components = 2
+[lighting]
+constant = [1.0, 0.7, 0.4]
+)";
+  return SceneSpec::parse(text, "checkpoint.toml", registry);
+}
+
+}  // namespace
+
+TEST_CASE("checkpoint parts round-trip and refuse damage and other runs", "[checkpoint]") {
+  const fs::path output = fresh_folder("store") / "bake.h5";
+  const CheckpointStore store(output, "key-1", "test");
+  MatrixXfRow floats = MatrixXfRow::Random(5, 3);
+  Eigen::MatrixXd doubles = Eigen::MatrixXd::Random(2, 4);
+  store.save("floats", floats);
+  store.save("doubles", doubles);
+  store.save("ints", std::vector<std::int32_t>{3, -1, 7});
+  store.save_text("text", "a 1\nb 2.5\n");
+  CHECK(store.load_floats("floats") == floats);
+  CHECK(store.load_doubles("doubles") == doubles);
+  CHECK(store.load_ints("ints") == std::vector<std::int32_t>{3, -1, 7});
+  CHECK(store.load_text("text") == "a 1\nb 2.5\n");
+  CHECK(store.parts() == std::vector<std::string>{"doubles", "floats", "ints", "text"});
+  // The same run reopens it; another is refused with the folder's name.
+  CHECK_NOTHROW(CheckpointStore(output, "key-1", "test"));
+  CHECK_THROWS_WITH(CheckpointStore(output, "key-2", "test"),
+                    Catch::Contains(".bake.h5.checkpoint") && Catch::Contains("--restart"));
+  // A truncated part and a flipped byte are refused, not loaded.
+  const fs::path part = store.folder() / "floats";
+  fs::resize_file(part, fs::file_size(part) - 4);
+  CHECK_THROWS_WITH(store.load_floats("floats"), Catch::Contains("damaged"));
+  {
+    std::fstream file(store.folder() / "doubles", std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(-1, std::ios::end);
+    file.put('\x5a');
+  }
+  CHECK_THROWS_WITH(store.load_doubles("doubles"), Catch::Contains("damaged"));
+  CHECK_THROWS(store.load_floats("ints"));  // wrong type
+  store.remove();
+  CHECK_FALSE(fs::exists(store.folder()));
+}
+
+TEST_CASE("a bake in slabs through a checkpoint equals the bake without one", "[checkpoint]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  const std::string sh = "plugin = \"sh\"\norder = 4";
+  for (const std::string& material :
+       {std::string("albedo = 0.8"),
+        std::string("brdf = \"phong\"\nspecular = 0.5\nexponent = 8")}) {
+    INFO(material);
+    const SceneSpec s = scene(registry, material, sh);
+    StageTimes times;
+    const BakeData reference = bake(s, registry, {true}, times);
+    const fs::path output = fresh_folder("slabs") / "bake.h5";
+    const BakePlan plan = plan_bake(s, registry);
+    REQUIRE(per_vertex_transfer(plan));
+    const CheckpointStore store(output, bake_key(s, plan), "test");
+    RunOptions options{true};
+    options.checkpoint = &store;
+    options.slab_vertices = 100;  // several slabs, the last one short
+    REQUIRE(reference.mesh.vertex_count() > 300);
+    const BakeData slabbed = bake(s, registry, options, times);
+    CHECK(slabbed.transfer.coefficients == reference.transfer.coefficients);
+    CHECK(slabbed.transfer.kind == reference.transfer.kind);
+    CHECK(slabbed.transfer.exit_rows == reference.transfer.exit_rows);
+    CHECK(slabbed.compressed.cluster_of_vertex == reference.compressed.cluster_of_vertex);
+    CHECK(slabbed.metrics == reference.metrics);
+    // Lose two slabs (as a kill would have left them never written): the
+    // rerun computes them again and gets the same result.
+    fs::remove(store.folder() / "transfer.slab-000001");
+    fs::remove(store.folder() / "rays.slab-000002");
+    const BakeData resumed = bake(s, registry, options, times);
+    CHECK(resumed.transfer.coefficients == reference.transfer.coefficients);
+    CHECK(resumed.metrics == reference.metrics);
+  }
+}
+
+TEST_CASE("a fitted basis is kept whole in the checkpoint and loaded on resume", "[checkpoint]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  std::string text = R"(
+[mesh]
+generate = "open-box"
+detail = 1
+[transport]
+directions = "cubemap"
+rays = 384
+[basis]
+plugin = "eigen"
+d = 8
+[compressor]
+plugin = "pca"
+components = 4
+[lighting]
+constant = [1, 1, 1]
+)";
+  const SceneSpec s = SceneSpec::parse(text, "eigen.toml", registry);
+  StageTimes times;
+  const BakeData reference = bake(s, registry, {true}, times);
+  const fs::path output = fresh_folder("fitted") / "bake.h5";
+  const BakePlan plan = plan_bake(s, registry);
+  REQUIRE_FALSE(per_vertex_transfer(plan));
+  const CheckpointStore store(output, bake_key(s, plan), "test");
+  RunOptions options{true};
+  options.checkpoint = &store;
+  const BakeData first = bake(s, registry, options, times);
+  REQUIRE(store.has("transfer"));
+  const BakeData resumed = bake(s, registry, options, times);  // loads, traces nothing
+  for (const BakeData* data : {&first, &resumed}) {
+    CHECK(data->transfer.coefficients == reference.transfer.coefficients);
+    CHECK(data->basis_state.matrices == reference.basis_state.matrices);
+    CHECK(data->metrics == reference.metrics);
+  }
+}
