@@ -18,20 +18,18 @@ namespace prt::clustering {
 
 namespace {
 
-std::vector<ClusterModel> fit_all(const MatrixXfRow& x, const std::vector<std::int32_t>& labels,
-                                  int clusters, const std::vector<int>& components) {
-  const auto members = members_of(labels, clusters);
-  std::vector<ClusterModel> models(clusters);
-  tbb::parallel_for(0, clusters,
-                    [&](int k) { models[k] = fit_cluster(x, members[k], components[k]); });
-  return models;
+std::vector<ClusterModel> fit_all(const Rows& rows, const std::vector<std::int32_t>& labels,
+                                  int clusters, const std::vector<int>& components,
+                                  std::vector<double>* counts = nullptr) {
+  return fit_models(rows, labels, clusters, components, counts);
 }
 
 // Assigns every row to the cluster of least approximation error:
 // |x - m_j|^2 - sum_i ((x - m_j) . u_ji)^2, from two float GEMMs per row block.
 // Returns the total error and fills each row's error.
-double classify(const MatrixXfRow& x, const std::vector<ClusterModel>& models,
+double classify(const Rows& rows, const std::vector<ClusterModel>& models,
                 std::vector<std::int32_t>& labels, std::vector<double>& errors) {
+  const MatrixXfRow& x = rows.x;
   const int k = static_cast<int>(models.size());
   const Eigen::Index n = x.cols();
   std::vector<Eigen::Index> offset(k + 1, 0);
@@ -50,12 +48,12 @@ double classify(const MatrixXfRow& x, const std::vector<ClusterModel>& models,
   }
   for_each_row_block(Eigen::Index(0), x.rows(), Eigen::Index(512),
                      [&](Eigen::Index begin, Eigen::Index end) {
-                       const Eigen::Index rows = end - begin;
-                       const auto block = x.middleRows(begin, rows);
+                       const Eigen::Index height = end - begin;
+                       const auto block = x.middleRows(begin, height);
                        const Eigen::MatrixXf dots = block * means_t;
                        Eigen::MatrixXf projections = block * basis_t;
                        projections.rowwise() -= mean_projections;
-                       for (Eigen::Index i = 0; i < rows; ++i) {
+                       for (Eigen::Index i = 0; i < height; ++i) {
                          const float row_norm = block.row(i).squaredNorm();
                          float best = std::numeric_limits<float>::infinity();
                          int best_label = 0;
@@ -69,33 +67,37 @@ double classify(const MatrixXfRow& x, const std::vector<ClusterModel>& models,
                          labels[begin + i] = best_label;
                        }
                      });
-  // Errors in double on every core; their sum in vertex order (the same
-  // figure whatever the number of cores).
+  // Errors in double on every core; their sum through segments (the same
+  // figure whatever the number of cores or ranks).
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 1024), [&](const auto& r) {
     for (Eigen::Index p = r.begin(); p < r.end(); ++p)
       errors[p] = approximation_error(x, p, models[labels[p]]);
   });
-  double total = 0;
-  for (Eigen::Index p = 0; p < x.rows(); ++p) total += errors[p];
-  return total;
+  return rows.sum(errors);
 }
 
 // Gives each empty cluster the worst-approximated point of the most populous
-// cluster. Returns true when something moved.
-bool refill_empty(std::vector<std::int32_t>& labels, std::vector<double>& errors, int clusters) {
-  std::vector<Eigen::Index> count(clusters, 0);
-  for (auto l : labels) ++count[l];
+// cluster (ties: the lowest index, over every rank). Returns true when
+// something moved.
+bool refill_empty(const Rows& rows, std::vector<std::int32_t>& labels, std::vector<double>& errors,
+                  int clusters) {
+  std::vector<double> count = cluster_sums(rows, labels, clusters).counts;
   bool moved = false;
   for (int j = 0; j < clusters; ++j) {
     if (count[j] > 0) continue;
     const int largest =
         static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
     if (count[largest] < 2) break;
-    std::size_t worst = labels.size();
+    double worst_error = -1;
+    std::int64_t worst = -1;
     for (std::size_t p = 0; p < labels.size(); ++p)
-      if (labels[p] == largest && (worst == labels.size() || errors[p] > errors[worst])) worst = p;
-    labels[worst] = j;
-    errors[worst] = 0;
+      if (labels[p] == largest && errors[p] > worst_error)
+        worst_error = errors[p], worst = rows.shard.first + std::int64_t(p);
+    worst = allreduce_argmax(rows.comm, worst_error, worst).second;
+    if (worst >= rows.shard.first && worst < rows.shard.last) {
+      labels[std::size_t(worst - rows.shard.first)] = j;
+      errors[std::size_t(worst - rows.shard.first)] = 0;
+    }
     --count[largest];
     count[j] = 1;
     moved = true;
@@ -103,11 +105,11 @@ bool refill_empty(std::vector<std::int32_t>& labels, std::vector<double>& errors
   return moved;
 }
 
-IterationLog gemm_log(const MatrixXfRow& x, const std::vector<ClusterModel>& models, double seconds,
+IterationLog gemm_log(const Rows& rows, const std::vector<ClusterModel>& models, double seconds,
                       double energy, const std::string& stage) {
   Eigen::Index cols = 0;
   for (const auto& m : models) cols += 1 + m.basis.rows();
-  return {seconds, energy, x.rows(), x.cols(), cols, stage};
+  return {seconds, energy, rows.local(), rows.cols(), cols, stage};
 }
 
 // Adaptive allocation: candidate vector i of cluster k reduces the squared
@@ -117,7 +119,7 @@ IterationLog gemm_log(const MatrixXfRow& x, const std::vector<ClusterModel>& mod
 // ranks by D_i^2 / m_k and counts weights only; the representative's n floats
 // make the comparison exact.)
 std::vector<int> allocate(const std::vector<ClusterModel>& models,
-                          const std::vector<std::vector<std::uint32_t>>& members, double budget,
+                          const std::vector<double>& members, double budget,
                           Eigen::Index dimension) {
   struct Candidate {
     double rate;
@@ -125,8 +127,8 @@ std::vector<int> allocate(const std::vector<ClusterModel>& models,
   };
   std::vector<Candidate> candidates;
   for (std::size_t k = 0; k < models.size(); ++k) {
-    const double cost = double(members[k].size() + dimension);
-    if (members[k].empty()) continue;
+    const double cost = members[k] + double(dimension);
+    if (members[k] == 0) continue;
     for (Eigen::Index i = 0; i < models[k].eigenvalues.size(); ++i)
       if (models[k].eigenvalues[i] > 0)
         candidates.push_back({models[k].eigenvalues[i] / cost, int(k), int(i)});
@@ -139,7 +141,7 @@ std::vector<int> allocate(const std::vector<ClusterModel>& models,
   std::vector<int> count(models.size(), 0);
   double spent = 0;
   for (const auto& c : candidates) {
-    const double cost = double(members[c.cluster].size() + dimension);
+    const double cost = members[c.cluster] + double(dimension);
     if (c.index != count[c.cluster] || spent + cost > budget) continue;  // in order, within budget
     ++count[c.cluster];
     spent += cost;
@@ -156,15 +158,15 @@ void truncate(std::vector<ClusterModel>& models, const std::vector<int>& count) 
 
 }  // namespace
 
-CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
+CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
   if (options.components < 0) throw Error("CPCA: negative component count");
   CpcaResult result;
-  Clusters vq = lbg(x, options.lbg);
+  Clusters vq = lbg(rows, options.lbg);
   result.log = vq.log;
   result.labels = std::move(vq.labels);
   const int k = static_cast<int>(vq.means.rows());
-  const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, x.cols()));
-  std::vector<double> errors(x.rows(), 0.0);
+  const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, rows.cols()));
+  std::vector<double> errors(std::size_t(rows.local()), 0.0);
 
   std::optional<Progress> progress;
   if (options.method != Method::static_pca) {
@@ -176,13 +178,13 @@ CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
     for (int c = 1; c <= n_prime; ++c) {
       for (int iteration = 0; iteration < options.iterations_per_component; ++iteration) {
         Stopwatch clock;
-        const auto models = fit_all(x, result.labels, k, std::vector<int>(k, c));
+        const auto models = fit_all(rows, result.labels, k, std::vector<int>(k, c));
         const std::vector<std::int32_t> before = result.labels;
-        const double energy = classify(x, models, result.labels, errors);
-        const bool refilled = refill_empty(result.labels, errors, k);
-        result.log.push_back(gemm_log(x, models, clock.seconds(), energy, "iterative"));
+        const double energy = classify(rows, models, result.labels, errors);
+        const bool refilled = refill_empty(rows, result.labels, errors, k);
+        result.log.push_back(gemm_log(rows, models, clock.seconds(), energy, "iterative"));
         progress->add(1, 1);
-        if (!refilled && before == result.labels) {  // LBG: no point switched
+        if (!refilled && !rows.any(before != result.labels)) {  // LBG: no point switched
           progress->add(options.iterations_per_component - iteration - 1, 0);
           break;
         }
@@ -191,27 +193,28 @@ CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
   }
   std::vector<int> count(k, n_prime);
   if (options.method == Method::adaptive) {
-    const int widest = static_cast<int>(std::min<Eigen::Index>(x.cols(), 2 * n_prime + 8));
+    const int widest = static_cast<int>(std::min<Eigen::Index>(rows.cols(), 2 * n_prime + 8));
     // Storage of fixed n' beyond the means: v n' weights + k n' n representatives.
-    const double budget = double(x.rows()) * n_prime + double(k) * n_prime * x.cols();
+    const double budget = double(rows.total()) * n_prime + double(k) * n_prime * rows.cols();
+    std::vector<double> sizes;
     for (int iteration = 0; iteration < options.adaptive_iterations; ++iteration) {
       Stopwatch clock;
-      auto models = fit_all(x, result.labels, k, std::vector<int>(k, widest));
-      count = allocate(models, members_of(result.labels, k), budget, x.cols());
+      auto models = fit_all(rows, result.labels, k, std::vector<int>(k, widest), &sizes);
+      count = allocate(models, sizes, budget, rows.cols());
       truncate(models, count);
-      const double energy = classify(x, models, result.labels, errors);
-      refill_empty(result.labels, errors, k);
-      result.log.push_back(gemm_log(x, models, clock.seconds(), energy, "adaptive"));
+      const double energy = classify(rows, models, result.labels, errors);
+      refill_empty(rows, result.labels, errors, k);
+      result.log.push_back(gemm_log(rows, models, clock.seconds(), energy, "adaptive"));
       progress->add(1, 1);
     }
     // Final representatives for the final classification, same allocation.
-    auto models = fit_all(x, result.labels, k, std::vector<int>(k, widest));
-    count = allocate(models, members_of(result.labels, k), budget, x.cols());
+    auto models = fit_all(rows, result.labels, k, std::vector<int>(k, widest), &sizes);
+    count = allocate(models, sizes, budget, rows.cols());
     truncate(models, count);
     result.models = std::move(models);
     return result;
   }
-  result.models = fit_all(x, result.labels, k, count);
+  result.models = fit_all(rows, result.labels, k, count);
   return result;
 }
 

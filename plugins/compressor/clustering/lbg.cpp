@@ -1,5 +1,6 @@
 // LBG / k-means with hyper-box or k-means++ initialisation, null-cluster
-// avoidance and Chen's geometry-coherent classification.
+// avoidance and Chen's geometry-coherent classification. Works on the rows a
+// process holds (Rows): classification is local, sums go through segments.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -12,6 +13,7 @@
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_blocks.hpp"
+#include "prt/segment_sum.hpp"
 
 namespace prt::clustering {
 
@@ -83,98 +85,132 @@ void nearest_coherent(const MatrixXfRow& x, const RowMatrixXd& means, const Mesh
       });
 }
 
-RowMatrixXd hyperbox_init(const MatrixXfRow& x, int k, std::mt19937_64& rng) {
-  const Eigen::RowVectorXf lo = x.colwise().minCoeff(), hi = x.colwise().maxCoeff();
+RowMatrixXd hyperbox_init(const Rows& rows, int k, std::mt19937_64& rng) {
+  const Eigen::Index n = rows.cols();
+  Eigen::RowVectorXd lo = Eigen::RowVectorXd::Constant(n, std::numeric_limits<double>::infinity());
+  Eigen::RowVectorXd hi = -lo;
+  if (rows.local() > 0) {
+    lo = rows.x.colwise().minCoeff().cast<double>();
+    hi = rows.x.colwise().maxCoeff().cast<double>();
+  }
+  allreduce_min_max(rows.comm, lo, hi);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  RowMatrixXd means(k, x.cols());
+  RowMatrixXd means(k, n);
   for (int j = 0; j < k; ++j)
-    for (Eigen::Index d = 0; d < x.cols(); ++d)
-      means(j, d) = lo[d] + uniform(rng) * (double(hi[d]) - lo[d]);
+    for (Eigen::Index d = 0; d < n; ++d)
+      means(j, d) = float(lo[d]) + uniform(rng) * (hi[d] - float(lo[d]));
   return means;
 }
 
-RowMatrixXd kmeans_plus_plus_init(const MatrixXfRow& x, int k, std::mt19937_64& rng) {
-  RowMatrixXd means(k, x.cols());
-  std::vector<double> d2(x.rows(), std::numeric_limits<double>::infinity());
+// k-means++: each next mean is drawn with probability proportional to the
+// squared distance to the nearest chosen one. The draw walks the segments'
+// sums, then the rows of the segment it falls in.
+RowMatrixXd kmeans_plus_plus_init(const Rows& rows, int k, std::mt19937_64& rng) {
+  const Eigen::Index n = rows.cols(), total = rows.total();
+  const Eigen::Index segments = (total + kSegmentRows - 1) / kSegmentRows;
+  const Eigen::Index first_segment = rows.shard.first / kSegmentRows;
+  const MatrixXfRow& x = rows.x;
+  RowMatrixXd means(k, n);
+  std::vector<double> d2(std::size_t(x.rows()), std::numeric_limits<double>::infinity());
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  Eigen::Index chosen = std::uniform_int_distribution<Eigen::Index>(0, x.rows() - 1)(rng);
+  Eigen::Index chosen = std::uniform_int_distribution<Eigen::Index>(0, total - 1)(rng);
   for (int j = 0; j < k; ++j) {
-    means.row(j) = x.row(chosen).cast<double>();
-    const Eigen::RowVectorXf c = x.row(chosen);
+    means.row(j) = rows.fetch(chosen);
+    const Eigen::RowVectorXf c = means.row(j).cast<float>();
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 4096), [&](const auto& r) {
       for (Eigen::Index p = r.begin(); p < r.end(); ++p)
         d2[p] = std::min(d2[p], double((x.row(p) - c).squaredNorm()));
     });
     if (j + 1 == k) break;
-    double total = 0;
-    for (double d : d2) total += d;
-    if (total <= 0) {  // all remaining points coincide with a mean
-      chosen = std::uniform_int_distribution<Eigen::Index>(0, x.rows() - 1)(rng);
+    // Every segment's sum, in segment order, on every rank.
+    std::vector<double> mine;
+    for (Eigen::Index s = first_segment; s * kSegmentRows < rows.shard.last; ++s) {
+      const auto [begin, end] = rows.segment_rows(s);
+      double t = 0;
+      for (Eigen::Index p = begin; p < end; ++p) t += d2[std::size_t(p)];
+      mine.push_back(t);
+    }
+    std::vector<double> sums;
+    for (const auto& part : allgather(rows.comm, mine))
+      sums.insert(sums.end(), part.begin(), part.end());
+    if (Eigen::Index(sums.size()) != segments)
+      throw Error("k-means++: ranks hold a wrong number of segments");
+    double all = 0;
+    for (double s : sums) all += s;
+    if (all <= 0) {  // all remaining points coincide with a mean
+      chosen = std::uniform_int_distribution<Eigen::Index>(0, total - 1)(rng);
       continue;
     }
-    double target = uniform(rng) * total;
-    chosen = x.rows() - 1;
-    for (Eigen::Index p = 0; p < x.rows(); ++p)
-      if ((target -= d2[p]) <= 0) {
-        chosen = p;
+    double target = uniform(rng) * all;
+    Eigen::Index segment = segments - 1;
+    for (Eigen::Index s = 0; s < segments; ++s) {
+      if (target - sums[std::size_t(s)] <= 0) {
+        segment = s;
         break;
       }
+      target -= sums[std::size_t(s)];
+    }
+    // The segment's holder walks its rows; the others learn the index.
+    const Eigen::Index begin = segment_begin(segment), end = segment_end(segment, total);
+    std::int64_t found = -1;
+    if (begin >= rows.shard.first && begin < rows.shard.last) {
+      found = end - 1;
+      for (Eigen::Index p = begin; p < end; ++p)
+        if ((target -= d2[std::size_t(p - rows.shard.first)]) <= 0) {
+          found = p;
+          break;
+        }
+    }
+    chosen = static_cast<Eigen::Index>(allreduce_argmax(rows.comm, 0.0, found).second);
   }
   return means;
+}
+
+// The member of cluster `cluster` farthest from `point` (ties: the lowest
+// index), over every rank; returns its global index.
+Eigen::Index farthest_member(const Rows& rows, const std::vector<std::int32_t>& label, int cluster,
+                             const Eigen::RowVectorXd& point) {
+  double best_distance = -1;
+  std::int64_t best = -1;
+  for (Eigen::Index p = 0; p < rows.local(); ++p) {
+    if (label[std::size_t(p)] != cluster) continue;
+    const double d = (rows.x.row(p).cast<double>() - point).squaredNorm();
+    if (d > best_distance) best_distance = d, best = rows.shard.first + p;
+  }
+  return static_cast<Eigen::Index>(allreduce_argmax(rows.comm, best_distance, best).second);
 }
 
 // Recomputes means; refills each empty cluster by splitting the most
 // populous one in two (Chen's null-cluster avoidance): its point farthest from
 // the mean and the point farthest from that one seed the halves. Returns the
 // number of clusters refilled.
-int update_means(const MatrixXfRow& x, std::vector<std::int32_t>& label, std::vector<double>& dist,
+int update_means(const Rows& rows, std::vector<std::int32_t>& label, std::vector<double>& dist,
                  RowMatrixXd& means) {
   const int k = static_cast<int>(means.rows());
-  std::vector<Eigen::Index> count(k, 0);
-  RowMatrixXd sums = RowMatrixXd::Zero(k, x.cols());
-  // Per cluster on every core, each summing its members in vertex order.
-  const auto members = members_of(label, k);
-  tbb::parallel_for(0, k, [&](int j) {
-    for (std::uint32_t p : members[j]) sums.row(j) += x.row(p).cast<double>();
-    count[j] = static_cast<Eigen::Index>(members[j].size());
-  });
+  ClusterSums sums = cluster_sums(rows, label, k);
   int refilled = 0;
   for (int j = 0; j < k; ++j) {
-    if (count[j] > 0) continue;
-    const int largest =
-        static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
-    if (count[largest] < 2) break;  // fewer points than clusters
-    std::vector<Eigen::Index> members;
-    for (Eigen::Index p = 0; p < x.rows(); ++p)
-      if (label[p] == largest) members.push_back(p);
-    const Eigen::RowVectorXd centre = sums.row(largest) / double(count[largest]);
-    auto farthest_from = [&](const Eigen::RowVectorXd& point) {
-      Eigen::Index best = members[0];
-      double best_distance = -1;
-      for (Eigen::Index p : members) {
-        const double d = (x.row(p).cast<double>() - point).squaredNorm();
-        if (d > best_distance) best_distance = d, best = p;
-      }
-      return best;
-    };
-    const Eigen::RowVectorXd a = x.row(farthest_from(centre)).cast<double>();
-    const Eigen::RowVectorXd b = x.row(farthest_from(a)).cast<double>();
-    sums.row(largest).setZero(), sums.row(j).setZero();
-    count[largest] = count[j] = 0;
-    for (Eigen::Index p : members) {
-      const Eigen::RowVectorXd v = x.row(p).cast<double>();
+    if (sums.counts[std::size_t(j)] > 0) continue;
+    const int largest = static_cast<int>(std::max_element(sums.counts.begin(), sums.counts.end()) -
+                                         sums.counts.begin());
+    if (sums.counts[std::size_t(largest)] < 2) break;  // fewer points than clusters
+    const Eigen::RowVectorXd centre = sums.sums.row(largest) / sums.counts[std::size_t(largest)];
+    const Eigen::RowVectorXd a = rows.fetch(farthest_member(rows, label, largest, centre));
+    const Eigen::RowVectorXd b = rows.fetch(farthest_member(rows, label, largest, a));
+    for (Eigen::Index p = 0; p < rows.local(); ++p) {
+      if (label[std::size_t(p)] != largest) continue;
+      const Eigen::RowVectorXd v = rows.x.row(p).cast<double>();
       const double da = (v - a).squaredNorm(), db = (v - b).squaredNorm();
-      const int target = db < da ? j : largest;
-      label[p] = target;
-      dist[p] = std::min(da, db);
-      sums.row(target) += v;
-      ++count[target];
+      label[std::size_t(p)] = db < da ? j : largest;
+      dist[std::size_t(p)] = std::min(da, db);
     }
-    if (count[j] == 0) break;  // all points identical: nothing to split
+    sums = cluster_sums(rows, label, k);
+    if (sums.counts[std::size_t(j)] == 0) break;  // all points identical: nothing to split
     ++refilled;
   }
   for (int j = 0; j < k; ++j)
-    if (count[j] > 0) means.row(j) = sums.row(j) / double(count[j]);
+    if (sums.counts[std::size_t(j)] > 0)
+      means.row(j) = sums.sums.row(j) / sums.counts[std::size_t(j)];
   return refilled;
 }
 
@@ -184,45 +220,47 @@ std::vector<std::vector<std::uint32_t>> members_of(const std::vector<std::int32_
                                                    int clusters) {
   std::vector<std::vector<std::uint32_t>> members(clusters);
   for (std::size_t p = 0; p < labels.size(); ++p)
-    members[labels[p]].push_back(static_cast<std::uint32_t>(p));
+    if (labels[p] >= 0) members[labels[p]].push_back(static_cast<std::uint32_t>(p));
   return members;
 }
 
-Clusters lbg(const MatrixXfRow& x, const LbgOptions& options) {
+Clusters lbg(const Rows& rows, const LbgOptions& options) {
   if (options.clusters < 1) throw Error("LBG: need at least one cluster");
-  if (x.rows() == 0) throw Error("LBG: no data");
+  if (rows.total() == 0) throw Error("LBG: no data");
   if (options.alpha > 0 && !options.mesh)
     throw Error("LBG: geometry-coherent clustering (alpha > 0) needs the mesh");
-  const int k = static_cast<int>(std::min<Eigen::Index>(options.clusters, x.rows()));
+  if (options.alpha > 0 && rows.distributed())
+    throw Error("LBG: geometry-coherent clustering (alpha > 0) needs every vertex in one process");
+  const int k = static_cast<int>(std::min<Eigen::Index>(options.clusters, rows.total()));
   std::mt19937_64 rng(options.seed);
   Clusters result;
   Stopwatch init_clock;
-  result.means = options.init == Init::kmeans_plus_plus ? kmeans_plus_plus_init(x, k, rng)
-                                                        : hyperbox_init(x, k, rng);
-  result.log.push_back({init_clock.seconds(), 0, x.rows(), x.cols(), k, "init"});
-  result.labels.assign(x.rows(), 0);
-  std::vector<double> distance(x.rows(), 0.0);
+  result.means = options.init == Init::kmeans_plus_plus ? kmeans_plus_plus_init(rows, k, rng)
+                                                        : hyperbox_init(rows, k, rng);
+  result.log.push_back({init_clock.seconds(), 0, rows.total(), rows.cols(), k, "init"});
+  result.labels.assign(std::size_t(rows.local()), 0);
+  std::vector<double> distance(std::size_t(rows.local()), 0.0);
   double previous = std::numeric_limits<double>::infinity();
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
     Stopwatch clock;
     if (options.alpha > 0 && iteration > 0)
-      nearest_coherent(x, result.means, *options.mesh, options.alpha, result.labels, distance);
+      nearest_coherent(rows.x, result.means, *options.mesh, options.alpha, result.labels, distance);
     else
-      nearest_means(x, result.means, result.labels, distance);
-    const int refilled = update_means(x, result.labels, distance, result.means);
-    double energy = 0;
-    for (double d : distance) energy += d;
+      nearest_means(rows.x, result.means, result.labels, distance);
+    const int refilled = update_means(rows, result.labels, distance, result.means);
+    const double energy = rows.sum(distance);
     result.energy = energy;
     result.iterations = iteration + 1;
-    result.log.push_back({clock.seconds(), energy, x.rows(), x.cols(), k, "lbg"});
+    result.log.push_back({clock.seconds(), energy, rows.total(), rows.cols(), k, "lbg"});
     if (refilled == 0 && (energy == 0 || (previous - energy) / previous < options.tolerance)) break;
     previous = energy;
   }
   // Energy of the final means (the loop's figure is of the previous ones).
-  double energy = 0;
-  for (Eigen::Index p = 0; p < x.rows(); ++p)
-    energy += (x.row(p).cast<double>() - result.means.row(result.labels[p])).squaredNorm();
-  result.energy = energy;
+  for (Eigen::Index p = 0; p < rows.local(); ++p)
+    distance[std::size_t(p)] =
+        (rows.x.row(p).cast<double>() - result.means.row(result.labels[std::size_t(p)]))
+            .squaredNorm();
+  result.energy = rows.sum(distance);
   return result;
 }
 

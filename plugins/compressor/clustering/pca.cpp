@@ -1,52 +1,10 @@
-// Per-cluster PCA and assembly of the compressed form.
+// Per-cluster projection and assembly of the compressed form.
 #include <tbb/parallel_for.h>
-
-#include <Eigen/Eigenvalues>
 
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
 
 namespace prt::clustering {
-
-ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
-                         int components) {
-  const Eigen::Index n = x.cols(), m = static_cast<Eigen::Index>(members.size());
-  const int c = std::max(0, components);
-  ClusterModel model{Eigen::RowVectorXd::Zero(n), RowMatrixXd::Zero(c, n),
-                     Eigen::VectorXd::Zero(c)};
-  if (m == 0) return model;
-  RowMatrixXd centred(m, n);
-  for (Eigen::Index j = 0; j < m; ++j) centred.row(j) = x.row(members[j]).cast<double>();
-  model.mean = centred.colwise().mean();
-  centred.rowwise() -= model.mean;
-  if (c == 0) return model;
-
-  // The smaller of the two Gram matrices has the same non-zero spectrum.
-  const bool small_side = m < n;
-  const Eigen::MatrixXd gram = small_side ? Eigen::MatrixXd(centred * centred.transpose())
-                                          : Eigen::MatrixXd(centred.transpose() * centred);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram);
-  const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
-  const double largest = std::max(values.size() ? values[values.size() - 1] : 0.0, 0.0);
-  const double cutoff = std::max(largest * 1e-12, 1e-300);
-  for (int i = 0; i < c && i < values.size(); ++i) {
-    const Eigen::Index column = values.size() - 1 - i;
-    const double lambda = values[column];
-    if (!(lambda > cutoff)) break;  // rank reached: the rest stay zero
-    Eigen::RowVectorXd direction;
-    if (small_side) {
-      direction = (centred.transpose() * solver.eigenvectors().col(column)).transpose();
-      direction /= std::sqrt(lambda);
-    } else {
-      direction = solver.eigenvectors().col(column).transpose();
-    }
-    const double norm = direction.norm();
-    if (!(norm > 0) || !std::isfinite(norm)) break;
-    model.basis.row(i) = direction / norm;
-    model.eigenvalues[i] = lambda;
-  }
-  return model;
-}
 
 double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model) {
   const Eigen::RowVectorXd d = x.row(p).cast<double>() - model.mean;

@@ -12,12 +12,46 @@
 #include <string>
 #include <vector>
 
+#include "prt/communicator.hpp"
 #include "prt/mesh.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt::clustering {
 
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The rows of the signal this process holds and where they sit in the whole:
+// all of them in a single process, a shard of whole segments in a distributed
+// run. Every sum over rows goes through segment_sum, so a result depends on
+// neither the thread count nor the rank count. Labels, errors and weights
+// are per local row; means and models are the same on every rank.
+struct Rows {
+  explicit Rows(const MatrixXfRow& x);
+  Rows(const MatrixXfRow& local, const Shard& shard, const Communicator& comm);
+  const MatrixXfRow& x;
+  Shard shard;
+  const Communicator& comm;
+
+  bool distributed() const { return comm.size() > 1; }
+  Eigen::Index local() const { return x.rows(); }
+  Eigen::Index total() const { return shard.total; }
+  Eigen::Index cols() const { return x.cols(); }
+  // Local rows [begin, end) of segment s of the whole signal.
+  std::pair<Eigen::Index, Eigen::Index> segment_rows(Eigen::Index segment) const;
+  // Sum of one value per local row over the whole signal.
+  double sum(const std::vector<double>& per_row) const;
+  // Row `global` of the whole signal, on every rank.
+  Eigen::RowVectorXd fetch(Eigen::Index global) const;
+  // True on every rank when it is true on any.
+  bool any(bool mine) const;
+};
+
+// Per cluster: the sum of its rows and their count (label -1: in none).
+struct ClusterSums {
+  RowMatrixXd sums;            // k x n
+  std::vector<double> counts;  // k
+};
+ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labels, int clusters);
 
 // One iteration of an iterative algorithm, for benchmarks: its wall time and
 // the shape (rows x inner x cols) of its dominant matrix product.
@@ -53,7 +87,10 @@ struct Clusters {
 // LBG / k-means. Empty clusters are refilled by splitting the most populous
 // one (its point farthest from its mean seeds the empty cluster), so every
 // cluster ends non-empty when there are at least k distinct points.
-Clusters lbg(const MatrixXfRow& x, const LbgOptions& options);
+Clusters lbg(const Rows& rows, const LbgOptions& options);
+inline Clusters lbg(const MatrixXfRow& x, const LbgOptions& options) {
+  return lbg(Rows(x), options);
+}
 
 // Mean and orthonormal principal directions of one cluster.
 struct ClusterModel {
@@ -62,9 +99,15 @@ struct ClusterModel {
   Eigen::VectorXd eigenvalues;  // D_i^2 of each basis row, descending
 };
 
-// PCA of the rows `members` of x, through the eigen-solve of C^T C or C C^T,
-// whichever is smaller. Clusters with fewer points than components, single
-// points and identical points give zero rows, never NaN.
+// Mean and PCA of every cluster: the eigen-solve of each cluster's n x n
+// scatter about its mean (both summed over segments). Clusters with fewer
+// points than components, single points and identical points give zero rows,
+// never NaN. `counts` gets each cluster's size.
+std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::int32_t>& labels,
+                                     int clusters, const std::vector<int>& components,
+                                     std::vector<double>* counts = nullptr);
+
+// PCA of the rows `members` of x (one cluster of fit_models).
 ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
                          int components);
 
@@ -72,9 +115,13 @@ ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>&
 std::vector<std::vector<std::uint32_t>> members_of(const std::vector<std::int32_t>& labels,
                                                    int clusters);
 
-// Builds the compressed form: per-vertex weights (x - mean) . basis^T.
+// Builds the compressed form: per-vertex weights (x - mean) . basis^T (of
+// the local rows: a distributed run gathers them with gather_rows).
 CompressedTransfer assemble(const MatrixXfRow& x, const std::vector<std::int32_t>& labels,
                             const std::vector<ClusterModel>& models, const std::string& name);
+// The ranks' compressed rows (weights, cluster ids, sparse indices) joined in
+// rank order on rank 0; other ranks keep theirs. Models are already shared.
+void gather_rows(const Rows& rows, CompressedTransfer& compressed);
 
 enum class Method { static_pca, iterative, adaptive };
 
@@ -92,7 +139,10 @@ struct CpcaResult {
   std::vector<IterationLog> log;
 };
 
-CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options);
+CpcaResult cpca(const Rows& rows, const CpcaOptions& options);
+inline CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
+  return cpca(Rows(x), options);
+}
 
 // Squared approximation error of row p under a cluster model.
 double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model);

@@ -1,0 +1,238 @@
+// Sums over the rows of a (possibly distributed) signal: per-cluster sums,
+// counts and scatter matrices, through segment_sum's fixed tree.
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <cstring>
+
+#include "prt/clustering.hpp"
+#include "prt/error.hpp"
+#include "prt/segment_sum.hpp"
+
+namespace prt::clustering {
+
+Rows::Rows(const MatrixXfRow& x) : x(x), shard(whole(x.rows())), comm(solo()) {}
+
+Rows::Rows(const MatrixXfRow& local, const Shard& shard, const Communicator& comm)
+    : x(local), shard(shard), comm(comm) {
+  if (local.rows() != shard.rows())
+    throw Error("clustering: " + std::to_string(local.rows()) + " local rows for a shard of " +
+                std::to_string(shard.rows()));
+}
+
+std::pair<Eigen::Index, Eigen::Index> Rows::segment_rows(Eigen::Index segment) const {
+  return {segment_begin(segment) - shard.first, segment_end(segment, shard.total) - shard.first};
+}
+
+double Rows::sum(const std::vector<double>& per_row) const {
+  const auto total = segment_sum(
+      shard,
+      [&](Eigen::Index s) {
+        const auto [begin, end] = segment_rows(s);
+        double t = 0;
+        for (Eigen::Index p = begin; p < end; ++p) t += per_row[std::size_t(p)];
+        return std::vector<double>{t};
+      },
+      comm);
+  return total.empty() ? 0.0 : total[0];
+}
+
+Eigen::RowVectorXd Rows::fetch(Eigen::Index global) const {
+  if (!distributed()) return x.row(global).cast<double>();
+  int owner = 0;
+  while (owner + 1 < comm.size() && shard_of(shard.total, owner, comm.size()).last <= global)
+    ++owner;
+  std::vector<double> values;
+  if (owner == comm.rank()) {
+    const Eigen::RowVectorXd row = x.row(global - shard.first).cast<double>();
+    values.assign(row.data(), row.data() + row.size());
+  }
+  std::vector<char> bytes = to_bytes(values);
+  comm.broadcast(bytes, owner);
+  const std::vector<double> row = to_doubles(bytes);
+  return Eigen::Map<const Eigen::RowVectorXd>(row.data(), static_cast<Eigen::Index>(row.size()));
+}
+
+bool Rows::any(bool mine) const {
+  if (!distributed()) return mine;
+  for (const auto& flag : allgather(comm, {mine ? 1.0 : 0.0}))
+    if (flag[0] != 0) return true;
+  return false;
+}
+
+ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labels, int k) {
+  const Eigen::Index n = rows.cols();
+  const auto total = segment_sum(
+      rows.shard,
+      [&](Eigen::Index s) {
+        const auto [begin, end] = rows.segment_rows(s);
+        std::vector<double> out(std::size_t(k) * (n + 1), 0.0);
+        for (Eigen::Index p = begin; p < end; ++p) {
+          const std::int32_t l = labels[std::size_t(p)];
+          if (l < 0) continue;
+          double* sum = &out[std::size_t(l) * n];
+          const float* row = rows.x.row(p).data();
+          for (Eigen::Index d = 0; d < n; ++d) sum[d] += double(row[d]);
+          out[std::size_t(k) * n + l] += 1;
+        }
+        return out;
+      },
+      rows.comm);
+  ClusterSums result{RowMatrixXd::Zero(k, n), std::vector<double>(k, 0.0)};
+  if (total.empty()) return result;
+  result.sums = Eigen::Map<const RowMatrixXd>(total.data(), k, n);
+  result.counts.assign(total.begin() + std::ptrdiff_t(k) * n, total.end());
+  return result;
+}
+
+namespace {
+
+// Scatter sum_p (x_p - m)(x_p - m)^T of each cluster in `which` (lower
+// triangles): a block per cluster, only for the clusters a segment touches,
+// in passes over groups of clusters whose blocks stay within kGroupBytes
+// (the tree holds a few partials per thread at once).
+constexpr std::size_t kGroupBytes = std::size_t(64) << 20;
+
+std::vector<Eigen::MatrixXd> cluster_scatter(const Rows& rows,
+                                             const std::vector<std::int32_t>& labels,
+                                             const RowMatrixXd& means,
+                                             const std::vector<int>& which) {
+  const Eigen::Index n = rows.cols();
+  const std::size_t group =
+      std::max<std::size_t>(1, kGroupBytes / (sizeof(double) * std::size_t(n) * std::size_t(n)));
+  Blocks total;
+  std::vector<bool> wanted(static_cast<std::size_t>(means.rows()), false);
+  for (std::size_t start = 0; start < which.size(); start += group) {
+    std::fill(wanted.begin(), wanted.end(), false);
+    for (std::size_t i = start; i < std::min(which.size(), start + group); ++i)
+      wanted[std::size_t(which[i])] = true;
+    Blocks part = segment_sum_blocks(
+        rows.shard,
+        [&](Eigen::Index s) {
+          const auto [begin, end] = rows.segment_rows(s);
+          std::map<std::int32_t, std::vector<Eigen::Index>> members;
+          for (Eigen::Index p = begin; p < end; ++p) {
+            const std::int32_t l = labels[std::size_t(p)];
+            if (l >= 0 && wanted[std::size_t(l)]) members[l].push_back(p);
+          }
+          Blocks out;
+          Eigen::MatrixXd centred;
+          for (const auto& [cluster, list] : members) {
+            centred.resize(n, static_cast<Eigen::Index>(list.size()));
+            for (std::size_t j = 0; j < list.size(); ++j)
+              centred.col(Eigen::Index(j)) =
+                  (rows.x.row(list[j]).cast<double>() - means.row(cluster)).transpose();
+            std::vector<double>& block = out[cluster];
+            block.assign(std::size_t(n * n), 0.0);
+            Eigen::Map<Eigen::MatrixXd> sum(block.data(), n, n);
+            sum.selfadjointView<Eigen::Lower>().rankUpdate(centred);
+          }
+          return out;
+        },
+        rows.comm);
+    total.merge(part);
+  }
+  std::vector<Eigen::MatrixXd> scatter(which.size());
+  for (std::size_t i = 0; i < which.size(); ++i) {
+    Eigen::MatrixXd& m = scatter[i];
+    const auto it = total.find(which[i]);
+    m = it == total.end()
+            ? Eigen::MatrixXd::Zero(n, n)
+            : Eigen::MatrixXd(Eigen::Map<const Eigen::MatrixXd>(it->second.data(), n, n));
+    m.triangularView<Eigen::StrictlyUpper>() = m.transpose();
+  }
+  return scatter;
+}
+
+// The principal directions of one cluster from its scatter.
+void principal_directions(const Eigen::MatrixXd& scatter, ClusterModel& model) {
+  const Eigen::Index c = model.basis.rows();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(scatter);
+  const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
+  const double largest = std::max(values.size() ? values[values.size() - 1] : 0.0, 0.0);
+  const double cutoff = std::max(largest * 1e-12, 1e-300);
+  for (Eigen::Index i = 0; i < c && i < values.size(); ++i) {
+    const Eigen::Index column = values.size() - 1 - i;
+    const double lambda = values[column];
+    if (!(lambda > cutoff)) break;  // rank reached: the rest stay zero
+    const Eigen::RowVectorXd direction = solver.eigenvectors().col(column).transpose();
+    const double norm = direction.norm();
+    if (!(norm > 0) || !std::isfinite(norm)) break;
+    model.basis.row(i) = direction / norm;
+    model.eigenvalues[i] = lambda;
+  }
+}
+
+}  // namespace
+
+std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::int32_t>& labels,
+                                     int k, const std::vector<int>& components,
+                                     std::vector<double>* counts) {
+  const Eigen::Index n = rows.cols();
+  const ClusterSums sums = cluster_sums(rows, labels, k);
+  std::vector<ClusterModel> models(static_cast<std::size_t>(k));
+  RowMatrixXd means = RowMatrixXd::Zero(k, n);
+  std::vector<int> which;
+  for (int j = 0; j < k; ++j) {
+    const int c = std::max(0, components[std::size_t(j)]);
+    models[std::size_t(j)] = {Eigen::RowVectorXd::Zero(n), RowMatrixXd::Zero(c, n),
+                              Eigen::VectorXd::Zero(c)};
+    if (sums.counts[std::size_t(j)] == 0) continue;
+    means.row(j) = sums.sums.row(j) / sums.counts[std::size_t(j)];
+    models[std::size_t(j)].mean = means.row(j);
+    if (c > 0) which.push_back(j);
+  }
+  const std::vector<Eigen::MatrixXd> scatter = cluster_scatter(rows, labels, means, which);
+  tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) {
+    principal_directions(scatter[i], models[std::size_t(which[i])]);
+  });
+  if (counts) *counts = sums.counts;
+  return models;
+}
+
+ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
+                         int components) {
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(x.rows()), -1);
+  for (std::uint32_t p : members) labels[p] = 0;
+  return fit_models(Rows(x), labels, 1, {components}).front();
+}
+
+void gather_rows(const Rows& rows, CompressedTransfer& c) {
+  if (!rows.distributed()) return;
+  // One message: ids, then weights, then sparse indices, as raw bytes.
+  std::vector<char> mine;
+  auto put = [&](const void* data, std::size_t size) {
+    const char* p = static_cast<const char*>(data);
+    mine.insert(mine.end(), p, p + size);
+  };
+  put(c.cluster_of_vertex.data(), c.cluster_of_vertex.size() * sizeof(std::int32_t));
+  put(c.weights.data(), std::size_t(c.weights.size()) * sizeof(float));
+  put(c.weight_index.data(), c.weight_index.size() * sizeof(std::int32_t));
+  const auto all = rows.comm.gather(mine, 0);
+  if (rows.comm.rank() != 0) return;
+  const Eigen::Index total = rows.total(), width = c.weights.cols();
+  const bool sparse = c.sparse();
+  c.cluster_of_vertex.resize(std::size_t(total));
+  c.weights.resize(total, width);
+  if (sparse) c.weight_index.resize(std::size_t(total * width));
+  for (int r = 0; r < rows.comm.size(); ++r) {
+    const Shard shard = shard_of(total, r, rows.comm.size());
+    const std::size_t count = std::size_t(shard.rows());
+    const std::size_t expected = count * sizeof(std::int32_t) +
+                                 count * std::size_t(width) * sizeof(float) +
+                                 (sparse ? count * std::size_t(width) * sizeof(std::int32_t) : 0);
+    if (all[std::size_t(r)].size() != expected)
+      throw Error("clustering: rank " + std::to_string(r) +
+                  " sent compressed rows of the wrong size");
+    const char* at = all[std::size_t(r)].data();
+    std::memcpy(&c.cluster_of_vertex[std::size_t(shard.first)], at, count * sizeof(std::int32_t));
+    at += count * sizeof(std::int32_t);
+    if (width) std::memcpy(c.weights.row(shard.first).data(), at, count * width * sizeof(float));
+    at += count * std::size_t(width) * sizeof(float);
+    if (sparse)
+      std::memcpy(&c.weight_index[std::size_t(shard.first * width)], at,
+                  count * std::size_t(width) * sizeof(std::int32_t));
+  }
+}
+
+}  // namespace prt::clustering
