@@ -17,12 +17,6 @@ namespace prt {
 
 namespace {
 
-std::string slab_name(const char* what, std::size_t slab) {
-  char name[64];
-  std::snprintf(name, sizeof name, "%s.slab-%06zu", what, slab);
-  return name;
-}
-
 // The kind and layout of a plan's transfer (what its rows mean).
 void set_shape(const BakePlan& plan, TransferSignal& signal) {
   signal.kind = plan.glossy ? "glossy" : "diffuse";
@@ -65,50 +59,74 @@ TransferSignal traced_transfer(const BakePlan& plan, const SceneSpec& scene, con
                            direct);
 }
 
+std::string rows_name(const char* what, std::size_t first, std::size_t last) {
+  char name[96];
+  std::snprintf(name, sizeof name, "%s.rows-%012zu-%012zu", what, first, last);
+  return name;
+}
+
+// Slab k of a grid of `slab` vertices, cut to [first, last).
+struct SlabRange {
+  std::size_t first, last;
+};
+std::vector<SlabRange> slabs_of(std::size_t first, std::size_t last, std::size_t slab) {
+  std::vector<SlabRange> out;
+  for (std::size_t k = first / slab; k * slab < last; ++k)
+    out.push_back({std::max(first, k * slab), std::min(last, (k + 1) * slab)});
+  return out;
+}
+
+Eigen::Index transfer_dimension(const BakePlan& plan) {
+  return Eigen::Index(plan.glossy ? plan.glossy_operator.rows() : 1) * plan.basis->size();
+}
+
+// Rows [first, last) of a per-vertex transfer, slab by slab through the
+// checkpoint: kept slabs are loaded, the others computed and kept.
 TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                                 const RunOptions& options, StageTimes& times,
-                                std::uint64_t& rays_cast) {
+                                std::uint64_t& rays_cast, std::size_t first, std::size_t last) {
   const CheckpointStore& store = *options.checkpoint;
-  const std::size_t v = mesh.vertex_count();
-  const std::size_t slab = std::max<std::size_t>(1, options.slab_vertices);
-  const std::size_t slabs = (v + slab - 1) / slab;
+  const auto slabs = slabs_of(first, last, std::max<std::size_t>(1, options.slab_vertices));
   std::size_t kept = 0;
-  for (std::size_t s = 0; s < slabs; ++s) kept += store.has(slab_name("transfer", s));
+  for (const auto& slab : slabs) kept += store.has(rows_name("transfer", slab.first, slab.last));
   if (kept > 0)
-    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs) +
+    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
                     " slabs of vertices kept in " + store.folder().string());
   Stopwatch clock;
   std::optional<RayCaster> caster;
-  if (plan.shadowed && kept < slabs) caster.emplace(mesh);
+  if (plan.shadowed && kept < slabs.size()) caster.emplace(mesh);
   const std::vector<Frame> frames =
-      plan.glossy && kept < slabs ? tangent_frames(mesh) : std::vector<Frame>();
+      plan.glossy && kept < slabs.size() ? tangent_frames(mesh) : std::vector<Frame>();
   TransferSignal out;
   set_shape(plan, out);
-  Progress progress("bake transfer", double(v), plan.shadowed ? "rays" : "", options.quiet);
+  out.coefficients.resize(static_cast<Eigen::Index>(last - first), transfer_dimension(plan));
+  Progress progress("bake transfer", double(last - first), plan.shadowed ? "rays" : "",
+                    options.quiet);
   rays_cast = 0;
-  for (std::size_t s = 0; s < slabs; ++s) {
-    const std::size_t first = s * slab, last = std::min(v, first + slab);
-    const std::string name = slab_name("transfer", s), rays_name = slab_name("rays", s);
+  for (const auto& slab : slabs) {
+    const std::string name = rows_name("transfer", slab.first, slab.last),
+                      rays_name = rows_name("rays", slab.first, slab.last);
     MatrixXfRow rows;
     std::uint64_t rays = 0;
     if (store.has(name) && store.has(rays_name)) {
       rows = store.load_floats(name);
       rays = static_cast<std::uint64_t>(store.load_doubles(rays_name)(0, 0));
-      if (rows.rows() != static_cast<Eigen::Index>(last - first))
-        throw Error(store.folder().string() + "/" + name + ": holds " +
-                    std::to_string(rows.rows()) + " vertices, not the slab's " +
-                    std::to_string(last - first) + "; delete the folder or rerun with --restart");
-      progress.add(double(last - first), double(rays));
+      progress.add(double(slab.last - slab.first), double(rays));
     } else {
-      rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames, first, last, rays,
-                           &progress)
+      rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames, slab.first,
+                           slab.last, rays, &progress)
                  .coefficients;
       store.save(rays_name, Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
       store.save(name, rows);  // last: its presence marks the slab done
     }
-    if (out.coefficients.size() == 0)
-      out.coefficients.resize(static_cast<Eigen::Index>(v), rows.cols());
-    out.coefficients.middleRows(static_cast<Eigen::Index>(first), rows.rows()) = rows;
+    if (rows.rows() != static_cast<Eigen::Index>(slab.last - slab.first) ||
+        rows.cols() != out.coefficients.cols())
+      throw Error(store.folder().string() + "/" + name + ": holds a " +
+                  std::to_string(rows.rows()) + " x " + std::to_string(rows.cols()) +
+                  " part where the slab needs " + std::to_string(slab.last - slab.first) + " x " +
+                  std::to_string(out.coefficients.cols()) +
+                  "; delete the folder or rerun with --restart");
+    out.coefficients.middleRows(static_cast<Eigen::Index>(slab.first - first), rows.rows()) = rows;
     rays_cast += rays;
   }
   times.add(plan.glossy ? "trace + glossy matrices (slabs)" : "trace + project (slabs)",
@@ -191,8 +209,35 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
   if (!options.checkpoint || options.traced)
     return traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
   if (per_vertex_transfer(plan))
-    return slabbed_transfer(plan, mesh, set, options, times, rays_cast);
+    return slabbed_transfer(plan, mesh, set, options, times, rays_cast, 0, mesh.vertex_count());
   return whole_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
+}
+
+TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                              const RunOptions& options, StageTimes& times,
+                              std::uint64_t& rays_cast, const Shard& shard) {
+  if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
+  return slabbed_transfer(plan, mesh, set, options, times, rays_cast, std::size_t(shard.first),
+                          std::size_t(shard.last));
+}
+
+TransferSignal kept_transfer(const BakePlan& plan, const CheckpointStore& store,
+                             std::size_t vertices, std::size_t slab, int ranks) {
+  TransferSignal out;
+  set_shape(plan, out);
+  out.coefficients.resize(static_cast<Eigen::Index>(vertices), transfer_dimension(plan));
+  for (int r = 0; r < ranks; ++r) {
+    const Shard shard = shard_of(Eigen::Index(vertices), r, ranks);
+    for (const auto& range : slabs_of(std::size_t(shard.first), std::size_t(shard.last), slab)) {
+      const std::string name = rows_name("transfer", range.first, range.last);
+      const MatrixXfRow rows = store.load_floats(name);
+      if (rows.rows() != Eigen::Index(range.last - range.first) ||
+          rows.cols() != out.coefficients.cols())
+        throw Error(store.folder().string() + "/" + name + ": a part of the wrong shape");
+      out.coefficients.middleRows(Eigen::Index(range.first), rows.rows()) = rows;
+    }
+  }
+  return out;
 }
 
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {

@@ -1,9 +1,14 @@
 #include "prt/compressor.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <nlohmann/json.hpp>
 #include <set>
+
+#include "prt/segment_sum.hpp"
 
 namespace prt {
 
@@ -25,15 +30,78 @@ std::vector<std::int32_t> supercluster_of_vertex(const CompressedTransfer& c) {
   return out;
 }
 
+void gather_rows(const Distribution& rows, CompressedTransfer& c) {
+  if (rows.comm->size() == 1) return;
+  // One message: ids, then weights, then sparse indices, as raw bytes.
+  std::vector<char> mine;
+  auto put = [&](const void* data, std::size_t size) {
+    const char* p = static_cast<const char*>(data);
+    mine.insert(mine.end(), p, p + size);
+  };
+  put(c.cluster_of_vertex.data(), c.cluster_of_vertex.size() * sizeof(std::int32_t));
+  put(c.weights.data(), std::size_t(c.weights.size()) * sizeof(float));
+  put(c.weight_index.data(), c.weight_index.size() * sizeof(std::int32_t));
+  const auto all = rows.comm->gather(mine, 0);
+  if (rows.comm->rank() != 0) return;
+  const Eigen::Index total = rows.shard.total, width = c.weights.cols();
+  const bool sparse = c.sparse();
+  c.cluster_of_vertex.resize(std::size_t(total));
+  c.weights.resize(total, width);
+  if (sparse) c.weight_index.resize(std::size_t(total * width));
+  for (int r = 0; r < rows.comm->size(); ++r) {
+    const Shard shard = shard_of(total, r, rows.comm->size());
+    const std::size_t count = std::size_t(shard.rows());
+    const std::size_t expected = count * sizeof(std::int32_t) +
+                                 count * std::size_t(width) * sizeof(float) +
+                                 (sparse ? count * std::size_t(width) * sizeof(std::int32_t) : 0);
+    if (all[std::size_t(r)].size() != expected)
+      throw Error("compressed rows: rank " + std::to_string(r) +
+                  " sent compressed rows of the wrong size");
+    const char* at = all[std::size_t(r)].data();
+    std::memcpy(&c.cluster_of_vertex[std::size_t(shard.first)], at, count * sizeof(std::int32_t));
+    at += count * sizeof(std::int32_t);
+    if (width) std::memcpy(c.weights.row(shard.first).data(), at, count * width * sizeof(float));
+    at += count * std::size_t(width) * sizeof(float);
+    if (sparse)
+      std::memcpy(&c.weight_index[std::size_t(shard.first * width)], at,
+                  count * std::size_t(width) * sizeof(std::int32_t));
+  }
+}
+
+std::vector<double> vertex_errors(const TransferSignal& signal,
+                                  const CompressedTransfer& compressed) {
+  std::vector<double> errors(std::size_t(signal.vertices()));
+  tbb::parallel_for(Eigen::Index(0), signal.vertices(), [&](Eigen::Index p) {
+    thread_local Eigen::RowVectorXf row;
+    row.resize(signal.dimension());
+    compressed.decode_row(p, row);
+    errors[std::size_t(p)] =
+        (signal.coefficients.row(p).cast<double>() - row.cast<double>()).squaredNorm();
+  });
+  return errors;
+}
+
 CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
-                          const Mesh* mesh, double encode_seconds) {
+                          const Mesh* mesh, double encode_seconds, const Distribution& where) {
   CompressionReport r;
-  const MatrixXfRow decoded = compressed.decode();
-  std::vector<double> errors(signal.vertices());
-  for (Eigen::Index p = 0; p < signal.vertices(); ++p) {
-    errors[p] =
-        (signal.coefficients.row(p).cast<double>() - decoded.row(p).cast<double>()).squaredNorm();
-    r.squared_error += errors[p];
+  std::vector<double> errors = vertex_errors(signal, compressed);
+  r.squared_error = segment_sum(
+      where.shard,
+      [&](Eigen::Index s) {
+        double t = 0;
+        for (Eigen::Index p = segment_begin(s); p < segment_end(s, where.shard.total); ++p)
+          t += errors[std::size_t(p - where.shard.first)];
+        return std::vector<double>{t};
+      },
+      *where.comm)[0];
+  if (where.comm->size() > 1) {  // every vertex's error on rank 0
+    const auto all = where.comm->gather(to_bytes(errors), 0);
+    errors.clear();
+    for (const auto& part : all) {
+      const auto values = to_doubles(part);
+      errors.insert(errors.end(), values.begin(), values.end());
+    }
+    if (where.comm->rank() != 0) return r;
   }
   std::sort(errors.begin(), errors.end());
   auto percentile = [&](double q) {

@@ -415,12 +415,18 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
 }
 
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
-                                  const Mesh& mesh, const SourceLocation& where) {
+                                  const Mesh& mesh, const SourceLocation& where,
+                                  const Distribution& shard) {
+  const Distribution here =
+      shard.shard.total == 0 ? Distribution::whole_signal(transfer.vertices()) : shard;
   try {
-    // A sparse approximation keeps its terms per channel transfer.
-    return plan.sparse_terms > 0
-               ? keep_largest(transfer, plan.sparse_terms * transfer.channel_groups)
-               : plan.compressor->encode(transfer, &mesh);
+    if (plan.sparse_terms > 0) {  // a sparse approximation keeps its terms per channel transfer
+      CompressedTransfer sparse =
+          keep_largest(transfer, plan.sparse_terms * transfer.channel_groups);
+      gather_rows(here, sparse);
+      return sparse;
+    }
+    return plan.compressor->encode_shard(transfer, &mesh, here);
   } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
     throw Error(where, "out of memory while compressing the " +
                            std::to_string(transfer.vertices()) + " x " +
@@ -428,6 +434,29 @@ CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& tr
                            plan.compressor_record.name + "\"");
   }
 }
+
+namespace {
+
+// What a distributed bake cannot do yet, refused before any ray.
+void require_distributable(const SceneSpec& scene, const BakePlan& plan,
+                           const RunOptions& options) {
+  if (!per_vertex_transfer(plan))
+    throw Error(scene.basis.where,
+                "a distributed bake needs a transfer each vertex gets alone; this scene's "
+                "couples vertices (a fitted basis, bounces, subsurface light or per-channel "
+                "transfers): bake it with prt bake");
+  if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
+  if (options.traced || !options.compress)
+    throw Error("a distributed bake traces and compresses its own shards");
+  if (plan.sparse_terms == 0) {
+    const std::string why = plan.compressor->why_not_distributed();
+    if (!why.empty())
+      throw Error(scene.compressor.where, "compressor \"" + plan.compressor_record.name +
+                                              "\" cannot run distributed: it " + why);
+  }
+}
+
+}  // namespace
 
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
               StageTimes& times) {
@@ -444,23 +473,42 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const DirectionSet set = scene.directions();
   times.add("directions", clock.seconds());
 
-  require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
+  const Communicator& comm = options.comm ? *options.comm : solo();
+  const bool distributed = comm.size() > 1;
+  if (distributed) require_distributable(scene, plan, options);
+  const Eigen::Index vertices = static_cast<Eigen::Index>(data.mesh.vertex_count());
+  const Distribution shard = distributed
+                                 ? Distribution{&comm, shard_of(vertices, comm.rank(), comm.size())}
+                                 : Distribution::whole_signal(vertices);
+  if (!distributed)
+    require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
   std::uint64_t rays_cast = 0;
-  data.transfer = checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
-                                        plan.bounces > 0 ? &data.direct : nullptr, rays_cast);
+  TransferSignal transfer =
+      distributed ? shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard)
+                  : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
+                                          plan.bounces > 0 ? &data.direct : nullptr, rays_cast);
+  if (distributed) {
+    std::uint64_t all = 0;
+    for (const auto& rays : allgather(comm, {double(rays_cast)})) all += std::uint64_t(rays[0]);
+    rays_cast = all;
+  }
 
   clock = Stopwatch();
   data.compressed = options.compress || plan.sparse_terms > 0
-                        ? compress_stage(plan, data.transfer, data.mesh, scene.compressor.where)
-                        : exact_form(data.transfer);
+                        ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, shard)
+                        : exact_form(transfer);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
   const CompressionReport report =
-      measure(data.transfer, data.compressed, &data.mesh, encode_seconds);
+      measure(transfer, data.compressed, &data.mesh, encode_seconds, shard);
+  if (distributed && comm.rank() != 0) return {};  // rank 0 holds the bake
   record(report, data.metrics);
   std::string text = report.text();
   if (!text.empty() && text.back() == '\n') text.pop_back();
   options.message(text);
+  data.transfer = distributed ? kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
+                                              options.slab_vertices, comm.size())
+                              : std::move(transfer);
 
   data.scene_file = scene.file.string();
   data.scene_text = scene.text;
@@ -478,8 +526,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     data.exit_state = plan.exit->save();
   }
   data.metrics["rays_cast"] = static_cast<double>(rays_cast);
-  data.metrics["squared_error"] =
-      squared_error(data.transfer.coefficients, data.compressed.decode());
+  data.metrics["squared_error"] = report.squared_error;
   data.metrics["stored_floats"] = data.compressed.stored_floats();
   return data;
 }

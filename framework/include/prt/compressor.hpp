@@ -1,10 +1,21 @@
 // The compressor interface: TransferSignal -> CompressedTransfer.
 #pragma once
+#include "prt/communicator.hpp"
+#include "prt/error.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt {
+
+// Where a distributed compressor's rows sit (prt-mpi): the signal it is given
+// holds rows [shard.first, shard.last) of the whole; sums over rows go
+// through segment_sum on `comm`, so the result equals one process's.
+struct Distribution {
+  const Communicator* comm = &solo();
+  Shard shard;
+  static Distribution whole_signal(Eigen::Index rows) { return {&solo(), whole(rows)}; }
+};
 
 class Compressor : public PluginObject {
  public:
@@ -12,6 +23,17 @@ class Compressor : public PluginObject {
   // `mesh` (may be null) gives compressors that care the triangles, for
   // overdraw reduction and geometry-coherent clustering.
   virtual CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const = 0;
+  // Capability: encode_shard runs on shards of the signal across ranks. An
+  // empty answer means yes; otherwise it says why not (e.g. a parameter that
+  // needs every vertex in one process).
+  virtual std::string why_not_distributed() const { return "it does not run distributed"; }
+  // Encodes this rank's rows; rank 0 returns the whole compressed form, the
+  // other ranks their rows of it. One rank: encode().
+  virtual CompressedTransfer encode_shard(const TransferSignal& local, const Mesh* mesh,
+                                          const Distribution& where) const {
+    if (where.comm->size() == 1) return encode(local, mesh);
+    throw Error("this compressor " + why_not_distributed());
+  }
   // Capability: the encoding reproduces the signal exactly (no compression),
   // so it may be replaced by a basis's own sparse approximation and needs no
   // comparison against the exact transfer.
@@ -42,7 +64,23 @@ double average_overdraw(const Mesh& mesh, const std::vector<std::int32_t>& id_of
 // Cluster ids mapped through superclusters (identity when there are none).
 std::vector<std::int32_t> supercluster_of_vertex(const CompressedTransfer& compressed);
 
+// The report of an encode. Distributed: `signal` holds this rank's rows and
+// `compressed` is encode_shard's result; the squared error is on every rank,
+// the rest on rank 0.
 CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
-                          const Mesh* mesh, double encode_seconds);
+                          const Mesh* mesh, double encode_seconds, const Distribution& where);
+inline CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
+                                 const Mesh* mesh, double encode_seconds) {
+  return measure(signal, compressed, mesh, encode_seconds,
+                 Distribution::whole_signal(signal.vertices()));
+}
+
+// |t_p - decoded_p|^2 for every row of `signal` (rows of `compressed` alike).
+std::vector<double> vertex_errors(const TransferSignal& signal,
+                                  const CompressedTransfer& compressed);
+
+// The ranks' rows of a compressed form (cluster ids, weights, sparse
+// indices) joined in rank order on rank 0; other ranks keep theirs.
+void gather_rows(const Distribution& where, CompressedTransfer& compressed);
 
 }  // namespace prt

@@ -49,6 +49,10 @@ struct RunOptions {
   // transfers each vertex gets alone are then computed in slabs of vertices.
   const CheckpointStore* checkpoint = nullptr;
   std::size_t slab_vertices = 65536;
+  // Ranks of a distributed bake (prt-mpi); null: this process alone. Each
+  // rank traces and compresses its shard of vertices; rank 0's result is the
+  // whole bake, the other ranks' results are empty.
+  const Communicator* comm = nullptr;
   void message(const std::string& text) const;
   void warn(const std::string& text) const;
 };
@@ -122,13 +126,22 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
                                      const DirectionSet& set, const RunOptions& options,
                                      StageTimes& times, std::map<std::string, double>& metrics,
                                      TransferSignal* direct, std::uint64_t& rays_cast);
+// A distributed bake's stages 1-2: this rank's rows of a per-vertex transfer,
+// slab by slab through options.checkpoint (a folder every rank sees).
+TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                              const RunOptions& options, StageTimes& times,
+                              std::uint64_t& rays_cast, const Shard& shard);
+// Every rank's rows, read back from the checkpoint's slabs (rank 0 writes the file).
+TransferSignal kept_transfer(const BakePlan& plan, const CheckpointStore& store,
+                             std::size_t vertices, std::size_t slab_vertices, int ranks);
 // What a scene's bake depends on (scene text, mesh bytes, plug-ins, format):
 // the key of its checkpoint.
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan);
 
 // 3. Compression (or the basis's sparse approximation).
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
-                                  const Mesh& mesh, const SourceLocation& where);
+                                  const Mesh& mesh, const SourceLocation& where,
+                                  const Distribution& shard = {});
 
 // Traces the scene's mesh over its direction set, keeping the visibility
 // bits, and the hits when the scene asks for bounces.

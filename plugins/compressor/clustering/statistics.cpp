@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "prt/clustering.hpp"
+#include "prt/compressor.hpp"
 #include "prt/error.hpp"
 #include "prt/segment_sum.hpp"
 
@@ -198,41 +199,7 @@ ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>&
 }
 
 void gather_rows(const Rows& rows, CompressedTransfer& c) {
-  if (!rows.distributed()) return;
-  // One message: ids, then weights, then sparse indices, as raw bytes.
-  std::vector<char> mine;
-  auto put = [&](const void* data, std::size_t size) {
-    const char* p = static_cast<const char*>(data);
-    mine.insert(mine.end(), p, p + size);
-  };
-  put(c.cluster_of_vertex.data(), c.cluster_of_vertex.size() * sizeof(std::int32_t));
-  put(c.weights.data(), std::size_t(c.weights.size()) * sizeof(float));
-  put(c.weight_index.data(), c.weight_index.size() * sizeof(std::int32_t));
-  const auto all = rows.comm.gather(mine, 0);
-  if (rows.comm.rank() != 0) return;
-  const Eigen::Index total = rows.total(), width = c.weights.cols();
-  const bool sparse = c.sparse();
-  c.cluster_of_vertex.resize(std::size_t(total));
-  c.weights.resize(total, width);
-  if (sparse) c.weight_index.resize(std::size_t(total * width));
-  for (int r = 0; r < rows.comm.size(); ++r) {
-    const Shard shard = shard_of(total, r, rows.comm.size());
-    const std::size_t count = std::size_t(shard.rows());
-    const std::size_t expected = count * sizeof(std::int32_t) +
-                                 count * std::size_t(width) * sizeof(float) +
-                                 (sparse ? count * std::size_t(width) * sizeof(std::int32_t) : 0);
-    if (all[std::size_t(r)].size() != expected)
-      throw Error("clustering: rank " + std::to_string(r) +
-                  " sent compressed rows of the wrong size");
-    const char* at = all[std::size_t(r)].data();
-    std::memcpy(&c.cluster_of_vertex[std::size_t(shard.first)], at, count * sizeof(std::int32_t));
-    at += count * sizeof(std::int32_t);
-    if (width) std::memcpy(c.weights.row(shard.first).data(), at, count * width * sizeof(float));
-    at += count * std::size_t(width) * sizeof(float);
-    if (sparse)
-      std::memcpy(&c.weight_index[std::size_t(shard.first * width)], at,
-                  count * std::size_t(width) * sizeof(std::int32_t));
-  }
+  gather_rows(Distribution{&rows.comm, rows.shard}, c);
 }
 
 }  // namespace prt::clustering

@@ -109,15 +109,40 @@ inline void improve_coherence(const CoherenceOptions& o, const Params& p, const 
   }
 }
 
-// The compressed form of clusters and their models, then the coherence passes.
+// The compressed form of clusters and their models, then the coherence
+// passes. Distributed: the rows are gathered on rank 0, which superclusters.
 inline CompressedTransfer finish(const std::string& name, const CoherenceOptions& o,
-                                 const Params& p, const MatrixXfRow& x,
+                                 const Params& p, const clustering::Rows& rows,
                                  const std::vector<std::int32_t>& labels,
                                  const std::vector<clustering::ClusterModel>& models,
                                  const Mesh* mesh) {
-  CompressedTransfer c = clustering::assemble(x, labels, models, name);
-  improve_coherence(o, p, x, mesh, c);
+  CompressedTransfer c = clustering::assemble(rows.x, labels, models, name);
+  if (!rows.distributed()) {
+    improve_coherence(o, p, rows.x, mesh, c);
+    return c;
+  }
+  if (o.reclassify) p.fail("reclassify", "needs every vertex in one process");
+  clustering::gather_rows(rows, c);
+  if (rows.comm.rank() == 0) {
+    CoherenceOptions without = o;
+    without.reclassify = false;
+    improve_coherence(without, p, rows.x, mesh, c);
+  }
   return c;
+}
+
+// Why a clustering compressor with these options cannot run distributed
+// (empty: it can).
+inline std::string why_not_distributed(const CoherenceOptions& o, const clustering::LbgOptions& l) {
+  if (o.reclassify)
+    return "reclassifies vertices (reclassify = true), which needs every vertex in one process";
+  if (l.alpha > 0)
+    return "clusters by geometry (alpha > 0), which needs every vertex in one process";
+  return "";
+}
+
+inline clustering::Rows rows_of(const TransferSignal& signal, const Distribution& where) {
+  return clustering::Rows(signal.coefficients, where.shard, *where.comm);
 }
 
 // Refuses NaN/Inf transfer with the vertex that holds it.

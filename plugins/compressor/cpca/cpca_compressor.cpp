@@ -37,12 +37,22 @@ class ClusteredPca final : public Compressor {
   }
 
   CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
+    return encode_shard(signal, mesh, Distribution::whole_signal(signal.vertices()));
+  }
+
+  std::string why_not_distributed() const override {
+    return compressor_params::why_not_distributed(coherence_, options_.lbg);
+  }
+
+  CompressedTransfer encode_shard(const TransferSignal& signal, const Mesh* mesh,
+                                  const Distribution& where) const override {
     compressor_params::require_finite(signal);
     clustering::CpcaOptions options = options_;
     options.lbg = compressor_params::with_mesh(options_.lbg, params_, mesh);
-    const auto result = clustering::cpca(signal.coefficients, options);
-    return compressor_params::finish("cpca", coherence_, params_, signal.coefficients,
-                                     result.labels, result.models, mesh);
+    const clustering::Rows rows = compressor_params::rows_of(signal, where);
+    const auto result = clustering::cpca(rows, options);
+    return compressor_params::finish("cpca", coherence_, params_, rows, result.labels,
+                                     result.models, mesh);
   }
 
  private:

@@ -17,15 +17,22 @@ class PrincipalComponents final : public Compressor {
   explicit PrincipalComponents(const Params& params)
       : components_(static_cast<int>(params.get_int("components"))) {}
 
-  CompressedTransfer encode(const TransferSignal& signal, const Mesh*) const override {
+  CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
+    return encode_shard(signal, mesh, Distribution::whole_signal(signal.vertices()));
+  }
+
+  std::string why_not_distributed() const override { return ""; }
+
+  CompressedTransfer encode_shard(const TransferSignal& signal, const Mesh*,
+                                  const Distribution& where) const override {
     compressor_params::require_finite(signal);
-    std::vector<std::uint32_t> all(signal.vertices());
-    std::iota(all.begin(), all.end(), 0u);
+    const clustering::Rows rows = compressor_params::rows_of(signal, where);
     const int c = static_cast<int>(std::min<Eigen::Index>(components_, signal.dimension()));
-    const std::vector<clustering::ClusterModel> model{
-        clustering::fit_cluster(signal.coefficients, all, c)};
-    return clustering::assemble(signal.coefficients,
-                                std::vector<std::int32_t>(signal.vertices(), 0), model, "pca");
+    const std::vector<std::int32_t> labels(std::size_t(signal.vertices()), 0);
+    CompressedTransfer compressed = clustering::assemble(
+        signal.coefficients, labels, clustering::fit_models(rows, labels, 1, {c}), "pca");
+    clustering::gather_rows(rows, compressed);
+    return compressed;
   }
 
  private:

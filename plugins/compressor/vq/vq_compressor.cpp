@@ -17,14 +17,23 @@ class VectorQuantizer final : public Compressor {
         lbg_(compressor_params::lbg_options(params)) {}
 
   CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
+    return encode_shard(signal, mesh, Distribution::whole_signal(signal.vertices()));
+  }
+
+  std::string why_not_distributed() const override {
+    return compressor_params::why_not_distributed(coherence_, lbg_);
+  }
+
+  CompressedTransfer encode_shard(const TransferSignal& signal, const Mesh* mesh,
+                                  const Distribution& where) const override {
     compressor_params::require_finite(signal);
-    const auto clusters =
-        clustering::lbg(signal.coefficients, compressor_params::with_mesh(lbg_, params_, mesh));
+    const clustering::Rows rows = compressor_params::rows_of(signal, where);
+    const auto clusters = clustering::lbg(rows, compressor_params::with_mesh(lbg_, params_, mesh));
     std::vector<clustering::ClusterModel> models(clusters.means.rows());
     for (std::size_t k = 0; k < models.size(); ++k)
       models[k] = {clusters.means.row(k), clustering::RowMatrixXd(0, clusters.means.cols()), {}};
-    return compressor_params::finish("vq", coherence_, params_, signal.coefficients,
-                                     clusters.labels, models, mesh);
+    return compressor_params::finish("vq", coherence_, params_, rows, clusters.labels, models,
+                                     mesh);
   }
 
  private:
