@@ -1,0 +1,144 @@
+// prt-mpi: the bake of `prt bake` with its vertices sharded across MPI ranks.
+//   mpirun -np N prt-mpi bake scene.toml [-o out.h5]
+// Every rank loads the scene and mesh and builds the ray-tracing structure,
+// traces and projects its shard of vertices in slabs (kept in the output's
+// checkpoint folder, which every rank must see), and compresses with the
+// others (local assignment, sums over a fixed tree of segments); rank 0
+// writes the file, equal to the one `prt bake` writes. docs/scale.md.
+#include <mpi.h>
+#include <sys/resource.h>
+#include <tbb/global_control.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <optional>
+
+#include "mpi_communicator.hpp"
+#include "prt/bake_file.hpp"
+#include "prt/error.hpp"
+#include "prt/output_file.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/progress.hpp"
+#include "prt/registry.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Args {
+  std::string scene, output;
+  bool force = false, restart = false, quiet = false;
+  std::size_t slab_vertices = 65536;
+  int threads = 0;
+};
+
+double peak_memory_gb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) * 1024.0 / 1e9;
+}
+
+int bake(const Args& args, const prt::MpiCommunicator& comm) {
+  using namespace prt;
+  const bool root = comm.rank() == 0;
+  Progress::set_enabled(root && !args.quiet);
+  PluginRegistry registry(PluginRegistry::default_directories());
+  Stopwatch clock;
+  const SceneSpec scene = SceneSpec::load(args.scene, registry);
+  StageTimes times;
+  const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
+  if (root) {
+    check_output({output, FileKind::bake, "bake file", args.output.empty()}, scene.input_files(),
+                 args.force);
+    if (args.restart) fs::remove_all(CheckpointStore::folder_for(output));
+  }
+  const BakePlan plan = plan_bake(scene, registry);
+  const std::string key = bake_key(scene, plan);
+  // Rank 0 makes (or checks) the folder before the others open it.
+  std::optional<CheckpointStore> checkpoint;
+  if (root) {
+    checkpoint.emplace(output, key,
+                       "prt-mpi bake " + scene.file.string() + " -> " + output.string() + " on " +
+                           std::to_string(comm.size()) + " ranks");
+    checkpoint->remove_temporaries();
+  }
+  comm.barrier();
+  if (!root) checkpoint.emplace(output, key, "");
+  RunOptions options{!root || args.quiet};
+  options.checkpoint = &*checkpoint;
+  options.slab_vertices = args.slab_vertices;
+  options.comm = &comm;
+  if (!root) options.log = [](const std::string&) {};
+  BakeData data = bake(scene, registry, options, times);
+  const double peak = peak_memory_gb();
+  std::vector<double> peaks;
+  for (const auto& p : allgather(comm, {peak})) peaks.push_back(p[0]);
+  if (root) {
+    clock = Stopwatch();
+    write_bake(output, data);
+    times.add("write bake file", clock.seconds());
+  }
+  comm.barrier();  // every rank is done with the checkpoint
+  if (!root) return 0;
+  checkpoint->remove();
+  std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << data.transfer.dimension()
+            << " coefficients (" << data.basis.name << ", " << data.transport << ") on "
+            << comm.size() << " ranks -> " << output.string() << "\n"
+            << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
+  std::printf("peak memory per rank (GB):");
+  for (double p : peaks) std::printf(" %.2f", p);
+  std::printf("\n");
+  std::cout << "timings (rank 0):\n" << times.table();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int provided = 0;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  CLI::App app{
+      "prt-mpi: prt bake with vertices sharded across MPI ranks (mpirun -np N prt-mpi bake ...)"};
+  app.require_subcommand(1);
+  Args args;
+  app.add_flag("-q,--quiet", args.quiet, "no progress bars");
+  auto* bake_cmd = app.add_subcommand("bake", "trace, project and compress a scene's transfer");
+  bake_cmd->add_option("scene", args.scene, "scene description (.toml)")->required();
+  bake_cmd->add_option("-o,--output", args.output, "bake file (default: from the scene)");
+  bake_cmd->add_flag("--force", args.force,
+                     "replace an existing output file of another kind (never an input)");
+  bake_cmd->add_flag("--restart", args.restart,
+                     "discard the checkpoint an interrupted run left (default: resume from it)");
+  bake_cmd
+      ->add_option("--slab-vertices", args.slab_vertices,
+                   "vertices traced per checkpointed slab (a killed bake loses at most one)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
+  bake_cmd->add_option("--threads", args.threads, "threads per rank (default: every core)")
+      ->check(CLI::Range(1, 4096));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = rank == 0 ? app.exit(e) : (e.get_exit_code() == 0 ? 0 : 1);
+    MPI_Finalize();
+    return code;
+  }
+  int code = 0;
+  try {
+    std::optional<tbb::global_control> threads;
+    if (args.threads > 0)
+      threads.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(args.threads));
+    prt::MpiCommunicator comm;
+    code = bake(args, comm);
+  } catch (...) {
+    // One rank's error ends every rank: the others would wait for it forever.
+    std::cerr << "prt-mpi: rank " << rank << ": " << prt::current_error_line() << "\n";
+    MPI_Abort(MPI_COMM_WORLD, 1);
+    return 1;
+  }
+  MPI_Finalize();
+  return code;
+}
