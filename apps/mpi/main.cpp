@@ -51,7 +51,7 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
   if (root) {
     check_output({output, FileKind::bake, "bake file", args.output.empty()}, scene.input_files(),
                  args.force);
-    if (args.restart) fs::remove_all(CheckpointStore::folder_for(output));
+    if (args.restart) CheckpointStore::discard(output);
   }
   const BakePlan plan = plan_bake(scene, registry);
   const std::string key = bake_key(scene, plan);
@@ -64,7 +64,7 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
     checkpoint->remove_temporaries();
   }
   comm.barrier();
-  if (!root) checkpoint.emplace(output, key, "");
+  if (!root) checkpoint.emplace(output, key, "", false);  // rank 0 holds the lock
   RunOptions options{!root || args.quiet};
   options.checkpoint = &*checkpoint;
   options.slab_vertices = args.slab_vertices;
@@ -88,7 +88,10 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
   std::printf("peak memory per rank (GB):");
   for (double p : peaks) std::printf(" %.2f", p);
-  std::printf("\n");
+  std::printf(
+      "\ncommunication (rank 0): %zu collectives, %.1f MB sent, %.1f MB received, %.2f s in MPI "
+      "calls (waiting included)\n",
+      comm.calls(), comm.bytes_sent() / 1e6, comm.bytes_received() / 1e6, comm.seconds());
   std::cout << "timings (rank 0):\n" << times.table();
   return 0;
 }

@@ -21,6 +21,13 @@ void check(int status, const char* call) {
   if (status != MPI_SUCCESS) throw Error(std::string("MPI: ") + call + " failed");
 }
 
+// Adds the wall time of a scope to a counter.
+struct Timed {
+  double& total;
+  double start = MPI_Wtime();
+  ~Timed() { total += MPI_Wtime() - start; }
+};
+
 // Splits the received bytes by the senders' counts.
 std::vector<std::vector<char>> split(const std::vector<char>& all, const std::vector<int>& counts,
                                      const std::vector<int>& offsets) {
@@ -38,10 +45,12 @@ MpiCommunicator::MpiCommunicator() {
 }
 
 void MpiCommunicator::barrier() const {
+  const Timed timed{seconds_};
   check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
 }
 
 std::vector<std::vector<char>> MpiCommunicator::allgather(const std::vector<char>& mine) const {
+  const Timed timed{seconds_};
   const int count = message_size(mine.size());
   std::vector<int> counts(size_), offsets(size_, 0);
   check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD),
@@ -50,6 +59,7 @@ std::vector<std::vector<char>> MpiCommunicator::allgather(const std::vector<char
   for (int r = 0; r < size_; ++r) offsets[r] = message_size(total), total += counts[r];
   message_size(total);
   std::vector<char> all(total);
+  ++calls_, sent_ += double(mine.size()) * (size_ - 1), received_ += double(total - mine.size());
   check(MPI_Allgatherv(mine.data(), count, MPI_BYTE, all.data(), counts.data(), offsets.data(),
                        MPI_BYTE, MPI_COMM_WORLD),
         "MPI_Allgatherv");
@@ -58,6 +68,7 @@ std::vector<std::vector<char>> MpiCommunicator::allgather(const std::vector<char
 
 std::vector<std::vector<char>> MpiCommunicator::gather(const std::vector<char>& mine,
                                                        int root) const {
+  const Timed timed{seconds_};
   const int count = message_size(mine.size());
   std::vector<int> counts(size_), offsets(size_, 0);
   check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, MPI_COMM_WORLD),
@@ -66,6 +77,8 @@ std::vector<std::vector<char>> MpiCommunicator::gather(const std::vector<char>& 
   if (rank_ == root)
     for (int r = 0; r < size_; ++r) offsets[r] = message_size(total), total += counts[r];
   std::vector<char> all(rank_ == root ? total : 0);
+  ++calls_, sent_ += rank_ == root ? 0.0 : double(mine.size());
+  received_ += rank_ == root ? double(total - mine.size()) : 0.0;
   check(MPI_Gatherv(mine.data(), count, MPI_BYTE, all.data(), counts.data(), offsets.data(),
                     MPI_BYTE, root, MPI_COMM_WORLD),
         "MPI_Gatherv");
@@ -74,9 +87,12 @@ std::vector<std::vector<char>> MpiCommunicator::gather(const std::vector<char>& 
 }
 
 void MpiCommunicator::broadcast(std::vector<char>& bytes, int root) const {
+  const Timed timed{seconds_};
   unsigned long long size = bytes.size();
   check(MPI_Bcast(&size, 1, MPI_UNSIGNED_LONG_LONG, root, MPI_COMM_WORLD), "MPI_Bcast");
   bytes.resize(size);
+  ++calls_, sent_ += rank_ == root ? double(size) * (size_ - 1) : 0.0;
+  received_ += rank_ == root ? 0.0 : double(size);
   check(MPI_Bcast(bytes.data(), message_size(size), MPI_BYTE, root, MPI_COMM_WORLD), "MPI_Bcast");
 }
 

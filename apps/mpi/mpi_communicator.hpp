@@ -13,9 +13,16 @@ class MpiCommunicator final : public Communicator {
   std::vector<std::vector<char>> allgather(const std::vector<char>& mine) const override;
   std::vector<std::vector<char>> gather(const std::vector<char>& mine, int root) const override;
   void broadcast(std::vector<char>& bytes, int root) const override;
+  // What this rank has exchanged so far: collective calls, bytes it sent and received.
+  std::size_t calls() const { return calls_; }
+  double bytes_sent() const { return sent_; }
+  double bytes_received() const { return received_; }
+  double seconds() const { return seconds_; }  // inside MPI calls (waiting included)
 
  private:
   int rank_ = 0, size_ = 1;
+  mutable std::size_t calls_ = 0;
+  mutable double sent_ = 0, received_ = 0, seconds_ = 0;
 };
 
 }  // namespace prt

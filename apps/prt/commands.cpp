@@ -40,8 +40,7 @@ int bake(Context& context, const BakeArgs& args) {
                args.force);
   // A killed bake rerun with the same command resumes from its checkpoint.
   const BakePlan plan = plan_bake(scene, context.registry);
-  const fs::path checkpoint_folder = CheckpointStore::folder_for(output);
-  if (args.restart) fs::remove_all(checkpoint_folder);
+  if (args.restart) CheckpointStore::discard(output);
   const CheckpointStore checkpoint(output, bake_key(scene, plan),
                                    "prt bake " + scene.file.string() + " -> " + output.string());
   checkpoint.remove_temporaries();

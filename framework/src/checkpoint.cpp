@@ -1,6 +1,7 @@
 #include "prt/checkpoint.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -126,18 +127,53 @@ fs::path CheckpointStore::folder_for(const fs::path& output) {
   return folder / ("." + output.filename().string() + ".checkpoint");
 }
 
+namespace {
+
+// An exclusive lock on the folder's "lock" file (created with the folder):
+// the descriptor, or throws when another process holds it.
+int lock_folder(const fs::path& folder) {
+  fs::create_directories(folder);
+  const fs::path file = folder / "lock";
+  const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw Error(file.string() + ": cannot open: " + std::strerror(errno));
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    throw Error(folder.string() +
+                ": another prt process is using this checkpoint; wait for it or stop it");
+  }
+  return fd;
+}
+
+}  // namespace
+
+void CheckpointStore::discard(const fs::path& output) {
+  const fs::path folder = folder_for(output);
+  if (!fs::exists(folder)) return;
+  const int fd = lock_folder(folder);
+  std::error_code ignored;
+  fs::remove_all(folder, ignored);
+  ::close(fd);
+}
+
+CheckpointStore::~CheckpointStore() {
+  if (lock_ >= 0) ::close(lock_);
+}
+
 CheckpointStore::CheckpointStore(const fs::path& output, const std::string& key,
-                                 const std::string& description)
+                                 const std::string& description, bool exclusive)
     : folder_(folder_for(output)) {
+  if (exclusive) lock_ = lock_folder(folder_);
   const fs::path key_file = folder_ / "key";
   if (fs::exists(key_file)) {
     std::ifstream in(key_file);
     std::string stored;
     std::getline(in, stored);
-    if (stored != key)
+    if (stored != key) {
+      if (lock_ >= 0) ::close(lock_), lock_ = -1;
       throw Error(folder_.string() +
                   ": a checkpoint of a different run (the scene, mesh or plug-ins changed since "
                   "it was written); delete the folder or rerun with --restart");
+    }
     return;
   }
   fs::create_directories(folder_);
@@ -214,7 +250,8 @@ std::vector<std::string> CheckpointStore::parts() const {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(folder_)) {
     const std::string name = entry.path().filename().string();
-    if (name != "key" && name.find(".tmp-") == std::string::npos) names.push_back(name);
+    if (name != "key" && name != "lock" && name.find(".tmp-") == std::string::npos)
+      names.push_back(name);
   }
   std::sort(names.begin(), names.end());
   return names;

@@ -35,9 +35,16 @@ class CheckpointStore {
   // The folder for `output`, created when missing. `key` identifies the run
   // (a digest of the scene, mesh and plug-ins); `description` is written
   // beside it for people. A folder with another key throws prt::Error.
+  // `exclusive`: hold the folder's lock while this object lives, refusing
+  // a second process (a distributed run's other ranks share the first's).
   CheckpointStore(const std::filesystem::path& output, const std::string& key,
-                  const std::string& description);
+                  const std::string& description, bool exclusive = true);
+  ~CheckpointStore();
+  CheckpointStore(const CheckpointStore&) = delete;
+  CheckpointStore& operator=(const CheckpointStore&) = delete;
   static std::filesystem::path folder_for(const std::filesystem::path& output);
+  // Deletes the checkpoint of `output` (--restart), unless a process holds it.
+  static void discard(const std::filesystem::path& output);
 
   const std::filesystem::path& folder() const { return folder_; }
   bool has(const std::string& name) const;
@@ -59,6 +66,7 @@ class CheckpointStore {
 
  private:
   std::filesystem::path folder_;
+  int lock_ = -1;
 };
 
 }  // namespace prt

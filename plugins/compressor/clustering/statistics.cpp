@@ -117,16 +117,20 @@ std::vector<Eigen::MatrixXd> cluster_scatter(const Rows& rows,
             if (l >= 0 && wanted[std::size_t(l)]) members[l].push_back(p);
           }
           Blocks out;
-          Eigen::MatrixXd centred;
+          Eigen::MatrixXd centred, sum;
           for (const auto& [cluster, list] : members) {
             centred.resize(n, static_cast<Eigen::Index>(list.size()));
             for (std::size_t j = 0; j < list.size(); ++j)
               centred.col(Eigen::Index(j)) =
                   (rows.x.row(list[j]).cast<double>() - means.row(cluster)).transpose();
-            std::vector<double>& block = out[cluster];
-            block.assign(std::size_t(n * n), 0.0);
-            Eigen::Map<Eigen::MatrixXd> sum(block.data(), n, n);
+            sum.setZero(n, n);
             sum.selfadjointView<Eigen::Lower>().rankUpdate(centred);
+            // The lower triangle, column by column: half the bytes to add and send.
+            std::vector<double>& block = out[cluster];
+            block.resize(std::size_t(n * (n + 1) / 2));
+            std::size_t at = 0;
+            for (Eigen::Index c = 0; c < n; ++c)
+              for (Eigen::Index r = c; r < n; ++r) block[at++] = sum(r, c);
           }
           return out;
         },
@@ -137,10 +141,11 @@ std::vector<Eigen::MatrixXd> cluster_scatter(const Rows& rows,
   for (std::size_t i = 0; i < which.size(); ++i) {
     Eigen::MatrixXd& m = scatter[i];
     const auto it = total.find(which[i]);
-    m = it == total.end()
-            ? Eigen::MatrixXd::Zero(n, n)
-            : Eigen::MatrixXd(Eigen::Map<const Eigen::MatrixXd>(it->second.data(), n, n));
-    m.triangularView<Eigen::StrictlyUpper>() = m.transpose();
+    m = Eigen::MatrixXd::Zero(n, n);
+    if (it == total.end()) continue;
+    std::size_t at = 0;
+    for (Eigen::Index c = 0; c < n; ++c)
+      for (Eigen::Index r = c; r < n; ++r) m(r, c) = m(c, r) = it->second[at++];
   }
   return scatter;
 }
@@ -184,9 +189,35 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     if (c > 0) which.push_back(j);
   }
   const std::vector<Eigen::MatrixXd> scatter = cluster_scatter(rows, labels, means, which);
+  // Each rank solves every size-th cluster and the ranks share the results
+  // (the same solver on the same scatter gives the same bits anywhere).
+  const int rank = rows.comm.rank(), ranks = rows.comm.size();
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) {
-    principal_directions(scatter[i], models[std::size_t(which[i])]);
+    if (int(i % std::size_t(ranks)) == rank)
+      principal_directions(scatter[i], models[std::size_t(which[i])]);
   });
+  if (ranks > 1) {
+    std::vector<double> mine;
+    for (std::size_t i = std::size_t(rank); i < which.size(); i += std::size_t(ranks)) {
+      const ClusterModel& m = models[std::size_t(which[i])];
+      mine.insert(mine.end(), m.basis.data(), m.basis.data() + m.basis.size());
+      mine.insert(mine.end(), m.eigenvalues.data(), m.eigenvalues.data() + m.eigenvalues.size());
+    }
+    const auto all = allgather(rows.comm, mine);
+    for (int r = 0; r < ranks; ++r) {
+      std::size_t at = 0;
+      for (std::size_t i = std::size_t(r); i < which.size(); i += std::size_t(ranks)) {
+        ClusterModel& m = models[std::size_t(which[i])];
+        const std::size_t size = std::size_t(m.basis.size()),
+                          values = std::size_t(m.eigenvalues.size());
+        if (at + size + values > all[std::size_t(r)].size())
+          throw Error("clustering: rank " + std::to_string(r) + " sent too few model values");
+        std::copy_n(&all[std::size_t(r)][at], size, m.basis.data());
+        std::copy_n(&all[std::size_t(r)][at + size], values, m.eigenvalues.data());
+        at += size + values;
+      }
+    }
+  }
   if (counts) *counts = sums.counts;
   return models;
 }

@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# A bake SIGKILLed twice at random moments and rerun with the same command
+# resumes from its checkpoint and writes a file identical, byte for byte, to
+# an uninterrupted bake; no partial file is ever left under the final name;
+# the checkpoint is removed once the file is in place; a changed scene
+# refuses the stale checkpoint with a message, and --restart discards it.
+#   checkpoint.sh <prt> <source dir>
+set -euo pipefail
+prt="$(realpath "$1")"
+src="$(realpath "$2")"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+[ -f "$src/data/meshes/bunny00.off" ] || { echo "FAIL: run scripts/setup.sh" >&2; exit 1; }
+
+# A subdivided bunny (150,818 vertices) in slabs of 8,192: 19 slabs.
+"$prt" -q subdivide "$src/data/meshes/bunny00.off" -o "$work/bunny.ply" -n 150818 >/dev/null
+cat >"$work/scene.toml" <<SCENE
+[mesh]
+file = "$work/bunny.ply"
+[transport]
+rays = 512
+[basis]
+plugin = "sh"
+order = 6
+[compressor]
+plugin = "cpca"
+clusters = 64
+components = 4
+[lighting]
+environment = "$src/data/hdri/courtyard.exr"
+SCENE
+bake() { exec_bake "$@"; }
+exec_bake() { "$prt" -q bake "$work/scene.toml" -o "$work/$1.h5" --slab-vertices 8192 "${@:2}"; }
+# In the background prt itself must be the process killed (not a subshell).
+bake_in_background() {
+  "$prt" -q bake "$work/scene.toml" -o "$work/$1.h5" --slab-vertices 8192 >/dev/null 2>&1 &
+  pid=$!
+}
+
+start=$(date +%s.%N)
+bake reference >/dev/null
+seconds=$(echo "$(date +%s.%N) - $start" | bc)
+echo "uninterrupted bake: ${seconds} s"
+
+RANDOM=$$  # a different pair of moments each run; printed for a rerun
+for attempt in 1 2; do
+  percent=$((25 + RANDOM % 60))  # drawn here: a subshell would repeat the draw
+  delay=$(echo "scale=2; $seconds * $percent / 100" | bc)
+  bake_in_background resumed
+  sleep "$delay"
+  kill -9 "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  [ ! -e "$work/resumed.h5" ] || { echo "FAIL: a partial file under the final name"; exit 1; }
+  kept=$(ls "$work/.resumed.h5.checkpoint" 2>/dev/null | grep -c '^transfer\.' || true)
+  echo "kill $attempt after ${delay} s: $kept slabs kept"
+done
+# A second process on the same checkpoint is refused while the first runs.
+bake_in_background resumed
+sleep 0.3
+if out=$(bake resumed 2>&1); then echo "FAIL: two processes baked into one checkpoint"; exit 1; fi
+grep -q 'another prt process is using this checkpoint' <<<"$out" || { echo "FAIL: $out"; exit 1; }
+kill -9 "$pid"; wait "$pid" 2>/dev/null || true
+out=$("$prt" bake "$work/scene.toml" -o "$work/resumed.h5" --slab-vertices 8192 2>&1)
+cmp "$work/reference.h5" "$work/resumed.h5" ||
+  { echo "FAIL: the resumed bake differs from the uninterrupted one"; exit 1; }
+[ ! -e "$work/.resumed.h5.checkpoint" ] || { echo "FAIL: checkpoint left after success"; exit 1; }
+echo "resumed bake identical to the uninterrupted one ($(grep -o 'resuming: [0-9]* of [0-9]*' <<<"$out" || echo 'nothing kept'))"
+
+# A stale checkpoint (the scene changed) is refused, then discarded on request.
+bake_in_background stale
+sleep "$(echo "scale=2; $seconds / 3" | bc)"; kill -9 "$pid" 2>/dev/null || true; wait "$pid" 2>/dev/null || true
+if [ -d "$work/.stale.h5.checkpoint" ]; then
+  sed -i 's/^order = 6$/order = 5/' "$work/scene.toml"
+  if out=$(bake stale 2>&1); then echo "FAIL: a stale checkpoint was used"; exit 1; fi
+  grep -q 'a checkpoint of a different run' <<<"$out" || { echo "FAIL: $out"; exit 1; }
+  bake stale --restart >/dev/null
+  echo "stale checkpoint refused, --restart discards it"
+fi

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# prt-mpi on a real CGAL mesh equals prt bake byte for byte, for 1 to 4
+# ranks (more ranks than cores: --oversubscribe): iterative CPCA with
+# superclusters, static CPCA from a hyper-box start, PCA and glossy VQ. A
+# compressor that cannot run distributed is refused on every rank with one
+# message, and a bad scene ends every rank (no hang).
+#   mpi.sh <prt> <prt-mpi> <source dir>
+set -euo pipefail
+prt="$(realpath "$1")"
+prt_mpi="$(realpath "$2")"
+src="$(realpath "$3")"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+[ -f "$src/data/meshes/bunny00.off" ] || { echo "FAIL: run scripts/setup.sh" >&2; exit 1; }
+# Ranks yield while they wait (more ranks than cores here).
+mpirun=(mpirun --oversubscribe --mca mpi_yield_when_idle 1)
+[ "$(id -u)" -ne 0 ] || mpirun+=(--allow-run-as-root)
+
+scene() {  # name, mesh, [basis] lines, [compressor] lines, [material] lines
+  cat >"$work/$1.toml" <<SCENE
+[mesh]
+file = "$src/data/meshes/$2"
+[material]
+${5:-albedo = 0.8}
+[transport]
+rays = 256
+[basis]
+$3
+[exit]
+plugin = "hsh"
+order = 3
+[compressor]
+$4
+[lighting]
+environment = "$src/data/hdri/courtyard.exr"
+SCENE
+}
+scene iterative bunny00.off $'plugin = "sh"\norder = 8' \
+  $'plugin = "cpca"\nmethod = "iterative"\nclusters = 64\ncomponents = 4\nsupercluster = "greedy"'
+scene static armadillo.off $'plugin = "sh"\norder = 6' \
+  $'plugin = "cpca"\nclusters = 32\ncomponents = 6\ninit = "hyperbox"'
+scene pca refined_elephant.off $'plugin = "sh"\norder = 6' $'plugin = "pca"\ncomponents = 8'
+scene glossy_vq armadillo.off $'plugin = "sh"\norder = 4' $'plugin = "vq"\nclusters = 48' \
+  $'brdf = "phong"\nspecular = 0.5\nexponent = 8'
+
+for name in iterative static pca glossy_vq; do
+  "$prt" -q bake "$work/$name.toml" -o "$work/$name.serial.h5" >/dev/null
+  ranks="1 2 3 4"
+  [ "$name" = iterative ] || ranks="3"
+  for np in $ranks; do
+    "${mpirun[@]}" -np "$np" "$prt_mpi" -q bake "$work/$name.toml" -o "$work/$name.$np.h5" >/dev/null
+    if ! cmp -s "$work/$name.serial.h5" "$work/$name.$np.h5"; then
+      echo "FAIL: $name on $np ranks differs from prt bake"
+      h5diff "$work/$name.serial.h5" "$work/$name.$np.h5" | head -20 || true
+      exit 1
+    fi
+    [ ! -e "$work/.$name.$np.h5.checkpoint" ] || { echo "FAIL: checkpoint left behind"; exit 1; }
+  done
+  echo "$name: prt-mpi on $ranks ranks = prt bake, byte for byte"
+done
+
+# Refusals end every rank with one clear message and no output.
+scene coherent bunny00.off $'plugin = "sh"\norder = 4' \
+  $'plugin = "cpca"\nclusters = 8\nreclassify = true'
+if out=$(timeout 120 "${mpirun[@]}" -np 2 "$prt_mpi" -q bake "$work/coherent.toml" \
+           -o "$work/coherent.h5" 2>&1); then
+  echo "FAIL: reclassification accepted under prt-mpi"; exit 1
+fi
+grep -q 'cannot run distributed: it reclassifies' <<<"$out" || { echo "FAIL: $out"; exit 1; }
+[ ! -e "$work/coherent.h5" ] || { echo "FAIL: output written"; exit 1; }
+printf '[mesh]\nfile = "missing.off"\n' >"$work/bad.toml"
+if out=$(timeout 120 "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/bad.toml" -o "$work/bad.h5" 2>&1); then
+  echo "FAIL: a missing mesh accepted"; exit 1
+fi
+grep -q 'missing.off' <<<"$out" || { echo "FAIL: $out"; exit 1; }
+echo "refusals: one message, non-zero exit, no output"
