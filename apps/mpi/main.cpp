@@ -82,7 +82,9 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
   comm.barrier();  // every rank is done with the checkpoint
   if (!root) return 0;
   checkpoint->remove();
-  std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << data.transfer.dimension()
+  std::cout << "baked " << data.mesh.vertex_count() << " vertices x "
+            << (data.streamed_transfer.rows ? data.streamed_transfer.cols
+                                            : data.transfer.dimension())
             << " coefficients (" << data.basis.name << ", " << data.transport << ") on "
             << comm.size() << " ranks -> " << output.string() << "\n"
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";

@@ -201,6 +201,28 @@ void write_matrix(H5::Group& group, const std::string& name, const MatrixXfRow& 
   write_array(group, name, m.data(), m.rows(), m.cols());
 }
 
+// The same dataset as write_matrix, filled chunk by chunk from `rows`.
+void write_streamed(H5::Group& group, const std::string& name, const BakeData::StreamedRows& rows) {
+  const hsize_t dims[2] = {hsize_t(rows.rows), hsize_t(rows.cols)};
+  const hsize_t chunk_rows = std::min<hsize_t>(dims[0], 4096);
+  H5::DSetCreatPropList properties;
+  H5Pset_obj_track_times(properties.getId(), false);
+  const hsize_t chunk[2] = {chunk_rows, dims[1]};
+  properties.setChunk(2, chunk);
+  H5::DataSet set = group.createDataSet(name, h5_type<float>(), H5::DataSpace(2, dims), properties);
+  MatrixXfRow block;
+  for (hsize_t first = 0; first < dims[0]; first += chunk_rows) {
+    const hsize_t count[2] = {std::min(chunk_rows, dims[0] - first), dims[1]};
+    const hsize_t offset[2] = {first, 0};
+    rows.read(Eigen::Index(first), Eigen::Index(count[0]), block);
+    if (block.rows() != Eigen::Index(count[0]) || block.cols() != rows.cols)
+      throw Error("dataset \"" + name + "\": its rows came in the wrong shape");
+    H5::DataSpace file_space = set.getSpace();
+    file_space.selectHyperslab(H5S_SELECT_SET, count, offset);
+    set.write(block.data(), h5_type<float>(), H5::DataSpace(2, count), file_space);
+  }
+}
+
 MatrixXfRow read_matrix(const H5::Group& group, const std::string& name) {
   hsize_t rows, cols;
   auto values = read_array<float>(group, name, rows, cols);
@@ -252,15 +274,20 @@ void write_bake(const fs::path& file, const BakeData& data) {
   H5::Exception::dontPrint();
   data.mesh.validate("bake data");
   data.compressed.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
-  if (data.transfer.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
+  const bool streamed = data.streamed_transfer.rows > 0;
+  const Eigen::Index transfer_rows =
+      streamed ? data.streamed_transfer.rows : data.transfer.vertices();
+  const Eigen::Index transfer_cols =
+      streamed ? data.streamed_transfer.cols : data.transfer.dimension();
+  if (transfer_rows != static_cast<Eigen::Index>(data.mesh.vertex_count()))
     throw Error(file.string() + ": transfer rows do not match the mesh's vertices");
   const TransferSignal& t = data.transfer;
   bool channels_ok = t.channel_groups >= 1 && t.channel_groups <= 3 && t.exit_rows >= 1 &&
-                     t.dimension() % (Eigen::Index(t.exit_rows) * t.channel_groups) == 0;
+                     transfer_cols % (Eigen::Index(t.exit_rows) * t.channel_groups) == 0;
   for (int group : t.group_of_channel)
     channels_ok = channels_ok && group >= 0 && group < t.channel_groups;
   if (!channels_ok)
-    throw Error(file.string() + ": the transfer's " + std::to_string(t.dimension()) + " columns, " +
+    throw Error(file.string() + ": the transfer's " + std::to_string(transfer_cols) + " columns, " +
                 std::to_string(t.exit_rows) + " exit rows and " + std::to_string(t.channel_groups) +
                 " channel transfers do not fit together (or a colour channel reads a missing "
                 "transfer); nothing written");
@@ -297,7 +324,10 @@ void write_bake(const fs::path& file, const BakeData& data) {
       for (int c = 0; c < 3; ++c)
         write_number(transfer, std::string("group_of_channel_") + "rgb"[c],
                      data.transfer.group_of_channel[std::size_t(c)]);
-      write_matrix(transfer, "coefficients", data.transfer.coefficients);
+      if (streamed)
+        write_streamed(transfer, "coefficients", data.streamed_transfer);
+      else
+        write_matrix(transfer, "coefficients", data.transfer.coefficients);
       if (data.direct.coefficients.size())
         write_matrix(transfer, "direct_coefficients", data.direct.coefficients);
 

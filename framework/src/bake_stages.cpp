@@ -1,8 +1,10 @@
 // Stages 1-2 of a bake through a checkpoint: a per-vertex transfer slab by
 // slab, any other transfer whole with its fitted basis. Each finished part is
 // kept, so a killed bake rerun with the same command computes only the rest.
+#include <algorithm>
 #include <cinttypes>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <sstream>
 
@@ -221,23 +223,51 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
                           std::size_t(shard.last));
 }
 
-TransferSignal kept_transfer(const BakePlan& plan, const CheckpointStore& store,
-                             std::size_t vertices, std::size_t slab, int ranks) {
-  TransferSignal out;
-  set_shape(plan, out);
-  out.coefficients.resize(static_cast<Eigen::Index>(vertices), transfer_dimension(plan));
-  for (int r = 0; r < ranks; ++r) {
+BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
+                                     std::size_t vertices, std::size_t slab, int ranks,
+                                     std::shared_ptr<const TransferSignal> own) {
+  // Where each slab of every rank lies, in vertex order.
+  std::vector<SlabRange> ranges;
+  for (int r = 1; r < ranks; ++r) {
     const Shard shard = shard_of(Eigen::Index(vertices), r, ranks);
-    for (const auto& range : slabs_of(std::size_t(shard.first), std::size_t(shard.last), slab)) {
-      const std::string name = rows_name("transfer", range.first, range.last);
-      const MatrixXfRow rows = store.load_floats(name);
-      if (rows.rows() != Eigen::Index(range.last - range.first) ||
-          rows.cols() != out.coefficients.cols())
-        throw Error(store.folder().string() + "/" + name + ": a part of the wrong shape");
-      out.coefficients.middleRows(Eigen::Index(range.first), rows.rows()) = rows;
-    }
+    for (const auto& range : slabs_of(std::size_t(shard.first), std::size_t(shard.last), slab))
+      ranges.push_back(range);
   }
-  return out;
+  BakeData::StreamedRows rows;
+  rows.rows = Eigen::Index(vertices);
+  rows.cols = transfer_dimension(plan);
+  // The slab last read stays loaded: write_bake asks for rows in order.
+  auto cache = std::make_shared<std::pair<SlabRange, MatrixXfRow>>(SlabRange{0, 0}, MatrixXfRow());
+  rows.read = [&store, own, ranges, cache, cols = rows.cols](Eigen::Index first, Eigen::Index count,
+                                                             MatrixXfRow& out) {
+    out.resize(count, cols);
+    for (Eigen::Index done = 0; done < count;) {
+      const std::size_t p = std::size_t(first + done);
+      if (p < std::size_t(own->vertices())) {  // rank 0's rows, in memory
+        const Eigen::Index n = std::min(count - done, own->vertices() - Eigen::Index(p));
+        out.middleRows(done, n) = own->coefficients.middleRows(Eigen::Index(p), n);
+        done += n;
+        continue;
+      }
+      if (!(p >= cache->first.first && p < cache->first.last)) {
+        const auto it = std::find_if(ranges.begin(), ranges.end(), [&](const SlabRange& r) {
+          return p >= r.first && p < r.last;
+        });
+        if (it == ranges.end())
+          throw Error("the checkpoint holds no slab with vertex " + std::to_string(p));
+        const std::string name = rows_name("transfer", it->first, it->last);
+        MatrixXfRow loaded = store.load_floats(name);
+        if (loaded.rows() != Eigen::Index(it->last - it->first) || loaded.cols() != cols)
+          throw Error(store.folder().string() + "/" + name + ": a part of the wrong shape");
+        *cache = {*it, std::move(loaded)};
+      }
+      const Eigen::Index at = Eigen::Index(p - cache->first.first);
+      const Eigen::Index n = std::min(count - done, cache->second.rows() - at);
+      out.middleRows(done, n) = cache->second.middleRows(at, n);
+      done += n;
+    }
+  };
+  return rows;
 }
 
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {

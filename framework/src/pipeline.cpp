@@ -506,9 +506,17 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   std::string text = report.text();
   if (!text.empty() && text.back() == '\n') text.pop_back();
   options.message(text);
-  data.transfer = distributed ? kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
-                                              options.slab_vertices, comm.size())
-                              : std::move(transfer);
+  if (distributed) {  // the file gets the other ranks' rows from their slabs as it is written
+    data.transfer.kind = transfer.kind;
+    data.transfer.exit_rows = transfer.exit_rows;
+    data.transfer.channel_groups = transfer.channel_groups;
+    data.transfer.group_of_channel = transfer.group_of_channel;
+    data.streamed_transfer =
+        kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(), options.slab_vertices,
+                      comm.size(), std::make_shared<const TransferSignal>(std::move(transfer)));
+  } else {
+    data.transfer = std::move(transfer);
+  }
 
   data.scene_file = scene.file.string();
   data.scene_text = scene.text;

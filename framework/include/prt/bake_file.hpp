@@ -3,6 +3,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 
@@ -38,6 +39,13 @@ struct BakeData {
   // bounces > 0: the transfer without inter-reflection (same shape), kept so
   // that prt render --compare can show what the bounces bring; else empty.
   TransferSignal direct;
+  // Set instead of transfer.coefficients' rows (which then has none, only
+  // its kind and layout) when the transfer is too large to hold: write_bake
+  // asks it for rows [first, first + count) into `out` (count x cols).
+  struct StreamedRows {
+    Eigen::Index rows = 0, cols = 0;
+    std::function<void(Eigen::Index first, Eigen::Index count, MatrixXfRow& out)> read;
+  } streamed_transfer;
   CompressedTransfer compressed;
   BasisState basis_state;
   BasisState exit_state;                  // glossy only

@@ -131,9 +131,12 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
 TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                               const RunOptions& options, StageTimes& times,
                               std::uint64_t& rays_cast, const Shard& shard);
-// Every rank's rows, read back from the checkpoint's slabs (rank 0 writes the file).
-TransferSignal kept_transfer(const BakePlan& plan, const CheckpointStore& store,
-                             std::size_t vertices, std::size_t slab_vertices, int ranks);
+// Every rank's rows as rank 0 writes the file: its own from memory, the
+// other ranks' read from the checkpoint's slabs a slab at a time (rank 0
+// never holds the whole transfer). `store` must outlive the result.
+BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
+                                     std::size_t vertices, std::size_t slab_vertices, int ranks,
+                                     std::shared_ptr<const TransferSignal> own);
 // What a scene's bake depends on (scene text, mesh bytes, plug-ins, format):
 // the key of its checkpoint.
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan);
