@@ -1,7 +1,10 @@
 // Stages 1-2 of a bake through a checkpoint: a per-vertex transfer slab by
 // slab, any other transfer whole with its fitted basis. Each finished part is
 // kept, so a killed bake rerun with the same command computes only the rest.
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cinttypes>
 #include <cstdio>
 #include <memory>
@@ -217,22 +220,84 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
 
 TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                               const RunOptions& options, StageTimes& times,
-                              std::uint64_t& rays_cast, const Shard& shard) {
+                              std::uint64_t& rays_cast, const Shard& shard,
+                              const Communicator& comm) {
   if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
-  return slabbed_transfer(plan, mesh, set, options, times, rays_cast, std::size_t(shard.first),
-                          std::size_t(shard.last));
+  const CheckpointStore& store = *options.checkpoint;
+  const std::size_t v = mesh.vertex_count();
+  const auto slabs = slabs_of(0, v, std::max<std::size_t>(1, options.slab_vertices));
+  // Ranks take slabs as they come free (a slab's cost depends on its part
+  // of the mesh), by creating its claim file. Claims carry this run's id, so
+  // those of a killed run do not hold a slab back.
+  std::vector<char> id;
+  if (comm.rank() == 0) {
+    const std::string text =
+        std::to_string(::getpid()) + "-" +
+        std::to_string(std::chrono::steady_clock::now().time_since_epoch().count());
+    id.assign(text.begin(), text.end());
+  }
+  comm.broadcast(id, 0);
+  const std::string run = Digest().add(std::string(id.begin(), id.end())).hex();
+  std::size_t kept = 0;
+  for (const auto& slab : slabs)
+    kept += store.has(rows_name("transfer", slab.first, slab.last)) &&
+            store.has(rows_name("rays", slab.first, slab.last));
+  if (kept > 0)
+    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
+                    " slabs of vertices kept in " + store.folder().string());
+  Stopwatch clock;
+  std::optional<RayCaster> caster;
+  std::vector<Frame> frames;
+  Progress progress("bake transfer (slabs done or taken)", double(slabs.size()), "", options.quiet);
+  std::size_t traced_here = 0;
+  for (const auto& slab : slabs) {
+    const std::string name = rows_name("transfer", slab.first, slab.last),
+                      rays_name = rows_name("rays", slab.first, slab.last);
+    progress.add(1);
+    if (store.has(name) && store.has(rays_name)) continue;
+    if (!store.claim("claim-" + run + "." + name)) continue;  // another rank has it
+    if (plan.shadowed && !caster) caster.emplace(mesh);
+    if (plan.glossy && frames.empty()) frames = tangent_frames(mesh);
+    std::uint64_t rays = 0;
+    const MatrixXfRow rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames,
+                                           slab.first, slab.last, rays, nullptr)
+                                 .coefficients;
+    store.save(rays_name, Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
+    store.save(name, rows);
+    ++traced_here;
+  }
+  caster.reset();
+  comm.barrier();  // every slab is kept
+  times.add("trace + project (" + std::to_string(traced_here) + " slabs on this rank)",
+            clock.seconds());
+  // This rank's rows, and the rays of every slab.
+  TransferSignal out;
+  set_shape(plan, out);
+  out.coefficients.resize(shard.rows(), transfer_dimension(plan));
+  rays_cast = 0;
+  for (const auto& slab : slabs) {
+    rays_cast += static_cast<std::uint64_t>(
+        store.load_doubles(rows_name("rays", slab.first, slab.last))(0, 0));
+    const std::size_t first = std::max(slab.first, std::size_t(shard.first)),
+                      last = std::min(slab.last, std::size_t(shard.last));
+    if (first >= last) continue;
+    const std::string name = rows_name("transfer", slab.first, slab.last);
+    const MatrixXfRow rows = store.load_floats(name);
+    if (rows.rows() != Eigen::Index(slab.last - slab.first) ||
+        rows.cols() != out.coefficients.cols())
+      throw Error(store.folder().string() + "/" + name + ": a part of the wrong shape");
+    out.coefficients.middleRows(Eigen::Index(first) - shard.first, Eigen::Index(last - first)) =
+        rows.middleRows(Eigen::Index(first - slab.first), Eigen::Index(last - first));
+  }
+  return out;
 }
 
 BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
                                      std::size_t vertices, std::size_t slab, int ranks,
                                      std::shared_ptr<const TransferSignal> own) {
   // Where each slab of every rank lies, in vertex order.
-  std::vector<SlabRange> ranges;
-  for (int r = 1; r < ranks; ++r) {
-    const Shard shard = shard_of(Eigen::Index(vertices), r, ranks);
-    for (const auto& range : slabs_of(std::size_t(shard.first), std::size_t(shard.last), slab))
-      ranges.push_back(range);
-  }
+  const std::vector<SlabRange> ranges = slabs_of(0, vertices, slab);
+  (void)ranks;
   BakeData::StreamedRows rows;
   rows.rows = Eigen::Index(vertices);
   rows.cols = transfer_dimension(plan);

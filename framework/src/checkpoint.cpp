@@ -191,6 +191,17 @@ bool CheckpointStore::has(const std::string& name) const {
   return fs::exists(folder_ / name);
 }
 
+bool CheckpointStore::claim(const std::string& name) const {
+  const fs::path file = folder_ / name;
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    if (errno == EEXIST) return false;
+    throw Error(file.string() + ": cannot create: " + std::strerror(errno));
+  }
+  ::close(fd);
+  return true;
+}
+
 void CheckpointStore::save(const std::string& name, const MatrixXfRow& m) const {
   const std::size_t bytes = static_cast<std::size_t>(m.size()) * sizeof(float);
   write_whole(folder_ / name, header_for(Scalar::f32, m.rows(), m.cols(), m.data(), bytes),
@@ -250,7 +261,8 @@ std::vector<std::string> CheckpointStore::parts() const {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(folder_)) {
     const std::string name = entry.path().filename().string();
-    if (name != "key" && name != "lock" && name.find(".tmp-") == std::string::npos)
+    if (name != "key" && name != "lock" && name.rfind("claim-", 0) != 0 &&
+        name.find(".tmp-") == std::string::npos)
       names.push_back(name);
   }
   std::sort(names.begin(), names.end());

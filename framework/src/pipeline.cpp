@@ -484,14 +484,10 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
   std::uint64_t rays_cast = 0;
   TransferSignal transfer =
-      distributed ? shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard)
-                  : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
-                                          plan.bounces > 0 ? &data.direct : nullptr, rays_cast);
-  if (distributed) {
-    std::uint64_t all = 0;
-    for (const auto& rays : allgather(comm, {double(rays_cast)})) all += std::uint64_t(rays[0]);
-    rays_cast = all;
-  }
+      distributed
+          ? shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard, comm)
+          : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
+                                  plan.bounces > 0 ? &data.direct : nullptr, rays_cast);
 
   clock = Stopwatch();
   data.compressed = options.compress || plan.sparse_terms > 0

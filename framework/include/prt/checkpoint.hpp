@@ -48,6 +48,9 @@ class CheckpointStore {
 
   const std::filesystem::path& folder() const { return folder_; }
   bool has(const std::string& name) const;
+  // Creates the empty marker `name` if no process has: true for the one
+  // that did (O_EXCL; ranks share out work this way).
+  bool claim(const std::string& name) const;
   // Parts are float, double or int32 matrices; saved whole or not at all.
   void save(const std::string& name, const MatrixXfRow& matrix) const;
   void save(const std::string& name, const Eigen::MatrixXd& matrix) const;

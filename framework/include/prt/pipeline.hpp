@@ -126,11 +126,13 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
                                      const DirectionSet& set, const RunOptions& options,
                                      StageTimes& times, std::map<std::string, double>& metrics,
                                      TransferSignal* direct, std::uint64_t& rays_cast);
-// A distributed bake's stages 1-2: this rank's rows of a per-vertex transfer,
-// slab by slab through options.checkpoint (a folder every rank sees).
+// A distributed bake's stages 1-2: the ranks trace the slabs of a per-vertex
+// transfer as each comes free, into options.checkpoint (a folder every rank
+// sees); then each takes its shard's rows from the slabs. rays_cast: all ranks'.
 TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                               const RunOptions& options, StageTimes& times,
-                              std::uint64_t& rays_cast, const Shard& shard);
+                              std::uint64_t& rays_cast, const Shard& shard,
+                              const Communicator& comm);
 // Every rank's rows as rank 0 writes the file: its own from memory, the
 // other ranks' read from the checkpoint's slabs a slab at a time (rank 0
 // never holds the whole transfer). `store` must outlive the result.
