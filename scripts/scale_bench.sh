@@ -5,11 +5,11 @@
 # Meshes are Loop-subdivided bunnies (prt subdivide), made once in out/scale/.
 # Prints each run's wall time, peak memory per rank and communication, then
 # the efficiencies (docs/scale.md). Target: strong >= 0.85 at np = 2.
-#   scripts/scale_bench.sh [rays]        (PRT_BIN overrides build/bin)
+#   scripts/scale_bench.sh [rays, default 1024]   (PRT_BIN overrides build/bin)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bin="${PRT_BIN:-$root/build/bin}"
-rays="${1:-256}"
+rays="${1:-1024}"  # the default scenes' rays
 work="$root/out/scale"
 mkdir -p "$work"
 mpirun=(mpirun --bind-to core)
