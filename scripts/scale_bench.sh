@@ -5,7 +5,8 @@
 # Meshes are Loop-subdivided bunnies (prt subdivide), made once in out/scale/.
 # Prints each run's wall time, peak memory per rank and communication, then
 # the efficiencies (docs/scale.md). Target: strong >= 0.85 at np = 2.
-#   scripts/scale_bench.sh [rays, default 1024]   (PRT_BIN overrides build/bin)
+#   scripts/scale_bench.sh [rays, default 1024]   (PRT_BIN overrides build/bin;
+#   PRT_REPEATS runs of each, default 2, the fastest counts)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bin="${PRT_BIN:-$root/build/bin}"
@@ -35,20 +36,25 @@ environment = "../../data/hdri/courtyard.exr"
 SCENE
 done
 
-run() {  # ranks, vertices -> prints a line, sets $seconds
-  local np="$1" n="$2" out
-  local start end
-  start=$(date +%s.%N)
-  out=$("${mpirun[@]}" -np "$np" "$bin/prt-mpi" -q bake "$work/scale_$n.toml" \
-          -o "$work/scale_${n}_np$np.h5" --threads 1 --restart)
-  end=$(date +%s.%N)
-  seconds=$(echo "$end - $start" | bc)
+repeats="${PRT_REPEATS:-2}"  # the best of a few runs: this VM's neighbours add noise
+run() {  # ranks, vertices -> prints a line, sets $seconds (the fastest run)
+  local np="$1" n="$2" out="" start end t
+  seconds=""
+  for ((i = 0; i < repeats; ++i)); do
+    start=$(date +%s.%N)
+    out=$("${mpirun[@]}" -np "$np" "$bin/prt-mpi" -q bake "$work/scale_$n.toml" \
+            -o "$work/scale_${n}_np$np.h5" --threads 1 --restart)
+    end=$(date +%s.%N)
+    t=$(echo "$end - $start" | bc)
+    if [ -z "$seconds" ] || [ "$(echo "$t < $seconds" | bc)" = 1 ]; then seconds=$t; fi
+  done
   printf "np=%d  %8d vertices  %7.1f s  %s  %s\n" "$np" "$n" "$seconds" \
     "$(grep -o 'peak memory per rank.*' <<<"$out")" \
     "$(grep -o 'communication.*' <<<"$out" | sed 's/ (waiting included)//')"
 }
 
-echo "prt-mpi scaling, one thread per rank, $rays rays, SH order 10, static CPCA 256 x 8"
+echo "prt-mpi scaling, one thread per rank, $rays rays, SH order 10, static CPCA 256 x 8," \
+  "best of $repeats runs"
 run 1 1000000; t1=$seconds
 run 2 1000000; t2=$seconds
 run 2 2000000; w2=$seconds

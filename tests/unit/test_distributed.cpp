@@ -1,0 +1,186 @@
+// Distributed clustering equals the single-process result bit for bit: ranks
+// are simulated by threads sharing an in-process Communicator, each holding a
+// shard of whole segments, and LBG, iterative and adaptive CPCA and the
+// segment sums are compared with one process on the whole signal.
+#include <catch2/catch.hpp>
+#include <condition_variable>
+#include <mutex>
+#include <random>
+#include <thread>
+
+#include "prt/clustering.hpp"
+#include "prt/segment_sum.hpp"
+
+using namespace prt;
+
+namespace {
+
+// Ranks as threads: every collective is an all-to-all exchange of bytes.
+class ThreadGroup {
+ public:
+  explicit ThreadGroup(int ranks) : slots_(std::size_t(ranks)) {}
+  std::vector<std::vector<char>> exchange(int rank, const std::vector<char>& mine) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const std::size_t generation = generation_;
+    slots_[std::size_t(rank)] = mine;
+    if (++arrived_ == int(slots_.size())) {
+      published_ = slots_;
+      arrived_ = 0;
+      ++generation_;
+      done_.notify_all();
+    } else {
+      done_.wait(lock, [&] { return generation_ != generation; });
+    }
+    return published_;
+  }
+  int size() const { return int(slots_.size()); }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable done_;
+  std::vector<std::vector<char>> slots_, published_;
+  int arrived_ = 0;
+  std::size_t generation_ = 0;
+};
+
+class ThreadCommunicator final : public Communicator {
+ public:
+  ThreadCommunicator(ThreadGroup& group, int rank) : group_(group), rank_(rank) {}
+  int rank() const override { return rank_; }
+  int size() const override { return group_.size(); }
+  void barrier() const override { group_.exchange(rank_, {}); }
+  std::vector<std::vector<char>> allgather(const std::vector<char>& mine) const override {
+    return group_.exchange(rank_, mine);
+  }
+  std::vector<std::vector<char>> gather(const std::vector<char>& mine, int root) const override {
+    auto all = group_.exchange(rank_, mine);
+    return rank_ == root ? all : std::vector<std::vector<char>>{};
+  }
+  void broadcast(std::vector<char>& bytes, int root) const override {
+    bytes = group_.exchange(rank_, rank_ == root ? bytes : std::vector<char>{})[std::size_t(root)];
+  }
+
+ private:
+  ThreadGroup& group_;
+  int rank_;
+};
+
+// Rows around a few centres, so clusters are real and ties are rare.
+MatrixXfRow clustered_rows(Eigen::Index rows, Eigen::Index cols, int centres) {
+  std::mt19937 rng(7);
+  std::normal_distribution<float> noise(0.f, 0.05f);
+  std::uniform_int_distribution<int> pick(0, centres - 1);
+  const MatrixXfRow centre = MatrixXfRow::Random(centres, cols);
+  MatrixXfRow x(rows, cols);
+  for (Eigen::Index p = 0; p < rows; ++p) {
+    x.row(p) = centre.row(pick(rng));
+    for (Eigen::Index d = 0; d < cols; ++d) x(p, d) += noise(rng);
+  }
+  return x;
+}
+
+// Runs `work(rows)` on `ranks` threads, each with its shard of x.
+template <class Work>
+void on_ranks(const MatrixXfRow& x, int ranks, const Work& work) {
+  ThreadGroup group(ranks);
+  std::vector<std::thread> threads;
+  for (int r = 0; r < ranks; ++r)
+    threads.emplace_back([&, r] {
+      ThreadCommunicator comm(group, r);
+      const Shard shard = shard_of(x.rows(), r, ranks);
+      const MatrixXfRow local = x.middleRows(shard.first, shard.rows());
+      work(r, clustering::Rows(local, shard, comm));
+    });
+  for (auto& t : threads) t.join();
+}
+
+}  // namespace
+
+TEST_CASE("segment sums are the same bits on any number of ranks", "[distributed]") {
+  const Eigen::Index total = 11 * kSegmentRows + 123;  // 12 segments, the last short
+  std::vector<double> values(static_cast<std::size_t>(total));
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> uniform(-1e3, 1e3);
+  for (double& v : values) v = uniform(rng) * std::pow(10.0, int(rng() % 12) - 6);
+  auto partial_of = [&](Eigen::Index first) {
+    return [&, first](Eigen::Index s) {
+      double t = 0;
+      for (Eigen::Index p = segment_begin(s); p < segment_end(s, total); ++p)
+        t += values[std::size_t(p)];
+      (void)first;
+      return std::vector<double>{t, 1.0};
+    };
+  };
+  const auto one = segment_sum(whole(total), partial_of(0), solo());
+  REQUIRE(one.size() == 2);
+  CHECK(one[1] == 12);
+  for (int ranks : {2, 3, 5, 12, 13}) {  // 13: a rank with no segment
+    ThreadGroup group(ranks);
+    std::vector<std::vector<double>> results(static_cast<std::size_t>(ranks));
+    std::vector<std::thread> threads;
+    for (int r = 0; r < ranks; ++r)
+      threads.emplace_back([&, r] {
+        ThreadCommunicator comm(group, r);
+        results[std::size_t(r)] = segment_sum(shard_of(total, r, ranks), partial_of(0), comm);
+      });
+    for (auto& t : threads) t.join();
+    for (const auto& result : results) CHECK(result == one);  // exactly, not approximately
+  }
+  // A shard that does not hold whole segments is refused.
+  CHECK_THROWS(segment_sum({100, total, total}, partial_of(0), solo()));
+}
+
+TEST_CASE("distributed LBG and CPCA equal one process bit for bit", "[distributed]") {
+  const MatrixXfRow x = clustered_rows(3 * kSegmentRows + 1000, 12, 9);
+  for (auto init : {clustering::Init::kmeans_plus_plus, clustering::Init::hyperbox})
+    for (auto method : {clustering::Method::static_pca, clustering::Method::iterative,
+                        clustering::Method::adaptive}) {
+      clustering::CpcaOptions options;
+      options.lbg.clusters = 12;
+      options.lbg.init = init;
+      options.method = method;
+      options.components = 3;
+      options.iterations_per_component = 3;
+      options.adaptive_iterations = 2;
+      const clustering::CpcaResult one = clustering::cpca(x, options);
+      for (int ranks : {2, 3}) {
+        INFO("ranks " << ranks << ", method " << int(method) << ", init " << int(init));
+        std::vector<clustering::CpcaResult> results(static_cast<std::size_t>(ranks));
+        on_ranks(x, ranks, [&](int r, const clustering::Rows& rows) {
+          results[std::size_t(r)] = clustering::cpca(rows, options);
+        });
+        std::vector<std::int32_t> labels;
+        for (const auto& result : results) {
+          labels.insert(labels.end(), result.labels.begin(), result.labels.end());
+          REQUIRE(result.models.size() == one.models.size());
+          for (std::size_t k = 0; k < one.models.size(); ++k) {
+            CHECK(result.models[k].mean == one.models[k].mean);
+            CHECK(result.models[k].basis == one.models[k].basis);
+          }
+        }
+        CHECK(labels == one.labels);
+      }
+    }
+}
+
+TEST_CASE("compressed rows gather on rank 0 in vertex order", "[distributed]") {
+  const MatrixXfRow x = clustered_rows(2 * kSegmentRows + 77, 6, 4);
+  std::vector<std::int32_t> labels(std::size_t(x.rows()));
+  for (std::size_t p = 0; p < labels.size(); ++p) labels[p] = std::int32_t(p % 4);
+  const auto models = clustering::fit_models(clustering::Rows(x), labels, 4, {2, 2, 2, 2});
+  const CompressedTransfer one = clustering::assemble(x, labels, models, "test");
+  on_ranks(x, 3, [&](int r, const clustering::Rows& rows) {
+    const std::vector<std::int32_t> local(labels.begin() + rows.shard.first,
+                                          labels.begin() + rows.shard.last);
+    const auto shared = clustering::fit_models(rows, local, 4, {2, 2, 2, 2});
+    CompressedTransfer c = clustering::assemble(rows.x, local, shared, "test");
+    clustering::gather_rows(rows, c);
+    if (r == 0) {
+      CHECK(c.cluster_of_vertex == one.cluster_of_vertex);
+      CHECK(c.weights == one.weights);
+      CHECK(c.means == one.means);
+    } else {
+      CHECK(c.vertices() == rows.local());
+    }
+  });
+}
