@@ -47,7 +47,13 @@ int bake(Context& context, const BakeArgs& args) {
   RunOptions options{context.quiet};
   options.checkpoint = &checkpoint;
   options.slab_vertices = args.slab_vertices;
-  BakeData data = bake(scene, context.registry, options, times);
+  BakeData data;
+  try {
+    data = bake(scene, context.registry, options, times);
+  } catch (...) {
+    if (checkpoint.parts().empty()) checkpoint.remove();  // nothing to resume: no litter
+    throw;
+  }
   clock = Stopwatch();
   write_bake(output, data);
   checkpoint.remove();

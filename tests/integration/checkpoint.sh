@@ -43,28 +43,37 @@ seconds=$(echo "$(date +%s.%N) - $start" | bc)
 echo "uninterrupted bake: ${seconds} s"
 
 RANDOM=$$  # a different pair of moments each run; printed for a rerun
+finished=no
 for attempt in 1 2; do
   percent=$((25 + RANDOM % 60))  # drawn here: a subshell would repeat the draw
   delay=$(echo "scale=2; $seconds * $percent / 100" | bc)
   bake_in_background resumed
   sleep "$delay"
   kill -9 "$pid" 2>/dev/null || true
-  wait "$pid" 2>/dev/null || true
+  status=0
+  wait "$pid" 2>/dev/null || status=$?
+  if [ "$status" -eq 0 ]; then  # what was left took less than the delay: it resumed
+    echo "run $attempt resumed and finished before its kill at ${delay} s"
+    finished=yes
+    break
+  fi
   [ ! -e "$work/resumed.h5" ] || { echo "FAIL: a partial file under the final name"; exit 1; }
   kept=$(ls "$work/.resumed.h5.checkpoint" 2>/dev/null | grep -c '^transfer\.' || true)
   echo "kill $attempt after ${delay} s: $kept slabs kept"
 done
 # A second process on the same checkpoint is refused while the first runs.
-bake_in_background resumed
+bake_in_background locked
 sleep 0.3
-if out=$(bake resumed 2>&1); then echo "FAIL: two processes baked into one checkpoint"; exit 1; fi
+if out=$(bake locked 2>&1); then echo "FAIL: two processes baked into one checkpoint"; exit 1; fi
 grep -q 'another prt process is using this checkpoint' <<<"$out" || { echo "FAIL: $out"; exit 1; }
 kill -9 "$pid"; wait "$pid" 2>/dev/null || true
-out=$("$prt" bake "$work/scene.toml" -o "$work/resumed.h5" --slab-vertices 8192 2>&1)
+out="run $attempt resumed and finished"
+[ "$finished" = yes ] ||
+  out=$("$prt" bake "$work/scene.toml" -o "$work/resumed.h5" --slab-vertices 8192 2>&1)
 cmp "$work/reference.h5" "$work/resumed.h5" ||
   { echo "FAIL: the resumed bake differs from the uninterrupted one"; exit 1; }
 [ ! -e "$work/.resumed.h5.checkpoint" ] || { echo "FAIL: checkpoint left after success"; exit 1; }
-echo "resumed bake identical to the uninterrupted one ($(grep -o 'resuming: [0-9]* of [0-9]*' <<<"$out" || echo 'nothing kept'))"
+echo "resumed bake identical to the uninterrupted one ($(grep -o 'resuming: [0-9]* of [0-9]*\|run [0-9] resumed and finished' <<<"$out" || echo 'nothing kept'))"
 
 # A stale checkpoint (the scene changed) is refused, then discarded on request.
 bake_in_background stale

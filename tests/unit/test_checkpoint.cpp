@@ -63,9 +63,14 @@ TEST_CASE("checkpoint parts round-trip and refuse damage and other runs", "[chec
   CHECK(store.load_ints("ints") == std::vector<std::int32_t>{3, -1, 7});
   CHECK(store.load_text("text") == "a 1\nb 2.5\n");
   CHECK(store.parts() == std::vector<std::string>{"doubles", "floats", "ints", "text"});
-  // The same run reopens it; another is refused with the folder's name.
-  CHECK_NOTHROW(CheckpointStore(output, "key-1", "test"));
-  CHECK_THROWS_WITH(CheckpointStore(output, "key-2", "test"),
+  // While it is held, a second opening is refused (its lock); a read-only
+  // sharer (another rank) may open it.
+  CHECK_THROWS_WITH(CheckpointStore(output, "key-1", "test"),
+                    Catch::Contains("another prt process is using this checkpoint"));
+  CHECK_THROWS_WITH(CheckpointStore::discard(output), Catch::Contains("another prt process"));
+  CHECK_NOTHROW(CheckpointStore(output, "key-1", "test", false));
+  // Another run is refused with the folder's name, even when unlocked.
+  CHECK_THROWS_WITH(CheckpointStore(output, "key-2", "test", false),
                     Catch::Contains(".bake.h5.checkpoint") && Catch::Contains("--restart"));
   // A truncated part and a flipped byte are refused, not loaded.
   const fs::path part = store.folder() / "floats";
@@ -80,6 +85,20 @@ TEST_CASE("checkpoint parts round-trip and refuse damage and other runs", "[chec
   CHECK_THROWS(store.load_floats("ints"));  // wrong type
   store.remove();
   CHECK_FALSE(fs::exists(store.folder()));
+}
+
+TEST_CASE("a released checkpoint reopens for the same run and is discarded on request",
+          "[checkpoint]") {
+  const fs::path output = fresh_folder("reopen") / "bake.h5";
+  { CheckpointStore(output, "key-1", "test").save_text("part", "x"); }
+  {
+    const CheckpointStore again(output, "key-1", "test");
+    CHECK(again.load_text("part") == "x");
+  }
+  CHECK_THROWS_WITH(CheckpointStore(output, "key-2", "test"), Catch::Contains("--restart"));
+  CheckpointStore::discard(output);
+  CHECK_FALSE(fs::exists(CheckpointStore::folder_for(output)));
+  CHECK_NOTHROW(CheckpointStore(output, "key-2", "test"));
 }
 
 TEST_CASE("a bake in slabs through a checkpoint equals the bake without one", "[checkpoint]") {
