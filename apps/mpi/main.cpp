@@ -105,6 +105,10 @@ int main(int argc, char** argv) {
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (provided < MPI_THREAD_FUNNELED) {  // TBB threads run beside the main thread's MPI calls
+    if (rank == 0) std::cerr << "prt-mpi: this MPI library does not support threads\n";
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
   CLI::App app{
       "prt-mpi: prt bake with vertices sharded across MPI ranks (mpirun -np N prt-mpi bake ...)"};
   app.require_subcommand(1);

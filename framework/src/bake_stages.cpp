@@ -296,7 +296,7 @@ BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore
                                      std::size_t vertices, std::size_t slab, int ranks,
                                      std::shared_ptr<const TransferSignal> own) {
   // Where each slab of every rank lies, in vertex order.
-  const std::vector<SlabRange> ranges = slabs_of(0, vertices, slab);
+  const std::vector<SlabRange> ranges = slabs_of(0, vertices, std::max<std::size_t>(1, slab));
   (void)ranks;
   BakeData::StreamedRows rows;
   rows.rows = Eigen::Index(vertices);

@@ -57,7 +57,8 @@ struct Header {
 
 // Writes a whole file or nothing under its name: temporary, fsync, rename,
 // fsync of the folder (so the rename survives a crash of the machine too).
-void write_whole(const fs::path& file, const Header& header, const void* data, std::size_t bytes) {
+void write_raw(const fs::path& file, const void* head, std::size_t head_bytes, const void* data,
+               std::size_t bytes) {
   const fs::path temporary = file.string() + ".tmp-" + std::to_string(::getpid());
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw Error(temporary.string() + ": cannot create: " + std::strerror(errno));
@@ -75,15 +76,21 @@ void write_whole(const fs::path& file, const Header& header, const void* data, s
       p += n, size -= static_cast<std::size_t>(n);
     }
   };
-  write_all(&header, sizeof header);
+  write_all(head, head_bytes);
   write_all(data, bytes);
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+  const bool synced = ::fsync(fd) == 0;
+  const bool closed = ::close(fd) == 0;  // always closed, even when fsync failed
+  if (!synced || !closed) {
     fs::remove(temporary);
     throw Error(temporary.string() + ": could not be flushed to disk");
   }
   fs::rename(temporary, file);
   const int dir = ::open(file.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir >= 0) ::fsync(dir), ::close(dir);
+}
+
+void write_whole(const fs::path& file, const Header& header, const void* data, std::size_t bytes) {
+  write_raw(file, &header, sizeof header, data, bytes);
 }
 
 Header header_for(Scalar scalar, std::uint64_t rows, std::uint64_t cols, const void* data,
@@ -163,11 +170,22 @@ CheckpointStore::CheckpointStore(const fs::path& output, const std::string& key,
                                  const std::string& description, bool exclusive)
     : folder_(folder_for(output)) {
   if (exclusive) lock_ = lock_folder(folder_);
+  try {
+    open_key(key, description);
+  } catch (...) {
+    if (lock_ >= 0) ::close(lock_), lock_ = -1;
+    throw;
+  }
+}
+
+void CheckpointStore::open_key(const std::string& key, const std::string& description) {
   const fs::path key_file = folder_ / "key";
+  std::string stored;
   if (fs::exists(key_file)) {
     std::ifstream in(key_file);
-    std::string stored;
     std::getline(in, stored);
+  }
+  if (!stored.empty()) {  // an empty key (never completed) counts as none
     if (stored != key) {
       if (lock_ >= 0) ::close(lock_), lock_ = -1;
       throw Error(folder_.string() +
@@ -178,13 +196,7 @@ CheckpointStore::CheckpointStore(const fs::path& output, const std::string& key,
   }
   fs::create_directories(folder_);
   const std::string text = key + "\n" + description + "\n";
-  const fs::path temporary = key_file.string() + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary);
-    out << text;
-    if (!out.flush()) throw Error(temporary.string() + ": cannot write");
-  }
-  fs::rename(temporary, key_file);
+  write_raw(key_file, text.data(), text.size(), nullptr, 0);
 }
 
 bool CheckpointStore::has(const std::string& name) const {

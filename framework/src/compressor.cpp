@@ -34,30 +34,40 @@ void gather_rows(const Distribution& rows, CompressedTransfer& c) {
   if (rows.comm->size() == 1) return;
   // One message: ids, then weights, then sparse indices, as raw bytes.
   std::vector<char> mine;
+  // Every rank says whether its rows are sparse (a rank without rows has no
+  // sparse indices to show it).
+  const std::int32_t sparse_here = c.sparse() ? 1 : 0;
   auto put = [&](const void* data, std::size_t size) {
     const char* p = static_cast<const char*>(data);
     mine.insert(mine.end(), p, p + size);
   };
+  put(&sparse_here, sizeof sparse_here);
   put(c.cluster_of_vertex.data(), c.cluster_of_vertex.size() * sizeof(std::int32_t));
   put(c.weights.data(), std::size_t(c.weights.size()) * sizeof(float));
   put(c.weight_index.data(), c.weight_index.size() * sizeof(std::int32_t));
   const auto all = rows.comm->gather(mine, 0);
   if (rows.comm->rank() != 0) return;
   const Eigen::Index total = rows.shard.total, width = c.weights.cols();
-  const bool sparse = c.sparse();
+  bool sparse = false;
+  for (const auto& message : all) {
+    std::int32_t flag = 0;
+    if (message.size() < sizeof flag) throw Error("compressed rows: an empty message");
+    std::memcpy(&flag, message.data(), sizeof flag);
+    sparse = sparse || flag != 0;
+  }
   c.cluster_of_vertex.resize(std::size_t(total));
   c.weights.resize(total, width);
   if (sparse) c.weight_index.resize(std::size_t(total * width));
   for (int r = 0; r < rows.comm->size(); ++r) {
     const Shard shard = shard_of(total, r, rows.comm->size());
     const std::size_t count = std::size_t(shard.rows());
-    const std::size_t expected = count * sizeof(std::int32_t) +
+    const std::size_t expected = sizeof(std::int32_t) + count * sizeof(std::int32_t) +
                                  count * std::size_t(width) * sizeof(float) +
                                  (sparse ? count * std::size_t(width) * sizeof(std::int32_t) : 0);
     if (all[std::size_t(r)].size() != expected)
       throw Error("compressed rows: rank " + std::to_string(r) +
                   " sent compressed rows of the wrong size");
-    const char* at = all[std::size_t(r)].data();
+    const char* at = all[std::size_t(r)].data() + sizeof(std::int32_t);
     std::memcpy(&c.cluster_of_vertex[std::size_t(shard.first)], at, count * sizeof(std::int32_t));
     at += count * sizeof(std::int32_t);
     if (width) std::memcpy(c.weights.row(shard.first).data(), at, count * width * sizeof(float));
@@ -85,7 +95,7 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
                           const Mesh* mesh, double encode_seconds, const Distribution& where) {
   CompressionReport r;
   std::vector<double> errors = vertex_errors(signal, compressed);
-  r.squared_error = segment_sum(
+  const std::vector<double> total = segment_sum(
       where.shard,
       [&](Eigen::Index s) {
         double t = 0;
@@ -93,8 +103,9 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
           t += errors[std::size_t(p - where.shard.first)];
         return std::vector<double>{t};
       },
-      *where.comm)[0];
-  if (where.comm->size() > 1) {  // every vertex's error on rank 0
+      *where.comm);
+  r.squared_error = total.empty() ? 0.0 : total[0];  // empty: no vertices
+  if (where.comm->size() > 1) {                      // every vertex's error on rank 0
     const auto all = where.comm->gather(to_bytes(errors), 0);
     errors.clear();
     for (const auto& part : all) {

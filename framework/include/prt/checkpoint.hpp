@@ -68,6 +68,7 @@ class CheckpointStore {
   void remove() const;
 
  private:
+  void open_key(const std::string& key, const std::string& description);
   std::filesystem::path folder_;
   int lock_ = -1;
 };

@@ -99,8 +99,10 @@ std::vector<Eigen::MatrixXd> cluster_scatter(const Rows& rows,
                                              const RowMatrixXd& means,
                                              const std::vector<int>& which) {
   const Eigen::Index n = rows.cols();
+  // Every rank receives every rank's subtree roots: the bound is shared.
   const std::size_t group =
-      std::max<std::size_t>(1, kGroupBytes / (sizeof(double) * std::size_t(n) * std::size_t(n)));
+      std::max<std::size_t>(1, kGroupBytes / std::size_t(rows.comm.size()) /
+                                   (sizeof(double) * std::size_t(n) * std::size_t(n)));
   Blocks total;
   std::vector<bool> wanted(static_cast<std::size_t>(means.rows()), false);
   for (std::size_t start = 0; start < which.size(); start += group) {
