@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # prt-mpi on a real CGAL mesh equals prt bake byte for byte, for 1 to 4
 # ranks (more ranks than cores: --oversubscribe): iterative CPCA with
-# superclusters, static CPCA from a hyper-box start, PCA and glossy VQ. A
+# superclusters, static CPCA from a hyper-box start, PCA, glossy VQ and a
+# sparse Haar approximation with a rank that holds no vertex. A
 # compressor that cannot run distributed is refused on every rank with one
 # message, and a bad scene ends every rank (no hang).
 #   mpi.sh <prt> <prt-mpi> <source dir>
@@ -43,7 +44,23 @@ scene pca refined_elephant.off $'plugin = "sh"\norder = 6' $'plugin = "pca"\ncom
 scene glossy_vq armadillo.off $'plugin = "sh"\norder = 4' $'plugin = "vq"\nclusters = 48' \
   $'brdf = "phong"\nspecular = 0.5\nexponent = 8'
 
-for name in iterative static pca glossy_vq; do
+# Haar's k largest (a sparse form, no compressor) on 10,000 vertices: two
+# segments for three ranks, so rank 0 holds none and still writes the file.
+cat >"$work/haar_sparse.toml" <<SCENE
+[mesh]
+file = "$src/data/meshes/ChineseDragon-10kv.off"
+[transport]
+directions = "cubemap"
+rays = 384
+[basis]
+plugin = "haar"
+resolution = 8
+k = 24
+[lighting]
+environment = "$src/data/hdri/courtyard.exr"
+SCENE
+
+for name in iterative static pca glossy_vq haar_sparse; do
   "$prt" -q bake "$work/$name.toml" -o "$work/$name.serial.h5" >/dev/null
   ranks="1 2 3 4"
   [ "$name" = iterative ] || ranks="3"
