@@ -81,6 +81,36 @@ std::vector<SlabRange> slabs_of(std::size_t first, std::size_t last, std::size_t
   return out;
 }
 
+// A slab is kept once both its parts exist (the transfer is saved last).
+bool slab_kept(const CheckpointStore& store, const SlabRange& slab) {
+  return store.has(rows_name("transfer", slab.first, slab.last)) &&
+         store.has(rows_name("rays", slab.first, slab.last));
+}
+
+void keep_slab(const CheckpointStore& store, const SlabRange& slab, const MatrixXfRow& rows,
+               std::uint64_t rays) {
+  store.save(rows_name("rays", slab.first, slab.last),
+             Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
+  store.save(rows_name("transfer", slab.first, slab.last), rows);  // last: marks it kept
+}
+
+std::uint64_t kept_rays(const CheckpointStore& store, const SlabRange& slab) {
+  return static_cast<std::uint64_t>(
+      store.load_doubles(rows_name("rays", slab.first, slab.last))(0, 0));
+}
+
+// A kept slab's rows, refused unless they have the slab's shape.
+MatrixXfRow kept_rows(const CheckpointStore& store, const SlabRange& slab, Eigen::Index cols) {
+  const std::string name = rows_name("transfer", slab.first, slab.last);
+  MatrixXfRow rows = store.load_floats(name);
+  if (rows.rows() != static_cast<Eigen::Index>(slab.last - slab.first) || rows.cols() != cols)
+    throw Error(store.folder().string() + "/" + name + ": holds a " + std::to_string(rows.rows()) +
+                " x " + std::to_string(rows.cols()) + " part where the slab needs " +
+                std::to_string(slab.last - slab.first) + " x " + std::to_string(cols) +
+                "; delete the folder or rerun with --restart");
+  return rows;
+}
+
 Eigen::Index transfer_dimension(const BakePlan& plan) {
   return Eigen::Index(plan.glossy ? plan.glossy_operator.rows() : 1) * plan.basis->size();
 }
@@ -93,7 +123,7 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
   const CheckpointStore& store = *options.checkpoint;
   const auto slabs = slabs_of(first, last, std::max<std::size_t>(1, options.slab_vertices));
   std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += store.has(rows_name("transfer", slab.first, slab.last));
+  for (const auto& slab : slabs) kept += slab_kept(store, slab);
   if (kept > 0)
     options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
                     " slabs of vertices kept in " + store.folder().string());
@@ -109,28 +139,18 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
                     options.quiet);
   rays_cast = 0;
   for (const auto& slab : slabs) {
-    const std::string name = rows_name("transfer", slab.first, slab.last),
-                      rays_name = rows_name("rays", slab.first, slab.last);
     MatrixXfRow rows;
     std::uint64_t rays = 0;
-    if (store.has(name) && store.has(rays_name)) {
-      rows = store.load_floats(name);
-      rays = static_cast<std::uint64_t>(store.load_doubles(rays_name)(0, 0));
+    if (slab_kept(store, slab)) {
+      rows = kept_rows(store, slab, out.coefficients.cols());
+      rays = kept_rays(store, slab);
       progress.add(double(slab.last - slab.first), double(rays));
     } else {
       rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames, slab.first,
                            slab.last, rays, &progress)
                  .coefficients;
-      store.save(rays_name, Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
-      store.save(name, rows);  // last: its presence marks the slab done
+      keep_slab(store, slab, rows, rays);
     }
-    if (rows.rows() != static_cast<Eigen::Index>(slab.last - slab.first) ||
-        rows.cols() != out.coefficients.cols())
-      throw Error(store.folder().string() + "/" + name + ": holds a " +
-                  std::to_string(rows.rows()) + " x " + std::to_string(rows.cols()) +
-                  " part where the slab needs " + std::to_string(slab.last - slab.first) + " x " +
-                  std::to_string(out.coefficients.cols()) +
-                  "; delete the folder or rerun with --restart");
     out.coefficients.middleRows(static_cast<Eigen::Index>(slab.first - first), rows.rows()) = rows;
     rays_cast += rays;
   }
@@ -239,9 +259,7 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   comm.broadcast(id, 0);
   const std::string run = Digest().add(std::string(id.begin(), id.end())).hex();
   std::size_t kept = 0;
-  for (const auto& slab : slabs)
-    kept += store.has(rows_name("transfer", slab.first, slab.last)) &&
-            store.has(rows_name("rays", slab.first, slab.last));
+  for (const auto& slab : slabs) kept += slab_kept(store, slab);
   if (kept > 0)
     options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
                     " slabs of vertices kept in " + store.folder().string());
@@ -251,19 +269,17 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   Progress progress("bake transfer (slabs done or taken)", double(slabs.size()), "", options.quiet);
   std::size_t traced_here = 0;
   for (const auto& slab : slabs) {
-    const std::string name = rows_name("transfer", slab.first, slab.last),
-                      rays_name = rows_name("rays", slab.first, slab.last);
     progress.add(1);
-    if (store.has(name) && store.has(rays_name)) continue;
-    if (!store.claim("claim-" + run + "." + name)) continue;  // another rank has it
+    if (slab_kept(store, slab)) continue;
+    if (!store.claim("claim-" + run + "." + rows_name("transfer", slab.first, slab.last)))
+      continue;  // another rank has it
     if (plan.shadowed && !caster) caster.emplace(mesh);
     if (plan.glossy && frames.empty()) frames = tangent_frames(mesh);
     std::uint64_t rays = 0;
     const MatrixXfRow rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames,
                                            slab.first, slab.last, rays, nullptr)
                                  .coefficients;
-    store.save(rays_name, Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
-    store.save(name, rows);
+    keep_slab(store, slab, rows, rays);
     ++traced_here;
   }
   caster.reset();
@@ -276,16 +292,11 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   out.coefficients.resize(shard.rows(), transfer_dimension(plan));
   rays_cast = 0;
   for (const auto& slab : slabs) {
-    rays_cast += static_cast<std::uint64_t>(
-        store.load_doubles(rows_name("rays", slab.first, slab.last))(0, 0));
+    rays_cast += kept_rays(store, slab);
     const std::size_t first = std::max(slab.first, std::size_t(shard.first)),
                       last = std::min(slab.last, std::size_t(shard.last));
     if (first >= last) continue;
-    const std::string name = rows_name("transfer", slab.first, slab.last);
-    const MatrixXfRow rows = store.load_floats(name);
-    if (rows.rows() != Eigen::Index(slab.last - slab.first) ||
-        rows.cols() != out.coefficients.cols())
-      throw Error(store.folder().string() + "/" + name + ": a part of the wrong shape");
+    const MatrixXfRow rows = kept_rows(store, slab, out.coefficients.cols());
     out.coefficients.middleRows(Eigen::Index(first) - shard.first, Eigen::Index(last - first)) =
         rows.middleRows(Eigen::Index(first - slab.first), Eigen::Index(last - first));
   }
@@ -293,11 +304,10 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
 }
 
 BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
-                                     std::size_t vertices, std::size_t slab, int ranks,
+                                     std::size_t vertices, std::size_t slab,
                                      std::shared_ptr<const TransferSignal> own) {
-  // Where each slab of every rank lies, in vertex order.
+  // Where each slab lies, in vertex order.
   const std::vector<SlabRange> ranges = slabs_of(0, vertices, std::max<std::size_t>(1, slab));
-  (void)ranks;
   BakeData::StreamedRows rows;
   rows.rows = Eigen::Index(vertices);
   rows.cols = transfer_dimension(plan);
@@ -320,11 +330,7 @@ BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore
         });
         if (it == ranges.end())
           throw Error("the checkpoint holds no slab with vertex " + std::to_string(p));
-        const std::string name = rows_name("transfer", it->first, it->last);
-        MatrixXfRow loaded = store.load_floats(name);
-        if (loaded.rows() != Eigen::Index(it->last - it->first) || loaded.cols() != cols)
-          throw Error(store.folder().string() + "/" + name + ": a part of the wrong shape");
-        *cache = {*it, std::move(loaded)};
+        *cache = {*it, kept_rows(store, *it, cols)};
       }
       const Eigen::Index at = Eigen::Index(p - cache->first.first);
       const Eigen::Index n = std::min(count - done, cache->second.rows() - at);

@@ -509,7 +509,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     data.transfer.group_of_channel = transfer.group_of_channel;
     data.streamed_transfer =
         kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(), options.slab_vertices,
-                      comm.size(), std::make_shared<const TransferSignal>(std::move(transfer)));
+                      std::make_shared<const TransferSignal>(std::move(transfer)));
   } else {
     data.transfer = std::move(transfer);
   }

@@ -137,7 +137,7 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
 // other ranks' read from the checkpoint's slabs a slab at a time (rank 0
 // never holds the whole transfer). `store` must outlive the result.
 BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
-                                     std::size_t vertices, std::size_t slab_vertices, int ranks,
+                                     std::size_t vertices, std::size_t slab_vertices,
                                      std::shared_ptr<const TransferSignal> own);
 // What a scene's bake depends on (scene text, mesh bytes, plug-ins, format):
 // the key of its checkpoint.
