@@ -95,17 +95,8 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
                           const Mesh* mesh, double encode_seconds, const Distribution& where) {
   CompressionReport r;
   std::vector<double> errors = vertex_errors(signal, compressed);
-  const std::vector<double> total = segment_sum(
-      where.shard,
-      [&](Eigen::Index s) {
-        double t = 0;
-        for (Eigen::Index p = segment_begin(s); p < segment_end(s, where.shard.total); ++p)
-          t += errors[std::size_t(p - where.shard.first)];
-        return std::vector<double>{t};
-      },
-      *where.comm);
-  r.squared_error = total.empty() ? 0.0 : total[0];  // empty: no vertices
-  if (where.comm->size() > 1) {                      // every vertex's error on rank 0
+  r.squared_error = segment_sum_rows(where.shard, errors, *where.comm);
+  if (where.comm->size() > 1) {  // every vertex's error on rank 0
     const auto all = where.comm->gather(to_bytes(errors), 0);
     errors.clear();
     for (const auto& part : all) {

@@ -151,6 +151,20 @@ Vector segment_sum(const Shard& shard, const SegmentPartial& partial, const Comm
   return tree_sum<Vector>(shard, partial, comm);
 }
 
+double segment_sum_rows(const Shard& shard, const std::vector<double>& per_row,
+                        const Communicator& comm) {
+  const Vector total = segment_sum(
+      shard,
+      [&](Eigen::Index s) {
+        double t = 0;
+        for (Eigen::Index p = segment_begin(s); p < segment_end(s, shard.total); ++p)
+          t += per_row[std::size_t(p - shard.first)];
+        return Vector{t};
+      },
+      comm);
+  return total.empty() ? 0.0 : total[0];
+}
+
 Blocks segment_sum_blocks(const Shard& shard, const SegmentBlocks& partial,
                           const Communicator& comm) {
   return tree_sum<Blocks>(shard, partial, comm);

@@ -28,6 +28,11 @@ using SegmentBlocks = std::function<Blocks(Eigen::Index segment)>;
 Blocks segment_sum_blocks(const Shard& shard, const SegmentBlocks& partial,
                           const Communicator& comm);
 
+// The sum of one value per local row of `shard` (per_row[0] is row
+// shard.first) over the whole signal: 0 when it has no rows.
+double segment_sum_rows(const Shard& shard, const std::vector<double>& per_row,
+                        const Communicator& comm);
+
 // Segment s's rows [begin, end) of the whole signal.
 inline Eigen::Index segment_begin(Eigen::Index s) {
   return s * kSegmentRows;

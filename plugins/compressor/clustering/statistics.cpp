@@ -26,16 +26,7 @@ std::pair<Eigen::Index, Eigen::Index> Rows::segment_rows(Eigen::Index segment) c
 }
 
 double Rows::sum(const std::vector<double>& per_row) const {
-  const auto total = segment_sum(
-      shard,
-      [&](Eigen::Index s) {
-        const auto [begin, end] = segment_rows(s);
-        double t = 0;
-        for (Eigen::Index p = begin; p < end; ++p) t += per_row[std::size_t(p)];
-        return std::vector<double>{t};
-      },
-      comm);
-  return total.empty() ? 0.0 : total[0];
+  return segment_sum_rows(shard, per_row, comm);
 }
 
 Eigen::RowVectorXd Rows::fetch(Eigen::Index global) const {
