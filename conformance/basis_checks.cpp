@@ -5,12 +5,11 @@
 // boolean and choice parameter varied, save/load round trip, extreme inputs.
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <catch2/catch.hpp>
 #include <random>
 #include <sstream>
 
-#include "../common/scenes.hpp"
-#include "conformance.hpp"
+#include "scenes.hpp"
+#include "kit.hpp"
 #include "prt/basis.hpp"
 #include "prt/error.hpp"
 #include "prt/mesh.hpp"
@@ -18,7 +17,7 @@
 #include "prt/registry.hpp"
 #include "prt/transport.hpp"
 
-using namespace prt;
+namespace prt::conformance {
 
 namespace {
 
@@ -34,11 +33,15 @@ std::shared_ptr<Basis> fitted(std::shared_ptr<Basis> basis) {
 }
 
 struct Fixture {
-  PluginRegistry registry{PluginRegistry::default_directories()};
-  Params params;
-  std::shared_ptr<Basis> basis = fitted(registry.create<Basis>(conformance::plugin_name, params));
+  explicit Fixture(Kit& kit) : registry(kit.registry) {
+    Params params;
+    basis = fitted(registry.create<Basis>(kit.plugin, params));
+    set = basis->native_directions().value_or(gauss_product_sphere(64));
+  }
+  PluginRegistry& registry;
+  std::shared_ptr<Basis> basis;
   // The basis's own exact rule, or one exact for spherical polynomials of degree < 128.
-  DirectionSet set = basis->native_directions().value_or(gauss_product_sphere(64));
+  DirectionSet set;
 };
 
 Eigen::MatrixXd random_coefficients(int functions, int size, std::uint64_t seed) {
@@ -51,47 +54,55 @@ Eigen::MatrixXd random_coefficients(int functions, int size, std::uint64_t seed)
 
 }  // namespace
 
-TEST_CASE_METHOD(Fixture, "basis values are finite everywhere, poles included", "[conformance]") {
+static void basis_check_0(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   Directions extremes(6, 3);
   extremes << 0, 0, 1, 0, 0, -1, 1, 0, 0, 0, 1, 0, 1e-12, 0, 1, 0, -1e-12, -1;
   extremes.row(4).normalize(), extremes.row(5).normalize();
   const Eigen::MatrixXd v = basis->evaluate(extremes);
-  CHECK(v.rows() == 6);
-  CHECK(v.cols() == basis->size());
-  CHECK(v.allFinite());
+  KIT_CHECK(kit, v.rows() == 6);
+  KIT_CHECK(kit, v.cols() == basis->size());
+  KIT_CHECK(kit, v.allFinite());
 }
 
-TEST_CASE_METHOD(Fixture, "an orthonormal basis has an identity Gram matrix", "[conformance]") {
+static void basis_check_1(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   if (!basis->orthonormal()) return;
   const Eigen::MatrixXd y = basis->evaluate(set.directions);
   const Eigen::MatrixXd gram = y.transpose() * set.weights.asDiagonal() * y;
   const int n = basis->size();
-  CHECK((gram - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
+  KIT_CHECK(kit, (gram - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
 }
 
-TEST_CASE_METHOD(Fixture, "projection reconstructs functions in the span", "[conformance]") {
+static void basis_check_2(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   const Eigen::MatrixXd c = random_coefficients(4, basis->size(), 1);
   const Eigen::MatrixXd samples = c * basis->evaluate(set.directions).transpose();
   const Eigen::MatrixXd projected = basis->project(samples, set);
-  CHECK((projected - c).norm() / c.norm() < 1e-9);
+  KIT_CHECK(kit, (projected - c).norm() / c.norm() < 1e-9);
 }
 
-TEST_CASE_METHOD(Fixture, "projection is linear and scales from 1e-6 to 1e6", "[conformance]") {
+static void basis_check_3(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   const Eigen::MatrixXd f = random_coefficients(2, set.size(), 2);
   const Eigen::MatrixXd pf = basis->project(f, set);
   const Eigen::MatrixXd combined = basis->project(3.0 * f.row(0) - 0.5 * f.row(1), set);
-  CHECK((combined - (3.0 * pf.row(0) - 0.5 * pf.row(1))).norm() < 1e-9 * pf.norm());
+  KIT_CHECK(kit, (combined - (3.0 * pf.row(0) - 0.5 * pf.row(1))).norm() < 1e-9 * pf.norm());
   for (double scale : {1e-6, 1e6}) {
     const Eigen::MatrixXd scaled = basis->project(scale * f, set);
-    REQUIRE(scaled.allFinite());
-    CHECK((scaled / scale - pf).norm() < 1e-12 * pf.norm());
+    KIT_REQUIRE(kit, scaled.allFinite());
+    KIT_CHECK(kit, (scaled / scale - pf).norm() < 1e-12 * pf.norm());
   }
-  CHECK(basis->project(Eigen::MatrixXd::Zero(1, set.size()), set).cwiseAbs().maxCoeff() == 0.0);
+  KIT_CHECK(kit, basis->project(Eigen::MatrixXd::Zero(1, set.size()), set).cwiseAbs().maxCoeff() == 0.0);
   // A constant function (every basis must cope, even if it is not in the span).
   const Eigen::MatrixXd constant =
       basis->project(Eigen::MatrixXd::Constant(1, set.size(), 2.5), set);
-  CHECK(constant.allFinite());
-  CHECK(constant.cwiseAbs().maxCoeff() > 0);
+  KIT_CHECK(kit, constant.allFinite());
+  KIT_CHECK(kit, constant.cwiseAbs().maxCoeff() > 0);
 }
 
 namespace {
@@ -123,20 +134,23 @@ Eigen::RowVectorXd integrals(const Basis& b, const DirectionSet& set) {
 
 }  // namespace
 
-TEST_CASE_METHOD(Fixture, "native quadrature weights integrate 1 to the domain's measure",
-                 "[conformance]") {
+static void basis_check_4(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   const auto native = basis->native_directions();
   if (!native) return;  // the kit then uses its own exact sphere rule
-  INFO("weights sum to " << native->weights.sum() << "; the "
+  KIT_INFO(kit, "weights sum to " << native->weights.sum() << "; the "
                          << (basis->domain() == Domain::hemisphere ? "hemisphere" : "sphere")
                          << " measures " << domain_measure(*basis));
-  CHECK(std::abs(native->weights.sum() - domain_measure(*basis)) < 1e-9 * domain_measure(*basis));
-  CHECK(native->weights.minCoeff() >= 0);
-  CHECK(native->directions.rowwise().norm().isApprox(Eigen::VectorXd::Ones(native->size()), 1e-9));
-  if (basis->domain() == Domain::hemisphere) CHECK(native->directions.col(2).minCoeff() >= 0);
+  KIT_CHECK(kit, std::abs(native->weights.sum() - domain_measure(*basis)) < 1e-9 * domain_measure(*basis));
+  KIT_CHECK(kit, native->weights.minCoeff() >= 0);
+  KIT_CHECK(kit, native->directions.rowwise().norm().isApprox(Eigen::VectorXd::Ones(native->size()), 1e-9));
+  if (basis->domain() == Domain::hemisphere) KIT_CHECK(kit, native->directions.col(2).minCoeff() >= 0);
 }
 
-TEST_CASE_METHOD(Fixture, "the basis agrees with an independent quadrature", "[conformance]") {
+static void basis_check_5(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   // Integrals of the basis functions over the kit's rule and over the
   // plug-in's own: a rule whose weights are off (even consistently with the
   // functions) or a function defined outside its domain shows here.
@@ -144,8 +158,8 @@ TEST_CASE_METHOD(Fixture, "the basis agrees with an independent quadrature", "[c
   const Eigen::RowVectorXd expected = integrals(*basis, independent);
   const Eigen::RowVectorXd own = integrals(*basis, set);
   const double scale = std::max(expected.norm(), 1e-3 * std::sqrt(domain_measure(*basis)));
-  INFO("function integrals differ by " << (own - expected).norm() / scale << " (relative)");
-  CHECK((own - expected).norm() < 0.02 * scale);
+  KIT_INFO(kit, "function integrals differ by " << (own - expected).norm() / scale << " (relative)");
+  KIT_CHECK(kit, (own - expected).norm() < 0.02 * scale);
   if (basis->orthonormal() && basis->size() <= 100) {
     // The Gram matrix on the independent rule (accurate to ~1e-3 for smooth bases).
     Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(basis->size(), basis->size());
@@ -156,50 +170,52 @@ TEST_CASE_METHOD(Fixture, "the basis agrees with an independent quadrature", "[c
     }
     const double off =
         (gram - Eigen::MatrixXd::Identity(basis->size(), basis->size())).cwiseAbs().maxCoeff();
-    INFO("independent Gram matrix is off the identity by " << off);
-    CHECK(off < 0.02);
+    KIT_INFO(kit, "independent Gram matrix is off the identity by " << off);
+    KIT_CHECK(kit, off < 0.02);
   }
 }
 
-TEST_CASE_METHOD(Fixture, "rotation is consistent with re-projection and composes",
-                 "[conformance]") {
+static void basis_check_6(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   if (!basis->can_rotate()) {
     // Not declared: asked anyway, it says so rather than returning something.
-    CHECK_THROWS_AS(basis->rotation_matrix(Eigen::Matrix3d::Identity()), Error);
+    KIT_CHECK_THROWS_WITH(kit, basis->rotation_matrix(Eigen::Matrix3d::Identity()), "");
     return;
   }
   const Eigen::Matrix3d a =
       Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Matrix3d b = Eigen::AngleAxisd(-1.9, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const Eigen::MatrixXd ra = basis->rotation_matrix(a), rb = basis->rotation_matrix(b);
-  CHECK((ra * rb - basis->rotation_matrix(a * b)).cwiseAbs().maxCoeff() < 1e-10);
+  KIT_CHECK(kit, (ra * rb - basis->rotation_matrix(a * b)).cwiseAbs().maxCoeff() < 1e-10);
   // Rotating coefficients equals projecting f(A^T d).
   const Eigen::VectorXd c = random_coefficients(1, basis->size(), 3).transpose();
   const Directions back = set.directions * a;
   const Eigen::RowVectorXd samples = (basis->evaluate(back) * c).transpose();
   const Eigen::VectorXd reprojected = basis->project(samples, set).transpose();
-  CHECK((ra * c - reprojected).norm() / c.norm() < 1e-9);
+  KIT_CHECK(kit, (ra * c - reprojected).norm() / c.norm() < 1e-9);
   // A rotation of functions keeps their norms: an orthonormal basis's
   // rotation matrix is orthogonal.
   if (basis->orthonormal()) {
     const int n = basis->size();
-    CHECK((ra.transpose() * ra - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
+    KIT_CHECK(kit, (ra.transpose() * ra - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
   }
 }
 
-TEST_CASE_METHOD(Fixture, "declared capabilities hold, undeclared ones are absent",
-                 "[conformance]") {
+static void basis_check_7(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   const std::vector<int> bands = basis->coefficient_bands();
   if (!bands.empty()) {
-    CHECK(bands.size() == static_cast<std::size_t>(basis->size()));
-    CHECK(*std::min_element(bands.begin(), bands.end()) >= 0);
-    CHECK(std::is_sorted(bands.begin(), bands.end()));
+    KIT_CHECK(kit, bands.size() == static_cast<std::size_t>(basis->size()));
+    KIT_CHECK(kit, *std::min_element(bands.begin(), bands.end()) >= 0);
+    KIT_CHECK(kit, std::is_sorted(bands.begin(), bands.end()));
     if (basis->can_rotate()) {  // a rotation never mixes bands
       const Eigen::MatrixXd r = basis->rotation_matrix(
           Eigen::AngleAxisd(1.1, Eigen::Vector3d(3, 1, 2).normalized()).toRotationMatrix());
       for (int i = 0; i < basis->size(); ++i)
         for (int j = 0; j < basis->size(); ++j)
-          if (bands[i] != bands[j]) CHECK(std::abs(r(i, j)) < 1e-12);
+          if (bands[i] != bands[j]) KIT_CHECK(kit, std::abs(r(i, j)) < 1e-12);
     }
   }
   if (!basis->can_fit()) {  // fitting a basis that does not fit changes nothing
@@ -208,55 +224,58 @@ TEST_CASE_METHOD(Fixture, "declared capabilities hold, undeclared ones are absen
     const TransportResult r = test::trace_visibility_only(scene, lattice);
     const Eigen::MatrixXd before = basis->evaluate(set.directions);
     basis->fit({&scene, &lattice, &r.visibility});
-    CHECK(basis->evaluate(set.directions) == before);
+    KIT_CHECK(kit, basis->evaluate(set.directions) == before);
   }
-  CHECK(basis->approximation_terms() >= 0);
-  CHECK(basis->approximation_terms() <= basis->size());
+  KIT_CHECK(kit, basis->approximation_terms() >= 0);
+  KIT_CHECK(kit, basis->approximation_terms() <= basis->size());
   if (!basis->has_fast_projection(set)) {  // the default projection is the matrix's
     const Eigen::MatrixXd f = random_coefficients(2, set.size(), 9);
-    CHECK((basis->project(f, set) - f * basis->projection_matrix(set)).norm() <=
+    KIT_CHECK(kit, (basis->project(f, set) - f * basis->projection_matrix(set)).norm() <=
           1e-12 * f.norm() * basis->projection_matrix(set).norm());
   }
 }
 
-TEST_CASE_METHOD(Fixture, "saved state restores an identical basis", "[conformance]") {
+static void basis_check_8(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
   const BasisState state = basis->save();
   Params fresh_params;
-  auto fresh = registry.create<Basis>(conformance::plugin_name, fresh_params);
+  auto fresh = registry.create<Basis>(kit.plugin, fresh_params);
   fresh->load(state);
-  CHECK(fresh->size() == basis->size());
-  CHECK(fresh->evaluate(set.directions) == basis->evaluate(set.directions));
+  KIT_CHECK(kit, fresh->size() == basis->size());
+  KIT_CHECK(kit, fresh->evaluate(set.directions) == basis->evaluate(set.directions));
 }
 
-TEST_CASE_METHOD(Fixture, "every integer parameter works at its smallest and largest value",
-                 "[conformance][extremes]") {
-  const ParamSchema schema = registry.find(PluginKind::basis, conformance::plugin_name).schema();
+static void basis_check_9(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
+  const ParamSchema schema = registry.find(PluginKind::basis, kit.plugin).schema();
   Directions extremes(4, 3);
   extremes << 0, 0, 1, 0, 0, -1, 1, 0, 0, 0.6, 0, 0.8;
   for (const auto& spec : schema.specs) {
     if (spec.type != ParamType::integer || std::string(spec.name) == "seed") continue;
     for (double value : {spec.min, spec.max}) {
-      INFO(spec.name << " = " << value);
+      KIT_INFO(kit, spec.name << " = " << value);
       Params p;
       p.set(spec.name, static_cast<std::int64_t>(value));
       std::shared_ptr<Basis> b;
       try {
-        b = fitted(registry.create<Basis>(conformance::plugin_name, p));
+        b = fitted(registry.create<Basis>(kit.plugin, p));
       } catch (const Error& e) {
         // A value the schema allows may still be refused with a clear message
         // (e.g. a resolution that is not a power of 2) -- but never crash.
-        CHECK(std::string(e.what()).find(spec.name) != std::string::npos);
+        KIT_CHECK(kit, std::string(e.what()).find(spec.name) != std::string::npos);
         continue;
       }
       const Eigen::MatrixXd v = b->evaluate(extremes);
-      CHECK(v.allFinite());
-      CHECK(v.cols() == b->size());
+      KIT_CHECK(kit, v.allFinite());
+      KIT_CHECK(kit, v.cols() == b->size());
       if (value == spec.min) {  // small enough for the round trip
         const DirectionSet native = b->native_directions().value_or(gauss_product_sphere(64));
         const Eigen::MatrixXd c = random_coefficients(2, b->size(), 5);
         const Eigen::MatrixXd back =
             b->project(c * b->evaluate(native.directions).transpose(), native);
-        CHECK((back - c).norm() <= 1e-8 * c.norm());
+        KIT_CHECK(kit, (back - c).norm() <= 1e-8 * c.norm());
       }
     }
   }
@@ -291,9 +310,10 @@ std::vector<std::vector<std::pair<std::string, ParamValue>>> combinations(
 
 }  // namespace
 
-TEST_CASE_METHOD(Fixture, "every boolean and choice parameter value gives a consistent basis",
-                 "[conformance][parameters]") {
-  const ParamSchema schema = registry.find(PluginKind::basis, conformance::plugin_name).schema();
+static void basis_check_10(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
+  const ParamSchema schema = registry.find(PluginKind::basis, kit.plugin).schema();
   for (const auto& combination : combinations(schema)) {
     if (combination.empty()) continue;
     std::string label;
@@ -304,33 +324,51 @@ TEST_CASE_METHOD(Fixture, "every boolean and choice parameter value gives a cons
       const std::string* text = std::get_if<std::string>(&value);
       label += key + "=" + (flag ? (*flag ? "true" : "false") : text ? *text : "?") + " ";
     }
-    INFO("parameters: " << label);
+    KIT_INFO(kit, "parameters: " << label);
     std::shared_ptr<Basis> b;
     try {
-      b = fitted(registry.create<Basis>(conformance::plugin_name, p));
+      b = fitted(registry.create<Basis>(kit.plugin, p));
     } catch (const Error& e) {
       // A refused combination must say which parameter (params.fail does).
       bool named = false;
       for (const auto& [key, value] : combination)
         named = named || std::string(e.what()).find("\"" + key + "\"") != std::string::npos;
-      INFO("refused with: " << e.what());
-      CHECK(named);
+      KIT_INFO(kit, "refused with: " << e.what());
+      KIT_CHECK(kit, named);
       continue;
     }
     const DirectionSet native = b->native_directions().value_or(gauss_product_sphere(64));
     const Eigen::MatrixXd y = b->evaluate(native.directions);
-    REQUIRE(b->size() > 0);
-    CHECK(y.cols() == b->size());  // size() must follow every parameter
-    CHECK(y.allFinite());
+    KIT_REQUIRE(kit, b->size() > 0);
+    KIT_CHECK(kit, y.cols() == b->size());  // size() must follow every parameter
+    KIT_CHECK(kit, y.allFinite());
     if (y.cols() != b->size()) continue;
     if (b->orthonormal()) {
       const Eigen::MatrixXd gram = y.transpose() * native.weights.asDiagonal() * y;
-      CHECK((gram - Eigen::MatrixXd::Identity(b->size(), b->size())).cwiseAbs().maxCoeff() < 1e-9);
+      KIT_CHECK(kit, (gram - Eigen::MatrixXd::Identity(b->size(), b->size())).cwiseAbs().maxCoeff() < 1e-9);
     }
     // Projection (by whichever method the parameters choose) gives one
     // finite coefficient per function.
     const Eigen::MatrixXd p_matrix = b->projection_matrix(native);
-    CHECK(p_matrix.cols() == b->size());
-    CHECK(p_matrix.allFinite());
+    KIT_CHECK(kit, p_matrix.cols() == b->size());
+    KIT_CHECK(kit, p_matrix.allFinite());
   }
 }
+
+std::vector<Check> basis_checks() {
+  return {
+      {"basis values are finite everywhere, poles included", "[conformance]", basis_check_0},
+      {"an orthonormal basis has an identity Gram matrix", "[conformance]", basis_check_1},
+      {"projection reconstructs functions in the span", "[conformance]", basis_check_2},
+      {"projection is linear and scales from 1e-6 to 1e6", "[conformance]", basis_check_3},
+      {"native quadrature weights integrate 1 to the domain's measure", "[conformance]", basis_check_4},
+      {"the basis agrees with an independent quadrature", "[conformance]", basis_check_5},
+      {"rotation is consistent with re-projection and composes", "[conformance]", basis_check_6},
+      {"declared capabilities hold, undeclared ones are absent", "[conformance]", basis_check_7},
+      {"saved state restores an identical basis", "[conformance]", basis_check_8},
+      {"every integer parameter works at its smallest and largest value", "[conformance][extremes]", basis_check_9},
+      {"every boolean and choice parameter value gives a consistent basis", "[conformance][parameters]", basis_check_10},
+  };
+}
+
+}  // namespace prt::conformance
