@@ -5,10 +5,17 @@
 #include <cmath>
 #include <cstdio>
 
+#include "prt/error.hpp"
+
 namespace prt {
 
 namespace {
 std::atomic<bool> enabled{true};
+std::atomic<bool> interrupt{false};
+
+void throw_if_interrupted() {
+  if (interrupt.load(std::memory_order_relaxed)) throw Error("interrupted");
+}
 std::mutex sink_mutex;
 ProgressSink sink;  // null: draw_bar
 }  // namespace
@@ -22,13 +29,27 @@ void Progress::set_enabled(bool on) {
   enabled = on;
 }
 
+void Progress::request_interrupt() {
+  interrupt = true;
+}
+
+void Progress::clear_interrupt() {
+  interrupt = false;
+}
+
+bool Progress::interrupt_requested() {
+  return interrupt;
+}
+
 Progress::Progress(std::string label, double total, std::string unit, bool quiet)
     : label_(std::move(label)),
       unit_(std::move(unit)),
       total_(total),
       quiet_(quiet || !enabled),
       start_(std::chrono::steady_clock::now()),
-      last_draw_(start_) {}
+      last_draw_(start_) {
+  throw_if_interrupted();
+}
 
 Progress::~Progress() {
   try {
@@ -46,6 +67,7 @@ void atomic_add(std::atomic<double>& value, double amount) {
 }  // namespace
 
 void Progress::add(double items, double work) {
+  throw_if_interrupted();
   atomic_add(done_, items);
   atomic_add(work_, work);
   if (quiet_) return;

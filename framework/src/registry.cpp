@@ -8,6 +8,8 @@
 #include <boost/dll/shared_library.hpp>
 #include <cstdlib>
 #include <cstring>
+#include <mutex>
+#include <set>
 
 #include "elf_symbols.hpp"
 
@@ -113,6 +115,84 @@ PluginDescriptor read_descriptor(const fs::path& file) {
 
 }  // namespace
 
+namespace {
+
+// In-process plug-ins and the registries alive, so that a registration
+// reaches every registry.
+struct InProcessTable {
+  std::mutex mutex;
+  std::vector<PluginDescriptor> plugins;
+  std::set<PluginRegistry*> registries;
+};
+InProcessTable& in_process_table() {
+  static InProcessTable table;
+  return table;
+}
+
+void check_record(const PluginInfoRecord& info) {
+  if (info.kind != PluginKind::basis && info.kind != PluginKind::compressor &&
+      info.kind != PluginKind::renderer)
+    throw Error("cannot register a plug-in of unknown kind " +
+                std::to_string(static_cast<unsigned>(info.kind)));
+  if (info.name[0] == '\0') throw Error("cannot register a plug-in without a name");
+  if (info.param_count > kMaxParams)
+    throw Error(std::string("plug-in \"") + info.name + "\" has " +
+                std::to_string(info.param_count) + " parameters; at most " +
+                std::to_string(kMaxParams) + " are allowed");
+}
+
+}  // namespace
+
+void register_in_process(const PluginInfoRecord& info, const std::string& origin,
+                         InProcessFactory factory) {
+  check_record(info);
+  if (!factory) throw Error(std::string("plug-in \"") + info.name + "\" has no factory");
+  PluginDescriptor d{origin, info, std::move(factory)};
+  terminate_texts(d.info);
+  auto& table = in_process_table();
+  std::lock_guard lock(table.mutex);
+  for (PluginRegistry* registry : table.registries)  // refuse before changing any
+    for (const auto& p : registry->plugins())
+      if (!p.factory && p.kind() == d.kind() && p.name() == d.name())
+        throw Error(std::string("cannot register ") + to_string(d.kind()) + " \"" + d.name() +
+                    "\": the plug-in library " + p.file.string() +
+                    " has that name; choose another");
+  std::erase_if(table.plugins,
+                [&](const auto& p) { return p.kind() == d.kind() && p.name() == d.name(); });
+  table.plugins.push_back(d);
+  for (PluginRegistry* registry : table.registries) registry->add_in_process(d);
+}
+
+void unregister_in_process(PluginKind kind, const std::string& name) {
+  auto& table = in_process_table();
+  std::lock_guard lock(table.mutex);
+  std::erase_if(table.plugins, [&](const auto& p) { return p.kind() == kind && p.name() == name; });
+  for (PluginRegistry* registry : table.registries) registry->remove_in_process(kind, name);
+}
+
+void PluginRegistry::add_in_process(const PluginDescriptor& descriptor) {
+  for (auto& p : plugins_)
+    if (p.kind() == descriptor.kind() && p.name() == descriptor.name()) {
+      if (!p.factory) {  // a library file has the name: the same answer as two files
+        problems_.push_back({descriptor.file, descriptor.kind(), descriptor.name(),
+                             descriptor.file.string() + ": duplicate " +
+                                 to_string(descriptor.kind()) + " plug-in name \"" +
+                                 descriptor.name() + "\", also provided by " + p.file.string(),
+                             true});
+        return;
+      }
+      p = descriptor;
+      return;
+    }
+  plugins_.push_back(descriptor);
+}
+
+void PluginRegistry::remove_in_process(PluginKind kind, const std::string& name) {
+  std::erase_if(plugins_, [&](const auto& p) {
+    return p.factory && p.kind() == kind && p.name() == name;
+  });
+}
+
 PluginRegistry::PluginRegistry(const std::vector<fs::path>& directories) {
   std::vector<fs::path> scanned;
   for (const auto& directory : directories) {
@@ -124,9 +204,17 @@ PluginRegistry::PluginRegistry(const std::vector<fs::path>& directories) {
     scan(directory);
     scanned.push_back(directory);
   }
+  auto& table = in_process_table();
+  std::lock_guard lock(table.mutex);
+  for (const auto& d : table.plugins) add_in_process(d);
+  table.registries.insert(this);
 }
 
-PluginRegistry::~PluginRegistry() = default;
+PluginRegistry::~PluginRegistry() {
+  auto& table = in_process_table();
+  std::lock_guard lock(table.mutex);
+  table.registries.erase(this);
+}
 
 namespace {
 // <libdir>/prt/plugins next to this library when it is an installed copy,
@@ -267,6 +355,22 @@ std::shared_ptr<PluginObject> PluginRegistry::create_object(PluginKind kind,
                                                             const SourceLocation& where) {
   const PluginDescriptor& d = find(kind, name, where);
   params.validate(d.schema());
+  if (d.factory) {  // in-process: no library to load
+    InProcessFactory factory = d.factory;  // a copy: the factory may register plug-ins
+    std::shared_ptr<PluginObject> object;
+    try {
+      object = factory(params);
+    } catch (const Error&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw Error(where, std::string(to_string(kind)) + " \"" + name + "\" (" + d.file.string() +
+                             ") failed to construct: " + e.what());
+    }
+    if (!object)
+      throw Error(where, std::string(to_string(kind)) + " \"" + name + "\" (" + d.file.string() +
+                             ") made no object");
+    return object;
+  }
 
   auto& module = modules_[d.file];
   if (!module) {

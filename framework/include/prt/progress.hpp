@@ -33,6 +33,12 @@ class Progress {
   void add(double items, double work = 0);
   // Switches every progress bar of the process off or on (the CLI's --quiet).
   static void set_enabled(bool enabled);
+  // Cooperative interruption (Ctrl-C in the Python module): once requested,
+  // the next bar made or advanced, on any thread, throws prt::Error
+  // "interrupted"; the work unwinds as from any other error, writing nothing.
+  static void request_interrupt();
+  static void clear_interrupt();
+  static bool interrupt_requested();
   void finish();
 
  private:

@@ -2,6 +2,7 @@
 // them, and loads a library only when an object of it is created.
 #pragma once
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -17,9 +18,14 @@ class shared_library;
 
 namespace prt {
 
+// Makes an object of a plug-in that lives in this process (no library
+// file), e.g. a class written in Python; `params` are already validated.
+using InProcessFactory = std::function<std::shared_ptr<PluginObject>(Params& params)>;
+
 struct PluginDescriptor {
-  std::filesystem::path file;
+  std::filesystem::path file;  // in-process plug-ins: where it was defined, in words
   PluginInfoRecord info;
+  InProcessFactory factory;  // set for in-process plug-ins only
 
   PluginKind kind() const { return info.kind; }
   std::string name() const { return info.name; }
@@ -44,6 +50,16 @@ struct PluginProblem {
   std::string message;
   bool duplicate = false;  // a valid plug-in whose name another file has too
 };
+
+// Registers a plug-in that lives in this process under info.name, in every
+// registry, those alive now and those made later. The record is checked as a
+// file's would be (a kind, a name, at most kMaxParams parameters); a second
+// registration of the same kind and name replaces the first, but a name that
+// a library file provides is refused.
+void register_in_process(const PluginInfoRecord& info, const std::string& origin,
+                         InProcessFactory factory);
+// Removes an in-process registration (no effect if there is none).
+void unregister_in_process(PluginKind kind, const std::string& name);
 
 class PluginRegistry {
  public:
@@ -81,6 +97,11 @@ class PluginRegistry {
     if (!typed) throw Error(where, "plug-in \"" + name + "\" does not implement its interface");
     return std::shared_ptr<Interface>(object, typed);
   }
+
+  // Adds or replaces an in-process plug-in in this registry (see
+  // register_in_process, which calls it for every live registry).
+  void add_in_process(const PluginDescriptor& descriptor);
+  void remove_in_process(PluginKind kind, const std::string& name);
 
   // Number of libraries mapped so far (lazy loading is observable).
   std::size_t loaded_count() const { return modules_.size(); }
