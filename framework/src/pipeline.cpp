@@ -740,18 +740,25 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   if (!scene.point_lights.empty())
     options.message("point lights (" + std::to_string(scene.point_lights.size()) +
                     "): " + relighting.point_light_rule());
-  clock = Stopwatch();
-  Rendered out;
-  const Relit relit = relighting.relight(data.compressed, light, camera);
-  out.vertex_radiance = relit.vertex_radiance;
-  times.add("relight vertices", clock.seconds());
+  Rendered out =
+      render_relit(relighting, *renderer, data.compressed, light, camera, &environment, &times);
+  return out;
+}
 
+Rendered render_relit(const Relighting& relighting, Renderer& renderer,
+                      const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                      const Camera& camera, const Environment* background, StageTimes* times) {
+  Stopwatch clock;
+  Rendered out;
+  const Relit relit = relighting.relight(transfer, light, camera);
+  out.vertex_radiance = relit.vertex_radiance;
+  if (times) times->add("relight vertices", clock.seconds());
   clock = Stopwatch();
-  RenderInput input = relighting.input(data.compressed, relit, light, camera);
-  input.background = &environment;
-  out.image = renderer->render(input);
-  out.statistics = renderer->statistics();
-  times.add("rasterise (" + renderer_choice.name + ")", clock.seconds());
+  RenderInput input = relighting.input(transfer, relit, light, camera);
+  input.background = background;
+  out.image = renderer.render(input);
+  out.statistics = renderer.statistics();
+  if (times) times->add("rasterise", clock.seconds());
   return out;
 }
 
@@ -862,6 +869,19 @@ Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginReg
   input.background = &environment;
   out.image = renderer->render(input);
   times.add("rasterise (" + renderer_choice.name + ")", clock.seconds());
+  return out;
+}
+
+Rendered render_relit(const Relighting& relighting, Renderer& renderer,
+                      const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                      const Camera& camera, const Environment* background) {
+  Rendered out;
+  const Relit relit = relighting.relight(transfer, light, camera);
+  out.vertex_radiance = relit.vertex_radiance;
+  RenderInput input = relighting.input(transfer, relit, light, camera);
+  input.background = background;
+  out.image = renderer.render(input);
+  out.statistics = renderer.statistics();
   return out;
 }
 

@@ -227,6 +227,14 @@ class Relighting {
   std::unique_ptr<PointLightProjector> projector_;
 };
 
+// One image: `transfer` (the bake's compressed form or another encoding of
+// it) relit under `light` toward `camera` and drawn by `renderer`, over
+// `background` when given. render() and the Python module use it.
+Rendered render_relit(const Relighting& relighting, Renderer& renderer,
+                      const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+                      const Camera& camera, const Environment* background,
+                      StageTimes* times = nullptr);
+
 // Light projection -> per-cluster constants -> per-vertex sums -> image.
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
                 StageTimes& times, const RunOptions& options = {});

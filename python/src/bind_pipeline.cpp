@@ -1,0 +1,243 @@
+// The scene and the stages of the bake and viewing pipelines (prt/pipeline.hpp):
+// the same functions the CLI composes, each callable alone.
+#include "long_call.hpp"
+#include "bindings.hpp"
+#include "prt/environment.hpp"
+#include "prt/image.hpp"
+#include "prt/output_file.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/progress.hpp"
+#include "prt/transport.hpp"
+
+namespace prt::python {
+
+namespace {
+
+// How a Python call runs: progress bars unless quiet; messages to `log`
+// (a callable taking one str) or to the process's log on stderr.
+RunOptions run_options(bool quiet, const py::object& log) {
+  RunOptions options;
+  options.quiet = quiet;
+  if (!log.is_none()) {
+    auto held = std::make_shared<py::object>(log);
+    options.log = [held](const std::string& text) {
+      py::gil_scoped_acquire gil;
+      try {
+        (*held)(text);
+      } catch (py::error_already_set&) {  // a failing log callback must not stop the work
+      }
+    };
+  }
+  return options;
+}
+
+py::dict times_dict(const StageTimes& times) {
+  py::dict out;
+  for (const auto& [name, seconds] : times.stages) out[py::str(name)] = seconds;
+  return out;
+}
+
+py::array_t<float> image_array(const Image& image) {
+  py::array_t<float> out({image.height, image.width, 3});
+  std::copy(image.rgb.begin(), image.rgb.end(), out.mutable_data());
+  return out;
+}
+
+Image image_from(const py::array_t<float, py::array::c_style | py::array::forcecast>& a) {
+  if (a.ndim() != 3 || a.shape(2) != 3)
+    throw Error("an image must be a height x width x 3 array");
+  Image image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)));
+  std::copy(a.data(), a.data() + a.size(), image.rgb.begin());
+  return image;
+}
+
+py::dict rendered_dict(const Rendered& r, const StageTimes* times) {
+  py::dict out;
+  out["image"] = image_array(r.image);
+  out["vertex_radiance"] = Eigen::MatrixX3f(r.vertex_radiance);
+  py::dict statistics;
+  for (const auto& [key, value] : r.statistics) statistics[py::str(key)] = value;
+  out["statistics"] = statistics;
+  if (times) out["times"] = times_dict(*times);
+  return out;
+}
+
+}  // namespace
+
+void bind_pipeline(py::module_& m) {
+  py::class_<SceneSpec>(m, "Scene",
+                        "A scene file (TOML), parsed and validated with its plug-ins' parameters.")
+      .def(py::init([](const std::filesystem::path& file) {
+             return SceneSpec::load(file, registry());
+           }),
+           py::arg("file"))
+      .def_static(
+          "parse",
+          [](const std::string& text, const std::filesystem::path& file) {
+            return SceneSpec::parse(text, file, registry());
+          },
+          py::arg("text"), py::arg("file"),
+          "A scene from TOML text; `file` names it in messages and is where relative paths "
+          "resolve from.")
+      .def_readonly("file", &SceneSpec::file)
+      .def_readonly("text", &SceneSpec::text)
+      .def_property_readonly("bake_path", &SceneSpec::bake_path)
+      .def_property_readonly("image_path", &SceneSpec::image_path)
+      .def_property_readonly("input_files", &SceneSpec::input_files)
+      .def_property_readonly("glossy", &SceneSpec::glossy)
+      .def("load_mesh", [](const SceneSpec& s) { return long_call([&] { return s.load_mesh(); }); })
+      .def("directions", &SceneSpec::directions, "The [transport] direction set.")
+      .def("load_environment", &SceneSpec::load_environment, "The [lighting] map.")
+      .def("camera", &SceneSpec::make_camera, py::arg("mesh"), "The [camera] for this mesh.")
+      .def(
+          "project_light",
+          [](const SceneSpec& s, const Environment& environment, const Basis& basis) {
+            return long_call([&] { return s.project_light(environment, basis); });
+          },
+          py::arg("environment"), py::arg("basis"),
+          "The environment in the basis (size() x 3), [lighting] window applied.")
+      .def("basis", [](const SceneSpec& s) {
+        PluginChoice c = s.basis;
+        return registry().create<Basis>(c.name, c.params, c.where);
+      }, "The scene's [basis] plug-in, created.")
+      .def("compressor", [](const SceneSpec& s) {
+        PluginChoice c = s.compressor;
+        return registry().create<Compressor>(c.name, c.params, c.where);
+      }, "The scene's [compressor] plug-in, created.");
+
+  m.def(
+      "trace",
+      [](const SceneSpec& scene, bool quiet, const py::object& log) {
+        const RunOptions options = run_options(quiet, log);
+        return long_call([&] { return trace_scene(scene, options); });
+      },
+      py::arg("scene"), py::kw_only(), py::arg("quiet") = false, py::arg("log") = py::none(),
+      "Traces the scene's mesh over its direction set and keeps the visibility bits (and the "
+      "hits when the scene asks for bounces); pass the result to bake(traced=...).");
+
+  m.def(
+      "bake",
+      [](const SceneSpec& scene, std::optional<std::filesystem::path> output, bool force,
+         bool compress, const TransportResult* traced, bool quiet, const py::object& log) {
+        if (output)
+          check_output({*output, FileKind::bake, "bake file"}, scene.input_files(), force);
+        RunOptions options = run_options(quiet, log);
+        options.compress = compress;
+        options.traced = traced;
+        StageTimes times;
+        BakeData data = long_call([&] { return bake(scene, registry(), options, times); });
+        if (output) long_call([&] { write_bake(*output, data); });
+        return py::make_tuple(std::move(data), times_dict(times));
+      },
+      py::arg("scene"), py::kw_only(), py::arg("output") = py::none(), py::arg("force") = false,
+      py::arg("compress") = true, py::arg("traced") = nullptr, py::arg("quiet") = false,
+      py::arg("log") = py::none());
+
+  m.def(
+      "compress",
+      [](const TransferSignal& signal, const Compressor& compressor, const Mesh* mesh) {
+        return long_call([&] {
+          Stopwatch clock;
+          CompressedTransfer c = compressor.encode(signal, mesh);
+          const double seconds = clock.seconds();
+          c.validate(signal.vertices());
+          return std::pair{c, measure(signal, c, mesh, seconds)};
+        });
+      },
+      py::arg("signal"), py::arg("compressor"), py::arg("mesh") = nullptr,
+      "Encodes a transfer: (compressed form, report).");
+
+  py::class_<Relighting>(m, "Relighting",
+                         "What viewing a bake needs, made once: relight it for any light, "
+                         "camera and encoding.")
+      .def(py::init([](const SceneSpec& scene, const BakeData& data) {
+             return std::make_unique<Relighting>(scene, data, registry());
+           }),
+           py::arg("scene"), py::arg("data"), py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
+      .def(
+          "light",
+          [](const Relighting& r, const Environment& e) {
+            return long_call([&] { return r.light(e); });
+          },
+          py::arg("environment"), "The light vector (size() x 3) of an environment.")
+      .def(
+          "relight",
+          [](const Relighting& r, const CompressedTransfer& transfer,
+             const Eigen::MatrixX3d& light, const Camera& camera) {
+            return long_call([&] { return Eigen::MatrixX3f(r.relight(transfer, light, camera).vertex_radiance); });
+          },
+          py::arg("transfer"), py::arg("light"), py::arg("camera"),
+          "Radiance each vertex sends toward the camera (v x 3, albedo included).")
+      .def(
+          "render",
+          [](const Relighting& r, const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+             const Camera& camera, Renderer& renderer, const Environment* background) {
+            const Rendered out = long_call(
+                [&] { return render_relit(r, renderer, transfer, light, camera, background); });
+            return rendered_dict(out, nullptr);
+          },
+          py::arg("transfer"), py::arg("light"), py::arg("camera"), py::arg("renderer"),
+          py::arg("background") = nullptr,
+          "An image (dict: image, vertex_radiance, statistics) of `transfer` relit.");
+
+  m.def(
+      "create_renderer",
+      [](const std::string& name, const py::kwargs& kwargs) {
+        const std::string owner = "prt.create_renderer(\"" + name + "\")";
+        Params params = params_from_kwargs(kwargs, owner);
+        return registry().create<Renderer>(name, params, SourceLocation{owner});
+      },
+      py::arg("name"));
+
+  m.def(
+      "render",
+      [](const SceneSpec& scene, const BakeData& data, bool quiet, const py::object& log) {
+        const RunOptions options = run_options(quiet, log);
+        StageTimes times;
+        const Rendered out = long_call([&] { return render(scene, data, registry(), times, options); });
+        return rendered_dict(out, &times);
+      },
+      py::arg("scene"), py::arg("data"), py::kw_only(), py::arg("quiet") = false,
+      py::arg("log") = py::none(),
+      "The scene's view of a bake, as `prt render` draws it: dict with image (h x w x 3 "
+      "linear float32), vertex_radiance, statistics and times.");
+
+  m.def(
+      "render_ground_truth",
+      [](const SceneSpec& scene, const Mesh* mesh, bool quiet, const py::object& log) {
+        const RunOptions options = run_options(quiet, log);
+        StageTimes times;
+        const Rendered out = long_call([&] {
+          const Mesh loaded = mesh ? Mesh{} : scene.load_mesh();
+          return render_ground_truth(scene, mesh ? *mesh : loaded, registry(), options, times);
+        });
+        return rendered_dict(out, &times);
+      },
+      py::arg("scene"), py::arg("mesh") = nullptr, py::kw_only(), py::arg("quiet") = false,
+      py::arg("log") = py::none(),
+      "The Monte Carlo ground truth of the scene, as `prt render --ground-truth` draws it.");
+
+  m.def(
+      "ground_truth_vertices",
+      [](const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+         const Camera& camera, bool quiet) {
+        const RunOptions options = run_options(quiet, py::none());
+        return long_call([&] {
+          return Eigen::MatrixX3f(ground_truth_vertices(scene, mesh, lighting, camera, options));
+        });
+      },
+      py::arg("scene"), py::arg("mesh"), py::arg("lighting"), py::arg("camera"), py::kw_only(),
+      py::arg("quiet") = false, "Monte Carlo radiance per vertex toward the camera (v x 3).");
+
+  m.def(
+      "write_png",
+      [](const py::array_t<float, py::array::c_style | py::array::forcecast>& image,
+         const std::filesystem::path& file, float exposure, bool force) {
+        check_output({file, FileKind::png, "image"}, {}, force);
+        write_png(image_from(image), file, exposure);
+      },
+      py::arg("image"), py::arg("file"), py::arg("exposure") = 1.0f, py::arg("force") = false,
+      "Writes a linear h x w x 3 image as an sRGB PNG (as prt render does).");
+}
+
+}  // namespace prt::python

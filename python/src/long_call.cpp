@@ -1,0 +1,95 @@
+#include "long_call.hpp"
+
+#include <pybind11/stl.h>
+
+#include <csignal>
+#include <memory>
+#include <thread>
+
+#include "prt/progress.hpp"
+
+namespace prt::python {
+
+namespace {
+
+std::thread::id main_thread;
+py::object* progress_callback = nullptr;        // owned; touched with the GIL held
+py::object* pending_exception = nullptr;        // the callback's exception, to re-raise
+int depth = 0;                                  // nested long calls (with the GIL)
+struct sigaction previous_sigint {};
+
+void on_sigint(int) {
+  Progress::request_interrupt();  // async-signal-safe: one atomic store
+}
+
+void deliver(const ProgressReport& report) {
+  py::gil_scoped_acquire gil;
+  if (!progress_callback || progress_callback->is_none()) return Progress::draw_bar(report);
+  try {
+    py::dict r;
+    r["label"] = report.label;
+    r["unit"] = report.unit;
+    r["done"] = report.done;
+    r["total"] = report.total;
+    r["rate"] = report.rate;
+    r["elapsed"] = report.elapsed;
+    r["eta"] = report.eta;
+    r["final"] = report.final;
+    (*progress_callback)(r);
+  } catch (py::error_already_set& e) {
+    // The callback failed (or saw KeyboardInterrupt): stop the work, then
+    // raise its exception in the caller.
+    if (!pending_exception) pending_exception = new py::object(e.value());
+    Progress::request_interrupt();
+  }
+}
+
+}  // namespace
+
+void remember_main_thread() {
+  main_thread = std::this_thread::get_id();
+}
+
+void set_progress_callback(py::object callback) {
+  delete progress_callback;
+  progress_callback = callback.is_none() ? nullptr : new py::object(std::move(callback));
+}
+
+LongCallScope::LongCallScope() {
+  if (depth++ > 0) return;
+  active_ = true;
+  Progress::clear_interrupt();
+  delete pending_exception;
+  pending_exception = nullptr;
+  Progress::set_sink(deliver);
+  // Python's own SIGINT handler only sets a flag that the interpreter checks
+  // between bytecodes, which never run while C++ works: ours stops the work.
+  if (std::this_thread::get_id() == main_thread) {
+    struct sigaction action {};
+    action.sa_handler = on_sigint;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &previous_sigint);
+  }
+}
+
+LongCallScope::~LongCallScope() {
+  --depth;
+  if (!active_) return;
+  if (std::this_thread::get_id() == main_thread) sigaction(SIGINT, &previous_sigint, nullptr);
+  Progress::set_sink(nullptr);
+  Progress::clear_interrupt();
+}
+
+void LongCallScope::rethrow_pending() {
+  if (!active_) return;
+  if (pending_exception) {
+    py::object exception = *pending_exception;
+    delete pending_exception;
+    pending_exception = nullptr;
+    PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(exception.ptr())), exception.ptr());
+    throw py::error_already_set();
+  }
+  if (Progress::interrupt_requested()) throw Interrupted{};
+}
+
+}  // namespace prt::python

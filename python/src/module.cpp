@@ -1,0 +1,78 @@
+// The Python module prt._prt: the framework's stages, plug-ins and bake
+// files with numpy arrays (docs/python.md).
+#include "bindings.hpp"
+#include "long_call.hpp"
+#include "prt/error.hpp"
+
+namespace prt::python {
+
+PluginRegistry& registry() {
+  // Never destroyed: plug-in objects held by Python may outlive the module's
+  // statics at exit, and they keep their libraries through the registry.
+  static auto* instance = new PluginRegistry(PluginRegistry::default_directories());
+  return *instance;
+}
+
+Params params_from_kwargs(const py::dict& kwargs, const std::string& owner) {
+  Params params(SourceLocation{owner});
+  for (const auto& [key, value] : kwargs) {
+    const std::string name = py::str(key);
+    const SourceLocation where{owner + " keyword " + name};
+    if (py::isinstance<py::bool_>(value))
+      params.set(name, value.cast<bool>(), where);
+    else if (py::isinstance<py::int_>(value))
+      params.set(name, value.cast<std::int64_t>(), where);
+    else if (py::isinstance<py::float_>(value))
+      params.set(name, value.cast<double>(), where);
+    else if (py::isinstance<py::str>(value))
+      params.set(name, value.cast<std::string>(), where);
+    else if (py::isinstance<py::sequence>(value) || py::isinstance<py::array>(value)) {
+      std::vector<double> list;
+      for (const auto& item : value) {
+        if (!py::isinstance<py::float_>(item) && !py::isinstance<py::int_>(item) &&
+            !py::isinstance<py::array>(item))
+          throw Error(where, "parameter \"" + name + "\": a list must hold numbers");
+        list.push_back(item.cast<double>());
+      }
+      params.set(name, std::move(list), where);
+    } else {
+      throw Error(where, "parameter \"" + name + "\": cannot use a value of type " +
+                             std::string(py::str(value.get_type().attr("__name__"))) +
+                             " (give a bool, int, float, str or list of numbers)");
+    }
+  }
+  return params;
+}
+
+py::dict params_to_dict(const Params& params) {
+  py::dict out;
+  for (const auto& [key, entry] : params.entries())
+    std::visit([&](const auto& v) { out[py::str(key)] = py::cast(v); }, entry.value);
+  return out;
+}
+
+}  // namespace prt::python
+
+using namespace prt;
+using namespace prt::python;
+
+PYBIND11_MODULE(_prt, m) {
+  m.doc() = "PRT: precomputed radiance transfer (C++ core; use the package `prt`)";
+  remember_main_thread();
+  static py::exception<Error> error(m, "Error", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Interrupted&) {
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+    } catch (const Error& e) {
+      PyErr_SetString(error.ptr(), e.what());
+    }
+  });
+  m.def("set_progress_callback", &set_progress_callback, py::arg("callback"),
+        "Receives every progress report as a dict (label, unit, done, total, rate, elapsed, "
+        "eta, final); None: bars on standard error.");
+  bind_types(m);
+  bind_plugins(m);
+  bind_pipeline(m);
+}
