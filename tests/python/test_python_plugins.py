@@ -1,0 +1,84 @@
+"""Plug-ins written in Python: the conformance kit passes the examples and
+fails the deliberately wrong ones; their errors are clear, never a crash."""
+import numpy as np
+import pytest
+
+import kmeans_svd  # noqa: F401  registers compressor "kmeans_svd"
+import prt
+import wrong_plugins  # noqa: F401  registers the wrong ones
+import zonal_basis  # noqa: F401  registers basis "zonal"
+from prt.testing import basis_conformance, compressor_conformance, run_all, run_check
+
+# The same checks as the C++ kit, one pytest test each.
+test_zonal_conformance = basis_conformance("zonal")
+test_kmeans_svd_conformance = compressor_conformance("kmeans_svd")
+
+
+def test_kit_runs_the_cpp_checks_on_cpp_plugins_too():
+    assert all(not failures for failures in run_all("basis", "sh").values())
+
+
+def test_kit_fails_a_basis_missing_its_normalisation():
+    failures = run_check("basis", "zonal_unnormalised",
+                         "an orthonormal basis has an identity Gram matrix")
+    assert failures and "Identity" in failures[0]
+
+
+def test_kit_fails_a_compressor_with_an_inconsistent_form():
+    failures = run_check("compressor", "keeps_mean_only", "the compressed form is consistent and "
+                         "finite")
+    assert failures and "inconsistent form" in "\n".join(failures)
+
+
+def test_wrong_shape_is_one_clear_error():
+    """What Python returns is checked where C++ calls it (here the default
+    projection, which evaluates the basis on the set's directions)."""
+    basis = prt.create_basis("wrong_shape")
+    with pytest.raises(prt.Error, match=r'basis "wrong_shape" \(Python class WrongShape\): '
+                                        r"evaluate\(\) returned a 5 x 2 array; expected 5 x 3"):
+        basis.projection_matrix(prt.DirectionSet.fibonacci(5))
+
+
+def test_python_parameters_are_validated_like_cpp_ones():
+    with pytest.raises(prt.Error, match=r'basis "zonal": parameter "axis" = "w"'):
+        prt.create_basis("zonal", axis="w")
+    with pytest.raises(prt.Error, match=r'"order" = 0 is out of range \[1, 60\]'):
+        prt.create_basis("zonal", order=0)
+    zonal = next(p for p in prt.plugins("basis") if p["name"] == "zonal")
+    assert zonal["python"] and "zonal_basis.py" in zonal["file"]
+
+
+def test_a_python_exception_names_the_plugin_and_method():
+    @prt.register_basis("raises")
+    class Raises(prt.Basis):
+        def __init__(self):
+            super().__init__()
+
+        def size(self):
+            return 1
+
+        def evaluate(self, directions):
+            raise ValueError("no values today")
+
+    with pytest.raises(prt.Error, match=r'basis "raises" .*evaluate\(\) raised ValueError: no '
+                                        r"values today"):
+        prt.create_basis("raises").projection_matrix(prt.DirectionSet.fibonacci(3))
+    prt.unregister("basis", "raises")
+    with pytest.raises(prt.Error, match='no basis plug-in named "raises"'):
+        prt.create_basis("raises")
+
+
+def test_a_library_plugin_name_cannot_be_taken():
+    class Fake(prt.Basis):
+        pass
+
+    with pytest.raises(prt.Error, match="the plug-in library .* has that name"):
+        prt.register_basis("sh")(Fake)
+
+
+def test_register_refuses_a_class_of_the_wrong_interface():
+    class NotABasis:
+        pass
+
+    with pytest.raises(prt.Error, match="must be a class deriving from prt.Basis"):
+        prt.register_basis("nope")(NotABasis)
