@@ -3,7 +3,8 @@
 y_l(d) = sqrt((2l + 1) / 4 pi) P_l(d . axis), l = 0 .. order - 1: the m = 0
 column of the spherical harmonics, so a zonal bake equals the SH bake's
 m = 0 coefficients (tests/python/test_examples.py checks it).
-Import this module and scenes can say [basis] plugin = "zonal".
+Import this module and scenes can say [basis] plugin = "numpy_zonal" (the C++
+SDK example of docs/writing-a-plugin.md is "zonal").
 """
 import numpy as np
 
@@ -12,7 +13,7 @@ import prt
 AXES = {"x": 0, "y": 1, "z": 2}
 
 
-@prt.register_basis("zonal", description="zonal harmonics about one axis (numpy)")
+@prt.register_basis("numpy_zonal", description="zonal harmonics about one axis (numpy)")
 class Zonal(prt.Basis):
     parameters = {
         "order": prt.integer(6, min=1, max=60, help="bands: order coefficients"),

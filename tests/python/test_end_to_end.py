@@ -38,7 +38,7 @@ def test_zonal_bake_equals_the_sh_bakes_zonal_coefficients(tmp_path, root):
     d = sh_scene.to_dict()
     d["basis"] = {"plugin": "sh", "order": order}
     sh = prt.bake(prt.Scene.from_dict(d, base=tmp_path), progress=False)
-    d["basis"] = {"plugin": "zonal", "order": order, "axis": "z"}
+    d["basis"] = {"plugin": "numpy_zonal", "order": order, "axis": "z"}
     zonal = prt.bake(prt.Scene.from_dict(d, base=tmp_path), progress=False)
     columns = [l * (l + 1) for l in range(order)]
     expected = sh.transfer.coefficients[:, columns]

@@ -6,11 +6,11 @@ import pytest
 import kmeans_svd  # noqa: F401  registers compressor "kmeans_svd"
 import prt
 import wrong_plugins  # noqa: F401  registers the wrong ones
-import zonal_basis  # noqa: F401  registers basis "zonal"
+import zonal_basis  # noqa: F401  registers basis "numpy_zonal"
 from prt.testing import basis_conformance, compressor_conformance, run_all, run_check
 
 # The same checks as the C++ kit, one pytest test each.
-test_zonal_conformance = basis_conformance("zonal")
+test_zonal_conformance = basis_conformance("numpy_zonal")
 test_kmeans_svd_conformance = compressor_conformance("kmeans_svd")
 
 
@@ -40,11 +40,11 @@ def test_wrong_shape_is_one_clear_error():
 
 
 def test_python_parameters_are_validated_like_cpp_ones():
-    with pytest.raises(prt.Error, match=r'basis "zonal": parameter "axis" = "w"'):
-        prt.create_basis("zonal", axis="w")
+    with pytest.raises(prt.Error, match=r'basis "numpy_zonal": parameter "axis" = "w"'):
+        prt.create_basis("numpy_zonal", axis="w")
     with pytest.raises(prt.Error, match=r'"order" = 0 is out of range \[1, 60\]'):
-        prt.create_basis("zonal", order=0)
-    zonal = next(p for p in prt.plugins("basis") if p["name"] == "zonal")
+        prt.create_basis("numpy_zonal", order=0)
+    zonal = next(p for p in prt.plugins("basis") if p["name"] == "numpy_zonal")
     assert zonal["python"] and "zonal_basis.py" in zonal["file"]
 
 
