@@ -8,7 +8,6 @@
 #include <random>
 #include <sstream>
 
-#include "scenes.hpp"
 #include "kit.hpp"
 #include "prt/basis.hpp"
 #include "prt/error.hpp"
@@ -16,6 +15,7 @@
 #include "prt/quadrature.hpp"
 #include "prt/registry.hpp"
 #include "prt/transport.hpp"
+#include "scenes.hpp"
 
 namespace prt::conformance {
 
@@ -97,7 +97,8 @@ static void basis_check_3(Kit& kit) {
     KIT_REQUIRE(kit, scaled.allFinite());
     KIT_CHECK(kit, (scaled / scale - pf).norm() < 1e-12 * pf.norm());
   }
-  KIT_CHECK(kit, basis->project(Eigen::MatrixXd::Zero(1, set.size()), set).cwiseAbs().maxCoeff() == 0.0);
+  KIT_CHECK(kit,
+            basis->project(Eigen::MatrixXd::Zero(1, set.size()), set).cwiseAbs().maxCoeff() == 0.0);
   // A constant function (every basis must cope, even if it is not in the span).
   const Eigen::MatrixXd constant =
       basis->project(Eigen::MatrixXd::Constant(1, set.size(), 2.5), set);
@@ -139,13 +140,17 @@ static void basis_check_4(Kit& kit) {
   [[maybe_unused]] auto& [registry, basis, set] = fixture;
   const auto native = basis->native_directions();
   if (!native) return;  // the kit then uses its own exact sphere rule
-  KIT_INFO(kit, "weights sum to " << native->weights.sum() << "; the "
-                         << (basis->domain() == Domain::hemisphere ? "hemisphere" : "sphere")
-                         << " measures " << domain_measure(*basis));
-  KIT_CHECK(kit, std::abs(native->weights.sum() - domain_measure(*basis)) < 1e-9 * domain_measure(*basis));
+  KIT_INFO(kit,
+           "weights sum to " << native->weights.sum() << "; the "
+                             << (basis->domain() == Domain::hemisphere ? "hemisphere" : "sphere")
+                             << " measures " << domain_measure(*basis));
+  KIT_CHECK(kit, std::abs(native->weights.sum() - domain_measure(*basis)) <
+                     1e-9 * domain_measure(*basis));
   KIT_CHECK(kit, native->weights.minCoeff() >= 0);
-  KIT_CHECK(kit, native->directions.rowwise().norm().isApprox(Eigen::VectorXd::Ones(native->size()), 1e-9));
-  if (basis->domain() == Domain::hemisphere) KIT_CHECK(kit, native->directions.col(2).minCoeff() >= 0);
+  KIT_CHECK(kit, native->directions.rowwise().norm().isApprox(Eigen::VectorXd::Ones(native->size()),
+                                                              1e-9));
+  if (basis->domain() == Domain::hemisphere)
+    KIT_CHECK(kit, native->directions.col(2).minCoeff() >= 0);
 }
 
 static void basis_check_5(Kit& kit) {
@@ -158,7 +163,8 @@ static void basis_check_5(Kit& kit) {
   const Eigen::RowVectorXd expected = integrals(*basis, independent);
   const Eigen::RowVectorXd own = integrals(*basis, set);
   const double scale = std::max(expected.norm(), 1e-3 * std::sqrt(domain_measure(*basis)));
-  KIT_INFO(kit, "function integrals differ by " << (own - expected).norm() / scale << " (relative)");
+  KIT_INFO(kit,
+           "function integrals differ by " << (own - expected).norm() / scale << " (relative)");
   KIT_CHECK(kit, (own - expected).norm() < 0.02 * scale);
   if (basis->orthonormal() && basis->size() <= 100) {
     // The Gram matrix on the independent rule (accurate to ~1e-3 for smooth bases).
@@ -198,7 +204,8 @@ static void basis_check_6(Kit& kit) {
   // rotation matrix is orthogonal.
   if (basis->orthonormal()) {
     const int n = basis->size();
-    KIT_CHECK(kit, (ra.transpose() * ra - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
+    KIT_CHECK(kit,
+              (ra.transpose() * ra - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
   }
 }
 
@@ -231,7 +238,7 @@ static void basis_check_7(Kit& kit) {
   if (!basis->has_fast_projection(set)) {  // the default projection is the matrix's
     const Eigen::MatrixXd f = random_coefficients(2, set.size(), 9);
     KIT_CHECK(kit, (basis->project(f, set) - f * basis->projection_matrix(set)).norm() <=
-          1e-12 * f.norm() * basis->projection_matrix(set).norm());
+                       1e-12 * f.norm() * basis->projection_matrix(set).norm());
   }
 }
 
@@ -345,7 +352,9 @@ static void basis_check_10(Kit& kit) {
     if (y.cols() != b->size()) continue;
     if (b->orthonormal()) {
       const Eigen::MatrixXd gram = y.transpose() * native.weights.asDiagonal() * y;
-      KIT_CHECK(kit, (gram - Eigen::MatrixXd::Identity(b->size(), b->size())).cwiseAbs().maxCoeff() < 1e-9);
+      KIT_CHECK(
+          kit,
+          (gram - Eigen::MatrixXd::Identity(b->size(), b->size())).cwiseAbs().maxCoeff() < 1e-9);
     }
     // Projection (by whichever method the parameters choose) gives one
     // finite coefficient per function.
@@ -361,13 +370,16 @@ std::vector<Check> basis_checks() {
       {"an orthonormal basis has an identity Gram matrix", "[conformance]", basis_check_1},
       {"projection reconstructs functions in the span", "[conformance]", basis_check_2},
       {"projection is linear and scales from 1e-6 to 1e6", "[conformance]", basis_check_3},
-      {"native quadrature weights integrate 1 to the domain's measure", "[conformance]", basis_check_4},
+      {"native quadrature weights integrate 1 to the domain's measure", "[conformance]",
+       basis_check_4},
       {"the basis agrees with an independent quadrature", "[conformance]", basis_check_5},
       {"rotation is consistent with re-projection and composes", "[conformance]", basis_check_6},
       {"declared capabilities hold, undeclared ones are absent", "[conformance]", basis_check_7},
       {"saved state restores an identical basis", "[conformance]", basis_check_8},
-      {"every integer parameter works at its smallest and largest value", "[conformance][extremes]", basis_check_9},
-      {"every boolean and choice parameter value gives a consistent basis", "[conformance][parameters]", basis_check_10},
+      {"every integer parameter works at its smallest and largest value", "[conformance][extremes]",
+       basis_check_9},
+      {"every boolean and choice parameter value gives a consistent basis",
+       "[conformance][parameters]", basis_check_10},
   };
 }
 

@@ -86,7 +86,8 @@ static void compressor_check_2(Kit& kit) {
   if (fixture.has("components")) {
     double previous = INFINITY;
     for (std::int64_t n : {0, 1, 2, 4, 8, 16}) {
-      const double e = se(s, fixture.make({{"components", n}, {"clusters", 6}})->encode(s, nullptr));
+      const double e =
+          se(s, fixture.make({{"components", n}, {"clusters", 6}})->encode(s, nullptr));
       KIT_INFO(kit, "components " << n);
       KIT_CHECK(kit, e <= previous * (1 + 1e-9) + 1e-12);
       previous = e;
@@ -95,7 +96,8 @@ static void compressor_check_2(Kit& kit) {
   if (fixture.has("clusters")) {
     double previous = INFINITY;
     for (std::int64_t k : {1, 3, 12, 48, 240}) {
-      const double e = se(s, fixture.make({{"clusters", k}, {"components", 1}})->encode(s, nullptr));
+      const double e =
+          se(s, fixture.make({{"clusters", k}, {"components", 1}})->encode(s, nullptr));
       KIT_INFO(kit, "clusters " << k);
       KIT_CHECK(kit, e <= previous * 1.01 + 1e-12);  // k-means local optima may reverse by a hair
       previous = e;
@@ -106,7 +108,8 @@ static void compressor_check_2(Kit& kit) {
 static void compressor_check_3(Kit& kit) {
   Fixture fixture(kit);
   const TransferSignal s = test_signal();
-  const CompressedTransfer a = fixture.make()->encode(s, nullptr), b = fixture.make()->encode(s, nullptr);
+  const CompressedTransfer a = fixture.make()->encode(s, nullptr),
+                           b = fixture.make()->encode(s, nullptr);
   KIT_CHECK(kit, a.cluster_of_vertex == b.cluster_of_vertex);
   KIT_CHECK(kit, a.weights == b.weights);
   KIT_CHECK(kit, a.means == b.means);
@@ -120,7 +123,8 @@ static void compressor_check_4(Kit& kit) {
   one.coefficients = MatrixXfRow::Constant(1, 16, -1.f);
   TransferSignal few = test_signal(5);  // fewer points than clusters and than n'
   for (const TransferSignal* s : {&same, &one, &few}) {
-    const CompressedTransfer c = fixture.make({{"clusters", 8}, {"components", 24}})->encode(*s, nullptr);
+    const CompressedTransfer c =
+        fixture.make({{"clusters", 8}, {"components", 24}})->encode(*s, nullptr);
     KIT_REQUIRE_NOTHROW(kit, c.validate(s->vertices()));
     KIT_CHECK(kit, c.decode().allFinite());
     KIT_CHECK(kit, se(*s, c) <= 1e-10 * (1 + s->coefficients.cast<double>().squaredNorm()));
@@ -151,8 +155,10 @@ std::vector<Check> compressor_checks() {
       {"exact at full rank", "[conformance]", compressor_check_1},
       {"squared error does not grow with the budget", "[conformance]", compressor_check_2},
       {"deterministic for a seed", "[conformance]", compressor_check_3},
-      {"degenerate inputs give a valid form, never NaN", "[conformance][extremes]", compressor_check_4},
-      {"NaN or Inf input is refused naming the vertex", "[conformance][extremes]", compressor_check_5},
+      {"degenerate inputs give a valid form, never NaN", "[conformance][extremes]",
+       compressor_check_4},
+      {"NaN or Inf input is refused naming the vertex", "[conformance][extremes]",
+       compressor_check_5},
   };
 }
 

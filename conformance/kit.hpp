@@ -66,38 +66,40 @@ std::vector<std::string> run_check(const Check& check, PluginRegistry& registry,
 
 }  // namespace prt::conformance
 
-#define KIT_CHECK(kit, ...) (kit).expect(static_cast<bool>(__VA_ARGS__), #__VA_ARGS__, __FILE__, __LINE__)
+#define KIT_CHECK(kit, ...) \
+  (kit).expect(static_cast<bool>(__VA_ARGS__), #__VA_ARGS__, __FILE__, __LINE__)
 #define KIT_CHECK_LESS(kit, a, b) (kit).expect_less((a), (b), #a, #b, __FILE__, __LINE__)
-#define KIT_REQUIRE(kit, ...) \
-  if (!KIT_CHECK(kit, __VA_ARGS__)) throw ::prt::conformance::Abort {}
+#define KIT_REQUIRE(kit, ...)                                         \
+  if (!KIT_CHECK(kit, __VA_ARGS__)) throw ::prt::conformance::Abort { \
+    }
 #define KIT_CONCAT_(a, b) a##b
 #define KIT_CONCAT(a, b) KIT_CONCAT_(a, b)
-#define KIT_INFO(kit, stream)                                   \
+#define KIT_INFO(kit, stream)                                    \
   ::prt::conformance::Kit::Note KIT_CONCAT(kit_note_, __LINE__)( \
       kit, (std::ostringstream() << stream).str())
 // The expression throws prt::Error (whose message holds `text`, if given).
-#define KIT_CHECK_THROWS_WITH(kit, expression, text)                                         \
-  do {                                                                                       \
-    std::string kit_thrown_;                                                                 \
-    bool kit_threw_ = false;                                                                 \
-    try {                                                                                    \
-      (void)(expression);                                                                    \
-    } catch (const ::prt::Error& e) {                                                        \
-      kit_threw_ = true;                                                                     \
-      kit_thrown_ = e.what();                                                                \
-    }                                                                                        \
-    (kit).expect(kit_threw_ && kit_thrown_.find(text) != std::string::npos,                  \
-                 std::string(#expression " throws prt::Error mentioning \"") + text + "\"" + \
+#define KIT_CHECK_THROWS_WITH(kit, expression, text)                                            \
+  do {                                                                                          \
+    std::string kit_thrown_;                                                                    \
+    bool kit_threw_ = false;                                                                    \
+    try {                                                                                       \
+      (void)(expression);                                                                       \
+    } catch (const ::prt::Error& e) {                                                           \
+      kit_threw_ = true;                                                                        \
+      kit_thrown_ = e.what();                                                                   \
+    }                                                                                           \
+    (kit).expect(kit_threw_&& kit_thrown_.find(text) != std::string::npos,                      \
+                 std::string(#expression " throws prt::Error mentioning \"") + text + "\"" +    \
                      (kit_threw_ ? " (it threw: " + kit_thrown_ + ")" : " (it did not throw)"), \
-                 __FILE__, __LINE__);                                                        \
+                 __FILE__, __LINE__);                                                           \
   } while (0)
-#define KIT_REQUIRE_NOTHROW(kit, expression)                                                \
-  do {                                                                                      \
-    try {                                                                                   \
-      (void)(expression);                                                                   \
-    } catch (const std::exception& e) {                                                     \
+#define KIT_REQUIRE_NOTHROW(kit, expression)                                                       \
+  do {                                                                                             \
+    try {                                                                                          \
+      (void)(expression);                                                                          \
+    } catch (const std::exception& e) {                                                            \
       (kit).expect(false, std::string(#expression " throws nothing (it threw: ") + e.what() + ")", \
-                   __FILE__, __LINE__);                                                     \
-      throw ::prt::conformance::Abort{};                                                    \
-    }                                                                                       \
+                   __FILE__, __LINE__);                                                            \
+      throw ::prt::conformance::Abort{};                                                           \
+    }                                                                                              \
   } while (0)

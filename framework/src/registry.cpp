@@ -188,9 +188,8 @@ void PluginRegistry::add_in_process(const PluginDescriptor& descriptor) {
 }
 
 void PluginRegistry::remove_in_process(PluginKind kind, const std::string& name) {
-  std::erase_if(plugins_, [&](const auto& p) {
-    return p.factory && p.kind() == kind && p.name() == name;
-  });
+  std::erase_if(plugins_,
+                [&](const auto& p) { return p.factory && p.kind() == kind && p.name() == name; });
 }
 
 PluginRegistry::PluginRegistry(const std::vector<fs::path>& directories) {
@@ -355,7 +354,7 @@ std::shared_ptr<PluginObject> PluginRegistry::create_object(PluginKind kind,
                                                             const SourceLocation& where) {
   const PluginDescriptor& d = find(kind, name, where);
   params.validate(d.schema());
-  if (d.factory) {  // in-process: no library to load
+  if (d.factory) {                         // in-process: no library to load
     InProcessFactory factory = d.factory;  // a copy: the factory may register plug-ins
     std::shared_ptr<PluginObject> object;
     try {

@@ -1,7 +1,7 @@
 // The scene and the stages of the bake and viewing pipelines (prt/pipeline.hpp):
 // the same functions the CLI composes, each callable alone.
-#include "long_call.hpp"
 #include "bindings.hpp"
+#include "long_call.hpp"
 #include "prt/environment.hpp"
 #include "prt/image.hpp"
 #include "prt/output_file.hpp"
@@ -44,8 +44,7 @@ py::array_t<float> image_array(const Image& image) {
 }
 
 Image image_from(const py::array_t<float, py::array::c_style | py::array::forcecast>& a) {
-  if (a.ndim() != 3 || a.shape(2) != 3)
-    throw Error("an image must be a height x width x 3 array");
+  if (a.ndim() != 3 || a.shape(2) != 3) throw Error("an image must be a height x width x 3 array");
   Image image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)));
   std::copy(a.data(), a.data() + a.size(), image.rgb.begin());
   return image;
@@ -67,9 +66,8 @@ py::dict rendered_dict(const Rendered& r, const StageTimes* times) {
 void bind_pipeline(py::module_& m) {
   py::class_<SceneSpec>(m, "Scene",
                         "A scene file (TOML), parsed and validated with its plug-ins' parameters.")
-      .def(py::init([](const std::filesystem::path& file) {
-             return SceneSpec::load(file, registry());
-           }),
+      .def(py::init(
+               [](const std::filesystem::path& file) { return SceneSpec::load(file, registry()); }),
            py::arg("file"))
       .def_static(
           "parse",
@@ -96,14 +94,20 @@ void bind_pipeline(py::module_& m) {
           },
           py::arg("environment"), py::arg("basis"),
           "The environment in the basis (size() x 3), [lighting] window applied.")
-      .def("basis", [](const SceneSpec& s) {
-        PluginChoice c = s.basis;
-        return registry().create<Basis>(c.name, c.params, c.where);
-      }, "The scene's [basis] plug-in, created.")
-      .def("compressor", [](const SceneSpec& s) {
-        PluginChoice c = s.compressor;
-        return registry().create<Compressor>(c.name, c.params, c.where);
-      }, "The scene's [compressor] plug-in, created.");
+      .def(
+          "basis",
+          [](const SceneSpec& s) {
+            PluginChoice c = s.basis;
+            return registry().create<Basis>(c.name, c.params, c.where);
+          },
+          "The scene's [basis] plug-in, created.")
+      .def(
+          "compressor",
+          [](const SceneSpec& s) {
+            PluginChoice c = s.compressor;
+            return registry().create<Compressor>(c.name, c.params, c.where);
+          },
+          "The scene's [compressor] plug-in, created.");
 
   m.def(
       "trace",
@@ -162,9 +166,11 @@ void bind_pipeline(py::module_& m) {
           py::arg("environment"), "The light vector (size() x 3) of an environment.")
       .def(
           "relight",
-          [](const Relighting& r, const CompressedTransfer& transfer,
-             const Eigen::MatrixX3d& light, const Camera& camera) {
-            return long_call([&] { return Eigen::MatrixX3f(r.relight(transfer, light, camera).vertex_radiance); });
+          [](const Relighting& r, const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
+             const Camera& camera) {
+            return long_call([&] {
+              return Eigen::MatrixX3f(r.relight(transfer, light, camera).vertex_radiance);
+            });
           },
           py::arg("transfer"), py::arg("light"), py::arg("camera"),
           "Radiance each vertex sends toward the camera (v x 3, albedo included).")
@@ -194,7 +200,8 @@ void bind_pipeline(py::module_& m) {
       [](const SceneSpec& scene, const BakeData& data, bool quiet, const py::object& log) {
         const RunOptions options = run_options(quiet, log);
         StageTimes times;
-        const Rendered out = long_call([&] { return render(scene, data, registry(), times, options); });
+        const Rendered out =
+            long_call([&] { return render(scene, data, registry(), times, options); });
         return rendered_dict(out, &times);
       },
       py::arg("scene"), py::arg("data"), py::kw_only(), py::arg("quiet") = false,

@@ -57,8 +57,8 @@ ParamType param_type_from(const std::string& type) {
 
 void copy_field(char* dst, std::size_t capacity, const std::string& text, const std::string& what) {
   if (text.size() + 1 > capacity)
-    throw Error(what + " \"" + text + "\" is longer than " +
-                std::to_string(capacity - 1) + " characters");
+    throw Error(what + " \"" + text + "\" is longer than " + std::to_string(capacity - 1) +
+                " characters");
   schema::copy_text(dst, capacity, text.c_str());
 }
 
@@ -138,7 +138,8 @@ void register_plugin(const std::string& kind_name, const std::string& name, py::
                   " (does __init__ call super().__init__()?)");
     }
     if (!raw)
-      throw Error(origin + ": the object is not initialised (does __init__ call super().__init__()?)");
+      throw Error(origin +
+                  ": the object is not initialised (does __init__ call super().__init__()?)");
     auto alive = keep(instance);
     return std::shared_ptr<PluginObject>(raw, [alive](PluginObject*) {});
   });
@@ -147,7 +148,9 @@ void register_plugin(const std::string& kind_name, const std::string& name, py::
 }  // namespace
 
 void bind_plugins(py::module_& m) {
-  py::enum_<Domain>(m, "Domain").value("sphere", Domain::sphere).value("hemisphere", Domain::hemisphere);
+  py::enum_<Domain>(m, "Domain")
+      .value("sphere", Domain::sphere)
+      .value("hemisphere", Domain::hemisphere);
 
   py::class_<Basis, PyBasis, std::shared_ptr<Basis>>(
       m, "Basis",
@@ -157,8 +160,9 @@ void bind_plugins(py::module_& m) {
       "fit(data), save() and load(state).")
       .def(py::init<>())
       .def("size", &Basis::size)
-      .def("domain",
-           [](const Basis& b) { return b.domain() == Domain::hemisphere ? "hemisphere" : "sphere"; })
+      .def(
+          "domain",
+          [](const Basis& b) { return b.domain() == Domain::hemisphere ? "hemisphere" : "sphere"; })
       .def("orthonormal", &Basis::orthonormal)
       .def(
           "evaluate",

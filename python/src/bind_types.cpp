@@ -20,8 +20,7 @@ using RowsF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMaj
 // v x 3 view of a vector of Vector3f (contiguous: 3 floats each).
 py::array_t<float> vectors_view(const std::vector<Eigen::Vector3f>& v, py::handle owner) {
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
-  return view(v.empty() ? nullptr : v.front().data(), static_cast<py::ssize_t>(v.size()), 3,
-              owner);
+  return view(v.empty() ? nullptr : v.front().data(), static_cast<py::ssize_t>(v.size()), 3, owner);
 }
 
 std::vector<Eigen::Vector3f> vectors_from(const RowsF& a, const char* what) {
@@ -65,9 +64,9 @@ py::dict state_dict(const BasisState& state) {
 
 void bind_types(py::module_& m) {
   py::class_<Mesh>(m, "Mesh", "A triangle mesh: positions, unit normals, triangles.")
-      .def(py::init([](const RowsF& positions, const Eigen::Matrix<std::int64_t, Eigen::Dynamic,
-                                                                  Eigen::Dynamic, Eigen::RowMajor>&
-                                                     triangles,
+      .def(py::init([](const RowsF& positions,
+                       const Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic,
+                                           Eigen::RowMajor>& triangles,
                        std::optional<RowsF> normals) {
              Mesh mesh;
              mesh.positions = vectors_from(positions, "positions");
@@ -96,10 +95,9 @@ void bind_types(py::module_& m) {
       .def_static(
           "load", [](const std::filesystem::path& file) { return load_mesh(file); },
           py::arg("file"), "Loads an OFF, PLY or OBJ file.")
-      .def_property_readonly("positions",
-                             [](py::object self) {
-                               return vectors_view(self.cast<const Mesh&>().positions, self);
-                             })
+      .def_property_readonly(
+          "positions",
+          [](py::object self) { return vectors_view(self.cast<const Mesh&>().positions, self); })
       .def_property_readonly(
           "normals",
           [](py::object self) { return vectors_view(self.cast<const Mesh&>().normals, self); })
@@ -117,7 +115,8 @@ void bind_types(py::module_& m) {
                std::to_string(mesh.triangle_count()) + " triangles>";
       });
 
-  py::class_<DirectionSet>(m, "DirectionSet", "Directions over the sphere with solid-angle weights.")
+  py::class_<DirectionSet>(m, "DirectionSet",
+                           "Directions over the sphere with solid-angle weights.")
       .def(py::init([](const Directions& directions, const Eigen::VectorXd& weights,
                        const std::string& kind) {
              if (directions.rows() != weights.size())
@@ -235,14 +234,14 @@ void bind_types(py::module_& m) {
                                const auto& w = self.cast<const CompressedTransfer&>().means;
                                return view(w.data(), w.rows(), w.cols(), self);
                              })
-      .def_property_readonly("representatives",
-                             [](py::object self) {
-                               py::list out;
-                               for (const auto& r :
-                                    self.cast<const CompressedTransfer&>().representatives)
-                                 out.append(view(r.data(), r.rows(), r.cols(), self));
-                               return out;
-                             })
+      .def_property_readonly(
+          "representatives",
+          [](py::object self) {
+            py::list out;
+            for (const auto& r : self.cast<const CompressedTransfer&>().representatives)
+              out.append(view(r.data(), r.rows(), r.cols(), self));
+            return out;
+          })
       .def_property_readonly("weight_index",
                              [](py::object self) {
                                return vector_view(
@@ -251,8 +250,8 @@ void bind_types(py::module_& m) {
       .def_property_readonly("sparse", &CompressedTransfer::sparse)
       .def_property_readonly("vertices", &CompressedTransfer::vertices)
       .def_property_readonly("clusters", &CompressedTransfer::clusters)
-      .def_property_readonly(
-          "statistics", [](const CompressedTransfer& c) { return metrics_dict(c.statistics); })
+      .def_property_readonly("statistics",
+                             [](const CompressedTransfer& c) { return metrics_dict(c.statistics); })
       .def("decode", &CompressedTransfer::decode, "The v x n signal it stands for (a copy).")
       .def("stored_floats", &CompressedTransfer::stored_floats)
       .def("validate", &CompressedTransfer::validate, py::arg("vertex_count"));
@@ -335,8 +334,7 @@ void bind_types(py::module_& m) {
       .def_property_readonly("basis_state",
                              [](const BakeData& d) { return state_dict(d.basis_state); })
       .def_property_readonly("metrics", [](const BakeData& d) { return metrics_dict(d.metrics); })
-      .def_property_readonly("albedo",
-                             [](const BakeData& d) { return Eigen::Vector3f(d.albedo); });
+      .def_property_readonly("albedo", [](const BakeData& d) { return Eigen::Vector3f(d.albedo); });
 }
 
 }  // namespace prt::python

@@ -27,9 +27,10 @@ py::dict params_to_dict(const Params& params);
 // A numpy view of `rows` x `cols` row-major data owned by `owner` (no copy).
 template <class T>
 py::array_t<T> view(const T* data, py::ssize_t rows, py::ssize_t cols, py::handle owner) {
-  return py::array_t<T>({rows, cols}, {cols * static_cast<py::ssize_t>(sizeof(T)),
-                                       static_cast<py::ssize_t>(sizeof(T))},
-                        data, owner);
+  return py::array_t<T>(
+      {rows, cols},
+      {cols * static_cast<py::ssize_t>(sizeof(T)), static_cast<py::ssize_t>(sizeof(T))}, data,
+      owner);
 }
 
 void bind_types(py::module_& m);

@@ -13,9 +13,9 @@ namespace prt::python {
 namespace {
 
 std::thread::id main_thread;
-py::object* progress_callback = nullptr;        // owned; touched with the GIL held
-py::object* pending_exception = nullptr;        // the callback's exception, to re-raise
-int depth = 0;                                  // nested long calls (with the GIL)
+py::object* progress_callback = nullptr;  // owned; touched with the GIL held
+py::object* pending_exception = nullptr;  // the callback's exception, to re-raise
+int depth = 0;                            // nested long calls (with the GIL)
 struct sigaction previous_sigint {};
 
 void on_sigint(int) {

@@ -11,8 +11,9 @@ namespace {
 
 // "basis \"zonal\" (Python class Zonal)".
 std::string label_of(const py::handle& self, const char* kind) {
-  const std::string name =
-      py::hasattr(self, "plugin_name") ? std::string(py::str(self.attr("plugin_name"))) : std::string("?");
+  const std::string name = py::hasattr(self, "plugin_name")
+                               ? std::string(py::str(self.attr("plugin_name")))
+                               : std::string("?");
   return std::string(kind) + " \"" + name + "\" (Python class " +
          std::string(py::str(self.get_type().attr("__name__"))) + ")";
 }
@@ -45,8 +46,8 @@ Result cast_result(const Interface* self, const char* kind, const char* method,
   }
 }
 
-void check_shape(const Basis* self, const char* method, const Eigen::MatrixXd& m,
-                 Eigen::Index rows, Eigen::Index cols) {
+void check_shape(const Basis* self, const char* method, const Eigen::MatrixXd& m, Eigen::Index rows,
+                 Eigen::Index cols) {
   if (m.rows() != rows || m.cols() != cols)
     throw Error(label_of(py::cast(self), "basis") + ": " + method + "() returned a " +
                 std::to_string(m.rows()) + " x " + std::to_string(m.cols()) + " array; expected " +
@@ -65,8 +66,10 @@ void check_shape(const Basis* self, const char* method, const Eigen::MatrixXd& m
 int PyBasis::size() const {
   PRT_OVERRIDE(Basis, "basis", "size");
   if (!override) throw Error(label_of(py::cast(this), "basis") + ": defines no size()");
-  const int n = cast_result<int>(this, "basis", "size", call_override(this, "basis", "size", override));
-  if (n < 1) throw Error(label_of(py::cast(this), "basis") + ": size() returned " + std::to_string(n));
+  const int n =
+      cast_result<int>(this, "basis", "size", call_override(this, "basis", "size", override));
+  if (n < 1)
+    throw Error(label_of(py::cast(this), "basis") + ": size() returned " + std::to_string(n));
   return n;
 }
 
@@ -94,7 +97,8 @@ Eigen::MatrixXd PyBasis::evaluate(const Directions& directions) const {
   if (!override) throw Error(label_of(py::cast(this), "basis") + ": defines no evaluate()");
   const py::array_t<double> d = py::cast(directions);
   auto m = cast_result<Eigen::MatrixXd>(
-      this, "basis", "evaluate", call_override(this, "basis", "evaluate", override, py::make_tuple(d)));
+      this, "basis", "evaluate",
+      call_override(this, "basis", "evaluate", override, py::make_tuple(d)));
   check_shape(this, "evaluate", m, directions.rows(), n);
   return m;
 }
@@ -178,8 +182,8 @@ void PyBasis::fit(const FitData& data) {
   d["directions"] = py::cast(data.directions, py::return_value_policy::reference);
   if (data.visibility) {
     const auto& bits = *data.visibility;
-    py::array_t<std::uint8_t> v({static_cast<py::ssize_t>(bits.vertices()),
-                                 static_cast<py::ssize_t>(bits.directions())});
+    py::array_t<std::uint8_t> v(
+        {static_cast<py::ssize_t>(bits.vertices()), static_cast<py::ssize_t>(bits.directions())});
     auto a = v.mutable_unchecked<2>();
     for (std::size_t p = 0; p < bits.vertices(); ++p)
       for (std::size_t k = 0; k < bits.directions(); ++k) a(p, k) = bits.get(p, k);

@@ -9,19 +9,12 @@
 set -euo pipefail
 build="$(realpath "$1")"
 src="$(realpath "$2")"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-mkdir -p "$work/home" "$work/checkout"
-ln -s "$build" "$work/checkout/build"
-cp -r "$src/examples" "$src/scenes" "$work/checkout/"
-ln -s "$src/data" "$work/checkout/data"
+source "$(dirname "${BASH_SOURCE[0]}")/documented_blocks.sh"
+scratch_checkout "$build" "$src"
 
 # The marked blocks, in order.
 script="$work/documented.sh"
-awk '/<!-- tested:/ { want = 1; next }
-     want && /^```sh$/ { inside = 1; next }
-     inside && /^```$/ { inside = 0; want = 0; next }
-     inside { print }' "$src/docs/writing-a-plugin.md" >"$script"
+tested_blocks "$src/docs/writing-a-plugin.md" >"$script"
 [ "$(grep -c 'cmake' "$script")" -ge 5 ] || { echo "FAIL: no documented commands found"; exit 1; }
 echo "--- documented commands:"
 cat "$script"

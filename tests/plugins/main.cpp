@@ -33,9 +33,8 @@ class CheckInvoker : public Catch::ITestInvoker {
 
 int main(int argc, char** argv) {
   for (const auto& check : conformance::checks(kind))
-    Catch::getMutableRegistryHub().registerTest(
-        Catch::makeTestCase(new CheckInvoker(check), "", {check.name, check.tags},
-                            CATCH_INTERNAL_LINEINFO));
+    Catch::getMutableRegistryHub().registerTest(Catch::makeTestCase(
+        new CheckInvoker(check), "", {check.name, check.tags}, CATCH_INTERNAL_LINEINFO));
   Catch::Session session;
   using namespace Catch::clara;
   session.cli(session.cli() | Opt(plugin_name, "name")["--plugin"]("plug-in under test"));
