@@ -107,7 +107,8 @@ void check_output(const OutputRequest& output, const std::vector<fs::path>& inpu
                            (existing == FileKind::other && s.st_size == 0);
   if (!replaceable && !force)
     throw Error(where + "refusing to replace " + to_string(existing) + " with " +
-                to_string(output.kind) + " (the " + output.role + "); use --force to overwrite it");
+                to_string(output.kind) + " (the " + output.role + "); use " + output.force_option +
+                " to overwrite it");
 }
 
 // ---- temporaries, removed on SIGINT/SIGTERM ------------------------------

@@ -12,6 +12,7 @@ namespace prt {
 namespace {
 std::atomic<bool> enabled{true};
 std::atomic<bool> interrupt{false};
+std::atomic<bool> has_sink{false};  // an app's sink wants frequent updates (e.g. a notebook)
 
 void throw_if_interrupted() {
   if (interrupt.load(std::memory_order_relaxed)) throw Error("interrupted");
@@ -23,6 +24,7 @@ ProgressSink sink;  // null: draw_bar
 void Progress::set_sink(ProgressSink new_sink) {
   std::lock_guard lock(sink_mutex);
   sink = std::move(new_sink);
+  has_sink = static_cast<bool>(sink);
 }
 
 void Progress::set_enabled(bool on) {
@@ -35,6 +37,10 @@ void Progress::request_interrupt() {
 
 void Progress::clear_interrupt() {
   interrupt = false;
+}
+
+void Progress::check_interrupt() {
+  throw_if_interrupted();
 }
 
 bool Progress::interrupt_requested() {
@@ -74,7 +80,7 @@ void Progress::add(double items, double work) {
   std::unique_lock lock(mutex_, std::try_to_lock);
   if (!lock) return;
   const auto now = std::chrono::steady_clock::now();
-  if (now - last_draw_ < std::chrono::milliseconds(isatty(2) ? 200 : 5000)) return;
+  if (now - last_draw_ < std::chrono::milliseconds(has_sink || isatty(2) ? 200 : 5000)) return;
   last_draw_ = now;
   draw(false);
 }

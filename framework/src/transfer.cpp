@@ -27,7 +27,7 @@ MatrixXfRow CompressedTransfer::decode() const {
   return out;
 }
 
-void CompressedTransfer::validate(Eigen::Index vertex_count) const {
+void CompressedTransfer::validate(Eigen::Index vertex_count, bool finite) const {
   if (vertices() != vertex_count || weights.rows() != vertices() || weights.cols() != components ||
       means.cols() != dimension || static_cast<Eigen::Index>(representatives.size()) != clusters())
     throw Error("compressed transfer has inconsistent sizes");
@@ -43,10 +43,12 @@ void CompressedTransfer::validate(Eigen::Index vertex_count) const {
     if (s < 0 || s >= clusters())
       throw Error("compressed transfer: supercluster id " + std::to_string(s) +
                   " out of range (there are " + std::to_string(clusters()) + " clusters)");
-  if (!weights.allFinite()) throw Error("compressed transfer: NaN or infinite weight");
-  if (!means.allFinite()) throw Error("compressed transfer: NaN or infinite cluster mean");
+  if (finite && !weights.allFinite()) throw Error("compressed transfer: NaN or infinite weight");
+  if (finite && !means.allFinite())
+    throw Error("compressed transfer: NaN or infinite cluster mean");
   for (const auto& r : representatives)
-    if (!r.allFinite()) throw Error("compressed transfer: NaN or infinite representative");
+    if (finite && !r.allFinite())
+      throw Error("compressed transfer: NaN or infinite representative");
   if (sparse()) {
     if (static_cast<Eigen::Index>(weight_index.size()) != vertices() * components)
       throw Error("compressed transfer: sparse indices do not match the weights");

@@ -20,7 +20,7 @@ from ._prt import (Basis, BakeData, Camera, CompressedTransfer, CompressionRepor
 from .plugins import (boolean, choice, integer, real, reals, register_basis,
                       register_compressor, text, unregister)
 from .progress import ProgressPrinter, progress_to, tqdm_progress
-from .scene_dict import scene_from_dict, scene_to_dict
+from .scene_dict import scene_from_dict, scene_replace, scene_to_dict
 
 __all__ = [
     "Basis", "BakeData", "Camera", "CompressedTransfer", "CompressionReport", "Compressor",
@@ -37,11 +37,14 @@ _atexit.register(_prt.unregister_all_python_plugins)
 
 Scene.from_dict = staticmethod(scene_from_dict)
 Scene.to_dict = scene_to_dict
+Scene.replace = scene_replace
 
 
 def plugins(kind=None):
     """Every plug-in found (C++ libraries and Python classes), as dicts with
     kind, name, version, description, file, python and parameters."""
+    if kind not in (None, "basis", "compressor", "renderer"):
+        raise ValueError(f"unknown plug-in kind {kind!r} (basis, compressor or renderer)")
     return [p for p in _prt.plugins() if kind is None or p["kind"] == kind]
 
 
@@ -76,7 +79,7 @@ def bake(scene, *, output=None, force=False, compress=True, traced=None, progres
     return data
 
 
-def compress(signal, compressor, mesh=None, **parameters):
+def compress(signal, compressor, mesh=None, *, progress=None, **parameters):
     """Encodes a transfer (a TransferSignal, or a v x n array) with a
     compressor (an object, or a name with keyword parameters):
     returns (CompressedTransfer, CompressionReport)."""
@@ -86,7 +89,8 @@ def compress(signal, compressor, mesh=None, **parameters):
         compressor = create_compressor(compressor, **parameters)
     elif parameters:
         raise TypeError("keyword parameters are for a compressor given by name")
-    return _prt.compress(signal, compressor, mesh)
+    with progress_to(progress):
+        return _prt.compress(signal, compressor, mesh)
 
 
 def render(scene, data, *, progress=None, log=None):

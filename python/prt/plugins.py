@@ -16,8 +16,6 @@ same messages, and prt.testing runs the conformance kit on it.
         def evaluate(self, directions): ...   # s x 3 -> s x size()
 """
 import inspect
-import json
-import re
 
 from . import _prt
 
@@ -31,8 +29,7 @@ def _text(value):
         return repr(value)
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(repr(float(v)) for v in value) + "]"
-    value = str(value)
-    return value if re.fullmatch(r"[A-Za-z_][\w.+-]*", value) else json.dumps(value)
+    return str(value)
 
 
 def integer(default=None, *, min=-2**53, max=2**53, help="", required=False):
@@ -53,17 +50,22 @@ def boolean(default=False, *, help=""):
 
 def choice(default, choices, *, help=""):
     """A string from `choices` (a list of words)."""
-    return dict(type="string", default=_text(default), choices="|".join(choices), help=help)
+    return dict(type="string", default=str(default), choices="|".join(choices), help=help)
 
 
 def text(default="", *, help="", required=False):
-    return dict(type="string", default=_text(default) if default else "", help=help,
+    return dict(type="string", default=str(default or ""), help=help,
                 required=required)
 
 
 def reals(default=None, *, length=0, min=-1e300, max=1e300, help=""):
     """A list of reals (length 0: any length; one number is broadcast)."""
-    return dict(type="reals", default=_text(default), length=length, min=min, max=max, help=help)
+    # The schema writes a list default without its brackets ("1, 2"), as C++ plug-ins do.
+    if isinstance(default, (list, tuple)):
+        text = ", ".join(repr(float(v)) for v in default)
+    else:
+        text = _text(default)
+    return dict(type="reals", default=text, length=length, min=min, max=max, help=help)
 
 
 def _specs(cls):
@@ -83,7 +85,7 @@ def _register(kind, name, cls, description, version):
     origin = f"{cls.__module__}.{cls.__qualname__}"
     try:
         origin = f"{inspect.getsourcefile(cls)}: {origin}"
-    except TypeError:
+    except (TypeError, OSError):  # defined in a -c string or a notebook cell
         pass
     cls.plugin_name = name
     _prt.register_plugin(kind, name, cls, _specs(cls), description or (cls.__doc__ or "").strip()

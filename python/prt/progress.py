@@ -48,14 +48,14 @@ def tqdm_progress():
 @contextlib.contextmanager
 def progress_to(progress):
     """Routes progress for one call; yields whether the call is quiet."""
-    if progress is False:
-        yield True
-        return
-    callback = tqdm_progress() if progress == "tqdm" else progress
+    # False: calls that take `quiet` make no bars; the others (compressors
+    # that report their iterations) report to a callback that drops them.
+    callback = (lambda report: None) if progress is False else \
+        tqdm_progress() if progress == "tqdm" else progress
     if callback is not None and not callable(callback):
         raise TypeError("progress must be None, False, \"tqdm\" or a callable")
     _prt.set_progress_callback(callback)
     try:
-        yield False
+        yield progress is False
     finally:
         _prt.set_progress_callback(None)

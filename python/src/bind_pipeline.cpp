@@ -31,6 +31,26 @@ RunOptions run_options(bool quiet, const py::object& log) {
   return options;
 }
 
+// The checks the scene's [camera] section gets, for cameras made in Python.
+void check_camera(const Camera& c) {
+  if (c.width < 1 || c.height < 1 || c.width > 16384 || c.height > 16384)
+    throw Error("camera: width and height must be in [1, 16384], not " + std::to_string(c.width) +
+                " x " + std::to_string(c.height));
+  if (!(c.fov_degrees > 0 && c.fov_degrees < 180))
+    throw Error("camera: fov_degrees must be in (0, 180)");
+  if (!c.position.allFinite() || !c.target.allFinite() || !c.up.allFinite())
+    throw Error("camera: position, target and up must be finite");
+  const Eigen::Vector3f view = c.target - c.position;
+  if (view.norm() <= 0) throw Error("camera: the target is the position");
+  if (view.normalized().cross(c.up).norm() < 1e-6)
+    throw Error("camera: up is zero or along the view direction");
+}
+
+std::string traced_key(const SceneSpec& scene) {
+  return scene.file.parent_path().string() + "\n" + scene.mesh.describe() + "\n" +
+         scene.transport.describe() + "\n" + scene.material.describe();
+}
+
 py::dict times_dict(const StageTimes& times) {
   py::dict out;
   for (const auto& [name, seconds] : times.stages) out[py::str(name)] = seconds;
@@ -113,7 +133,7 @@ void bind_pipeline(py::module_& m) {
       "trace",
       [](const SceneSpec& scene, bool quiet, const py::object& log) {
         const RunOptions options = run_options(quiet, log);
-        return long_call([&] { return trace_scene(scene, options); });
+        return Traced{long_call([&] { return trace_scene(scene, options); }), traced_key(scene)};
       },
       py::arg("scene"), py::kw_only(), py::arg("quiet") = false, py::arg("log") = py::none(),
       "Traces the scene's mesh over its direction set and keeps the visibility bits (and the "
@@ -122,12 +142,17 @@ void bind_pipeline(py::module_& m) {
   m.def(
       "bake",
       [](const SceneSpec& scene, std::optional<std::filesystem::path> output, bool force,
-         bool compress, const TransportResult* traced, bool quiet, const py::object& log) {
+         bool compress, const Traced* traced, bool quiet, const py::object& log) {
+        if (traced && traced->key != traced_key(scene))
+          throw Error(scene.file.string() +
+                      ": the rays given (traced=) were traced for another mesh, transport or "
+                      "material; trace this scene (prt.trace) or leave traced out");
         if (output)
-          check_output({*output, FileKind::bake, "bake file"}, scene.input_files(), force);
+          check_output({*output, FileKind::bake, "bake file", false, kForceKeyword},
+                       scene.input_files(), force);
         RunOptions options = run_options(quiet, log);
         options.compress = compress;
-        options.traced = traced;
+        options.traced = traced ? &traced->result : nullptr;
         StageTimes times;
         BakeData data = long_call([&] { return bake(scene, registry(), options, times); });
         if (output) long_call([&] { write_bake(*output, data); });
@@ -140,6 +165,7 @@ void bind_pipeline(py::module_& m) {
   m.def(
       "compress",
       [](const TransferSignal& signal, const Compressor& compressor, const Mesh* mesh) {
+        check_signal_and_mesh(signal, mesh);
         return long_call([&] {
           Stopwatch clock;
           CompressedTransfer c = compressor.encode(signal, mesh);
@@ -168,6 +194,8 @@ void bind_pipeline(py::module_& m) {
           "relight",
           [](const Relighting& r, const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
              const Camera& camera) {
+            check_camera(camera);
+            r.check_inputs(transfer, light);
             return long_call([&] {
               return Eigen::MatrixX3f(r.relight(transfer, light, camera).vertex_radiance);
             });
@@ -178,6 +206,8 @@ void bind_pipeline(py::module_& m) {
           "render",
           [](const Relighting& r, const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
              const Camera& camera, Renderer& renderer, const Environment* background) {
+            check_camera(camera);
+            r.check_inputs(transfer, light);
             const Rendered out = long_call(
                 [&] { return render_relit(r, renderer, transfer, light, camera, background); });
             return rendered_dict(out, nullptr);
@@ -228,6 +258,9 @@ void bind_pipeline(py::module_& m) {
       "ground_truth_vertices",
       [](const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
          const Camera& camera, bool quiet) {
+        check_camera(camera);
+        if (mesh.vertex_count() == 0)
+          throw Error("ground_truth_vertices: the mesh has no vertices");
         const RunOptions options = run_options(quiet, py::none());
         return long_call([&] {
           return Eigen::MatrixX3f(ground_truth_vertices(scene, mesh, lighting, camera, options));
@@ -240,7 +273,7 @@ void bind_pipeline(py::module_& m) {
       "write_png",
       [](const py::array_t<float, py::array::c_style | py::array::forcecast>& image,
          const std::filesystem::path& file, float exposure, bool force) {
-        check_output({file, FileKind::png, "image"}, {}, force);
+        check_output({file, FileKind::png, "image", false, kForceKeyword}, {}, force);
         write_png(image_from(image), file, exposure);
       },
       py::arg("image"), py::arg("file"), py::arg("exposure") = 1.0f, py::arg("force") = false,

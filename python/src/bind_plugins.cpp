@@ -1,4 +1,8 @@
 // The plug-in interfaces, the registry, Python plug-ins and the conformance kit.
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
 #include "kit.hpp"
 #include "long_call.hpp"
 #include "prt/direction_set.hpp"
@@ -47,12 +51,58 @@ py::dict descriptor_dict(const PluginDescriptor& d) {
   return out;
 }
 
+// The type names of prt.integer(...) etc. (and the schema's own names).
 ParamType param_type_from(const std::string& type) {
-  for (ParamType t : {ParamType::boolean, ParamType::integer, ParamType::real, ParamType::string,
-                      ParamType::reals, ParamType::path})
-    if (type == to_string(t)) return t;
+  const std::pair<const char*, ParamType> names[] = {
+      {"boolean", ParamType::boolean}, {"integer", ParamType::integer}, {"real", ParamType::real},
+      {"string", ParamType::string},   {"reals", ParamType::reals},     {"path", ParamType::path}};
+  for (const auto& [name, t] : names)
+    if (type == name || type == to_string(t)) return t;
   throw Error("unknown parameter type \"" + type +
               "\" (boolean, integer, real, string, reals or path)");
+}
+
+bool is_identifier(const std::string& name) {
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// What a C++ plug-in's constexpr schema gets right by review: a usable
+// name, a range, choices, and a default inside them.
+void check_spec(const std::string& plugin, const ParamSpecRecord& p) {
+  const std::string where = "plug-in \"" + plugin + "\", parameter \"" + p.name + "\": ";
+  if (!is_identifier(p.name) || std::string(p.name) == "plugin")
+    throw Error(where + "a name must be letters, digits and _ (and not \"plugin\")");
+  if (p.min > p.max) throw Error(where + "min is above max");
+  std::vector<std::string> choices;
+  if (p.choices[0]) {
+    std::stringstream list(p.choices);
+    for (std::string c; std::getline(list, c, '|');) {
+      if (c.empty()) throw Error(where + "an empty choice");
+      choices.push_back(c);
+    }
+  }
+  if (!p.default_value[0]) return;
+  // String defaults are the text itself (as the schema reads them).
+  const ParamValue value = p.type == ParamType::string || p.type == ParamType::path
+                               ? ParamValue(std::string(p.default_value))
+                               : parse_value(p.default_value);
+  const auto* number = std::get_if<double>(&value);
+  const auto* integer = std::get_if<std::int64_t>(&value);
+  if ((p.type == ParamType::integer || p.type == ParamType::real) && (number || integer)) {
+    const double v = number ? *number : static_cast<double>(*integer);
+    if (v < p.min || v > p.max)
+      throw Error(where + "the default " + p.default_value + " is outside [" +
+                  std::to_string(p.min) + ", " + std::to_string(p.max) + "]");
+  }
+  if (!choices.empty()) {
+    const auto* text = std::get_if<std::string>(&value);
+    if (!text || std::find(choices.begin(), choices.end(), *text) == choices.end())
+      throw Error(where + "the default " + p.default_value + " is not one of the choices " +
+                  p.choices);
+  }
 }
 
 void copy_field(char* dst, std::size_t capacity, const std::string& text, const std::string& what) {
@@ -93,6 +143,7 @@ PluginInfoRecord record_from(PluginKind kind, const std::string& name, const py:
                s.contains("choices") ? s["choices"].cast<std::string>() : "", "choices of " + key);
     copy_field(p.help, sizeof p.help, s.contains("help") ? s["help"].cast<std::string>() : "",
                "help of " + key);
+    check_spec(name, p);
   }
   return r;
 }
@@ -111,6 +162,7 @@ void register_plugin(const std::string& kind_name, const std::string& name, py::
                      const py::list& specs, const std::string& description,
                      const std::string& version, const std::string& origin) {
   const PluginKind kind = kind_from(kind_name);
+  registry();  // scanned first, so that a library plug-in's name is refused
   const py::object interface =
       py::module_::import("prt._prt").attr(kind == PluginKind::basis ? "Basis" : "Compressor");
   if (kind == PluginKind::renderer)
@@ -272,6 +324,7 @@ void bind_plugins(py::module_& m) {
   m.def(
       "run_conformance_check",
       [](const std::string& kind, const std::string& plugin, const std::string& check_name) {
+        registry().find(kind_from(kind), plugin);  // an unknown name: one error, not 11
         for (const auto& check : conformance::checks(kind_from(kind)))
           if (check.name == check_name)
             return long_call([&] {

@@ -32,8 +32,8 @@ std::vector<Eigen::Vector3f> vectors_from(const RowsF& a, const char* what) {
 
 template <class T>
 py::array_t<T> vector_view(const std::vector<T>& v, py::handle owner) {
-  return py::array_t<T>({static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(T))},
-                        v.data(), owner);
+  return read_only(py::array_t<T>({static_cast<py::ssize_t>(v.size())},
+                                  {static_cast<py::ssize_t>(sizeof(T))}, v.data(), owner));
 }
 
 template <class T>
@@ -62,12 +62,25 @@ py::dict state_dict(const BasisState& state) {
 
 }  // namespace
 
+void check_signal_and_mesh(const TransferSignal& signal, const Mesh* mesh) {
+  if (signal.vertices() == 0 || signal.dimension() == 0)
+    throw Error("the transfer is empty (" + std::to_string(signal.vertices()) + " x " +
+                std::to_string(signal.dimension()) + ")");
+  if (mesh && static_cast<Eigen::Index>(mesh->vertex_count()) != signal.vertices())
+    throw Error("the mesh has " + std::to_string(mesh->vertex_count()) +
+                " vertices but the transfer " + std::to_string(signal.vertices()) + " rows");
+}
+
 void bind_types(py::module_& m) {
   py::class_<Mesh>(m, "Mesh", "A triangle mesh: positions, unit normals, triangles.")
-      .def(py::init([](const RowsF& positions,
-                       const Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic,
-                                           Eigen::RowMajor>& triangles,
+      .def(py::init([](const RowsF& positions, const py::array& triangle_array,
                        std::optional<RowsF> normals) {
+             const char kind = triangle_array.dtype().kind();
+             if (kind != 'i' && kind != 'u')
+               throw Error("triangles: expected an integer array (vertex indices), not dtype " +
+                           std::string(py::str(triangle_array.dtype())));
+             const auto triangles = triangle_array.cast<
+                 Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>();
              Mesh mesh;
              mesh.positions = vectors_from(positions, "positions");
              if (triangles.cols() != 3) throw Error("triangles: expected an n x 3 array");
@@ -136,12 +149,12 @@ void bind_types(py::module_& m) {
                                const auto& d = self.cast<const DirectionSet&>().directions;
                                return view(d.data(), d.rows(), 3, self);
                              })
-      .def_property_readonly("weights",
-                             [](py::object self) {
-                               const auto& w = self.cast<const DirectionSet&>().weights;
-                               return py::array_t<double>({w.size()}, {sizeof(double)}, w.data(),
-                                                          self);
-                             })
+      .def_property_readonly(
+          "weights",
+          [](py::object self) {
+            const auto& w = self.cast<const DirectionSet&>().weights;
+            return read_only(py::array_t<double>({w.size()}, {sizeof(double)}, w.data(), self));
+          })
       .def("__len__", &DirectionSet::size);
 
   py::class_<Camera>(m, "Camera", "A pinhole camera.")
@@ -158,13 +171,42 @@ void bind_types(py::module_& m) {
 
   py::class_<Environment>(m, "Environment", "Distant light: an equirectangular HDR map.")
       .def_static("load", &Environment::load, py::arg("file"), "Loads an .exr or .hdr map.")
-      .def_static("constant", &Environment::constant, py::arg("radiance"))
+      .def_static(
+          "constant",
+          [](const Eigen::Vector3f& radiance) {
+            if (!radiance.allFinite() || radiance.minCoeff() < 0)
+              throw Error("Environment.constant: radiance must be finite and non-negative");
+            return Environment::constant(radiance);
+          },
+          py::arg("radiance"))
       .def_property_readonly("width", &Environment::width)
       .def_property_readonly("height", &Environment::height)
       .def_property(
           "rotation", [](const Environment& e) { return Eigen::Matrix3d(e.rotation()); },
-          &Environment::set_rotation, "Rotation of the map (the light turns, not the object).")
-      .def("set_intensity", &Environment::set_intensity, py::arg("intensity"));
+          [](Environment& e, const Eigen::Matrix3d& r) {
+            if (!r.allFinite() ||
+                (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
+                r.determinant() < 0)
+              throw Error("Environment.rotation: expected a rotation matrix (orthonormal, det 1)");
+            e.set_rotation(r);
+          },
+          "Rotation of the map, a 3 x 3 matrix (the light turns, not the object); "
+          "set_rotation_degrees(d) turns it about +y as [lighting] rotation does.")
+      .def(
+          "set_rotation_degrees",
+          [](Environment& e, double degrees) {
+            if (!std::isfinite(degrees)) throw Error("set_rotation_degrees: not a finite angle");
+            e.set_rotation(rotation_about_up(degrees));
+          },
+          py::arg("degrees"), "Turns the map about +y, as the scene's [lighting] rotation.")
+      .def(
+          "set_intensity",
+          [](Environment& e, float intensity) {
+            if (!std::isfinite(intensity) || intensity < 0)
+              throw Error("set_intensity: the intensity must be finite and non-negative");
+            e.set_intensity(intensity);
+          },
+          py::arg("intensity"));
 
   py::class_<TransferSignal>(m, "TransferSignal",
                              "Per-vertex transfer: one row of coefficients per vertex.")
@@ -176,6 +218,8 @@ void bind_types(py::module_& m) {
                throw Error("TransferSignal: exit_rows " + std::to_string(exit_rows) +
                            " does not divide the " + std::to_string(coefficients.cols()) +
                            " columns");
+             if (coefficients.cols() == 0)
+               throw Error("TransferSignal: the array has no columns (coefficients)");
              TransferSignal s;
              s.coefficients = coefficients;
              s.kind = kind;
@@ -211,6 +255,8 @@ void bind_types(py::module_& m) {
              c.components = static_cast<int>(weights.cols());
              c.means = means;
              for (const auto& r : representatives) c.representatives.push_back(r);
+             // The structure now (indices, shapes); values may be NaN in an exact form.
+             c.validate(c.vertices(), false);
              return c;
            }),
            py::arg("compressor"), py::arg("dimension"), py::arg("cluster_of_vertex"),
@@ -252,9 +298,16 @@ void bind_types(py::module_& m) {
       .def_property_readonly("clusters", &CompressedTransfer::clusters)
       .def_property_readonly("statistics",
                              [](const CompressedTransfer& c) { return metrics_dict(c.statistics); })
-      .def("decode", &CompressedTransfer::decode, "The v x n signal it stands for (a copy).")
+      .def(
+          "decode",
+          [](const CompressedTransfer& c) {
+            c.validate(c.vertices(), false);
+            return c.decode();
+          },
+          "The v x n signal it stands for (a copy).")
       .def("stored_floats", &CompressedTransfer::stored_floats)
-      .def("validate", &CompressedTransfer::validate, py::arg("vertex_count"));
+      .def("validate", &CompressedTransfer::validate, py::arg("vertex_count"),
+           py::arg("finite") = true);
   m.def("exact_form", &exact_form, py::arg("signal"),
         "The signal as a compressed form that stores it exactly.");
 
@@ -274,19 +327,24 @@ void bind_types(py::module_& m) {
   m.def(
       "measure",
       [](const TransferSignal& signal, const CompressedTransfer& compressed, const Mesh* mesh) {
+        check_signal_and_mesh(signal, mesh);
         compressed.validate(signal.vertices());
+        if (compressed.dimension != signal.dimension())
+          throw Error("measure: the compressed form has " + std::to_string(compressed.dimension) +
+                      " coefficients per vertex, the signal " + std::to_string(signal.dimension()));
         return long_call([&] { return measure(signal, compressed, mesh, 0); });
       },
       py::arg("signal"), py::arg("compressed"), py::arg("mesh") = nullptr,
       "Squared error, its per-vertex distribution, storage and overdraw of an encoding.");
 
-  py::class_<TransportResult>(m, "Traced", "Rays traced for a scene: visibility bits (and hits).")
-      .def_readonly("rays_cast", &TransportResult::rays_cast)
-      .def_readonly("trace_seconds", &TransportResult::trace_seconds)
+  py::class_<Traced>(m, "Traced", "Rays traced for a scene: visibility bits (and hits).")
+      .def_property_readonly("rays_cast", [](const Traced& t) { return t.result.rays_cast; })
+      .def_property_readonly("trace_seconds",
+                             [](const Traced& t) { return t.result.trace_seconds; })
       .def(
           "visibility",
-          [](const TransportResult& r) {
-            const auto& bits = r.visibility;
+          [](const Traced& t) {
+            const auto& bits = t.result.visibility;
             py::array_t<std::uint8_t> out({static_cast<py::ssize_t>(bits.vertices()),
                                            static_cast<py::ssize_t>(bits.directions())});
             auto a = out.mutable_unchecked<2>();
@@ -311,7 +369,7 @@ void bind_types(py::module_& m) {
           "write",
           [](const BakeData& data, const std::filesystem::path& file,
              const std::vector<std::filesystem::path>& inputs, bool force) {
-            check_output({file, FileKind::bake, "bake file"}, inputs, force);
+            check_output({file, FileKind::bake, "bake file", false, kForceKeyword}, inputs, force);
             long_call([&] { write_bake(file, data); });
           },
           py::arg("file"), py::arg("inputs") = std::vector<std::filesystem::path>{},
@@ -328,9 +386,20 @@ void bind_types(py::module_& m) {
       .def_readonly("bounces", &BakeData::bounces)
       .def_readonly("mesh", &BakeData::mesh)
       .def_readonly("transfer", &BakeData::transfer)
-      .def_readwrite("compressed", &BakeData::compressed,
-                     "The compressed form relit by render(); assign another encoding of the "
-                     "transfer to render it instead.")
+      .def_property(
+          "compressed", [](const BakeData& d) { return d.compressed; },
+          [](BakeData& d, const CompressedTransfer& c) {
+            c.validate(static_cast<Eigen::Index>(d.mesh.vertex_count()), false);
+            const Eigen::Index columns =
+                d.transfer.dimension() > 0 ? d.transfer.dimension() : d.compressed.dimension;
+            if (c.dimension != columns)
+              throw Error("compressed: the encoding has " + std::to_string(c.dimension) +
+                          " coefficients per vertex; this bake's transfer has " +
+                          std::to_string(columns));
+            d.compressed = c;
+          },
+          "The compressed form relit by render(); assign another encoding of the "
+          "transfer to render it instead.")
       .def_property_readonly("basis_state",
                              [](const BakeData& d) { return state_dict(d.basis_state); })
       .def_property_readonly("metrics", [](const BakeData& d) { return metrics_dict(d.metrics); })

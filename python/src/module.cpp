@@ -15,14 +15,26 @@ PluginRegistry& registry() {
 
 Params params_from_kwargs(const py::dict& kwargs, const std::string& owner) {
   Params params(SourceLocation{owner});
-  for (const auto& [key, value] : kwargs) {
+  for (const auto& [key, item] : kwargs) {
     const std::string name = py::str(key);
     const SourceLocation where{owner + " keyword " + name};
+    py::object value = py::reinterpret_borrow<py::object>(item);
+    // numpy scalars (np.int64(4), np.float32(0.5), np.bool_) as Python's own
+    if (py::hasattr(value, "item") && py::hasattr(value, "dtype") &&
+        py::getattr(value, "ndim", py::int_(1)).cast<int>() == 0)
+      value = value.attr("item")();
     if (py::isinstance<py::bool_>(value))
       params.set(name, value.cast<bool>(), where);
-    else if (py::isinstance<py::int_>(value))
-      params.set(name, value.cast<std::int64_t>(), where);
-    else if (py::isinstance<py::float_>(value))
+    else if (py::isinstance<py::int_>(value)) {
+      std::int64_t integer = 0;
+      try {
+        integer = value.cast<std::int64_t>();
+      } catch (const py::cast_error&) {
+        throw Error(where, "parameter \"" + name + "\": " + std::string(py::str(value)) +
+                               " does not fit in 64 bits");
+      }
+      params.set(name, integer, where);
+    } else if (py::isinstance<py::float_>(value))
       params.set(name, value.cast<double>(), where);
     else if (py::isinstance<py::str>(value))
       params.set(name, value.cast<std::string>(), where);

@@ -37,9 +37,17 @@ py::object call_override(const Interface* self, const char* kind, const char* me
 template <class Result, class Interface>
 Result cast_result(const Interface* self, const char* kind, const char* method,
                    const py::object& value) {
+  if (value.is_none())
+    throw Error(label_of(py::cast(self), kind) + ": " + method + "() returned None");
+  if constexpr (std::is_same_v<Result, bool>)
+    if (!py::isinstance<py::bool_>(value) &&
+        std::string(py::str(value.get_type().attr("__name__"))) != "bool_")
+      throw Error(label_of(py::cast(self), kind) + ": " + method + "() returned a " +
+                  std::string(py::str(value.get_type().attr("__name__"))) +
+                  "; expected True or False");
   try {
     return value.cast<Result>();
-  } catch (const py::cast_error&) {
+  } catch (const std::exception&) {  // cast_error, reference_cast_error
     throw Error(label_of(py::cast(self), kind) + ": " + method + "() returned a " +
                 std::string(py::str(value.get_type().attr("__name__"))) +
                 ", which is not what the interface expects (docs/python.md)");
@@ -157,8 +165,14 @@ Eigen::MatrixXd PyBasis::rotation_matrix(const Eigen::Matrix3d& rotation) const 
 std::vector<int> PyBasis::coefficient_bands() const {
   PRT_OVERRIDE(Basis, "basis", "coefficient_bands");
   if (!override) return {};
-  return cast_result<std::vector<int>>(this, "basis", "coefficient_bands",
-                                       call_override(this, "basis", "coefficient_bands", override));
+  auto bands =
+      cast_result<std::vector<int>>(this, "basis", "coefficient_bands",
+                                    call_override(this, "basis", "coefficient_bands", override));
+  if (!bands.empty() && static_cast<int>(bands.size()) != size())
+    throw Error(label_of(py::cast(this), "basis") + ": coefficient_bands() returned " +
+                std::to_string(bands.size()) + " bands for " + std::to_string(size()) +
+                " coefficients");
+  return bands;
 }
 
 std::optional<DirectionSet> PyBasis::native_directions() const {

@@ -150,3 +150,87 @@ def test_progress_callback_errors_surface(root):
 
     with pytest.raises(RuntimeError, match="callback broke"):
         prt.trace(scene, progress=fail)
+
+
+# What a first review found: each was a crash, a silent wrong result or an
+# unclear message before.
+
+def test_empty_or_mismatched_inputs_are_refused(root):
+    with pytest.raises(prt.Error, match="no columns"):
+        prt.compress(np.zeros((10, 0), np.float32), "pca")
+    mesh = prt.Scene(root / "scenes" / "bunny.toml").load_mesh()
+    with pytest.raises(prt.Error, match="the mesh has 37706 vertices but the transfer 1 rows"):
+        prt.compress(np.random.rand(1, 4), "none", mesh=mesh)
+    with pytest.raises(prt.Error, match="cluster index out of range"):
+        prt.CompressedTransfer("x", 4, np.full(3, 10**8, np.int32), np.zeros((3, 0), np.float32),
+                               np.zeros((1, 4), np.float32), [np.zeros((0, 4), np.float32)])
+    with pytest.raises(prt.Error, match="integer array"):
+        prt.Mesh(np.zeros((3, 3), np.float32), np.array([[0, 1, 2.5]]))
+
+
+def test_views_are_read_only(root):
+    data = prt.bake(prt.Scene(root / "scenes" / "bunny.toml"), compress=False, progress=False)
+    with pytest.raises(ValueError, match="read-only"):
+        data.mesh.triangles[0, 0] = 10**9
+    with pytest.raises(ValueError, match="read-only"):
+        data.transfer.coefficients[0, 0] = 1
+    copy = np.array(data.mesh.positions)
+    copy[0] = 5  # a copy is the user's
+    assert data.mesh.positions[0, 0] != 5
+
+
+def test_rays_of_another_scene_are_refused(root):
+    scene = prt.Scene(root / "scenes" / "bunny.toml")
+    other = scene.replace({"transport": {"directions": "stratified", "rays": 64}})
+    traced = prt.trace(other, progress=False)
+    with pytest.raises(prt.Error, match="traced for another mesh, transport or material"):
+        prt.bake(scene, traced=traced, progress=False)
+
+
+def test_scene_replace_and_dict_errors_show_the_line(root):
+    scene = prt.Scene(root / "scenes" / "bunny.toml")
+    smaller = scene.replace({"basis": {"order": 3}})
+    assert smaller.basis().size() == 9
+    with pytest.raises(prt.Error, match=r"line \d+ of the TOML written from the dict: oder = 3"):
+        scene.replace({"basis": {"oder": 3}})
+
+
+def test_keyword_values_numpy_and_overflow():
+    assert prt.create_basis("sh", order=np.int64(3)).size() == 9
+    with pytest.raises(prt.Error, match="does not fit in 64 bits"):
+        prt.create_basis("sh", order=10**30)
+
+
+def test_camera_light_and_encoding_are_checked(root):
+    scene = prt.Scene(root / "scenes" / "bunny.toml")
+    data = prt.bake(scene, progress=False)
+    relighting = prt.Relighting(scene, data)
+    light = relighting.light(scene.load_environment())
+    camera = scene.camera(data.mesh)
+    for field, value in [("width", -1), ("fov_degrees", 0.0), ("fov_degrees", float("nan"))]:
+        bad = scene.camera(data.mesh)
+        setattr(bad, field, value)
+        with pytest.raises(prt.Error, match="camera"):
+            relighting.relight(data.compressed, light, bad)
+    with pytest.raises(prt.Error, match="finite 100 x 3"):
+        relighting.relight(data.compressed, light[:4], camera)
+    with pytest.raises(prt.Error, match="6 coefficients per vertex"):
+        data.compressed = prt.exact_form(prt.TransferSignal(np.zeros((37706, 6), np.float32)))
+    environment = scene.load_environment()
+    with pytest.raises(prt.Error, match="finite and non-negative"):
+        environment.set_intensity(-1)
+    with pytest.raises(prt.Error, match="rotation matrix"):
+        environment.rotation = 2 * np.eye(3)
+    environment.set_rotation_degrees(90)
+    assert np.allclose(environment.rotation @ environment.rotation.T, np.eye(3))
+
+
+def test_output_messages_name_the_python_keyword(tmp_path):
+    (tmp_path / "notes.txt").write_text("mine")
+    with pytest.raises(prt.Error, match="use force=True to overwrite"):
+        prt.write_png(np.zeros((2, 2, 3), np.float32), tmp_path / "notes.txt")
+
+
+def test_unknown_kind_is_an_error():
+    with pytest.raises(ValueError, match="unknown plug-in kind"):
+        prt.plugins("nonsense")

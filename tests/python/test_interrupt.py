@@ -46,3 +46,32 @@ def test_ctrl_c_interrupts_a_bake(tmp_path):
     assert "KeyboardInterrupt" in err and process.returncode != 0
     assert waited < 10, f"took {waited:.1f} s to stop"
     assert list(output.parent.iterdir()) == [], "the interrupted bake left files behind"
+
+
+COMPRESS = textwrap.dedent("""
+    import sys, prt
+    data = prt.bake(prt.Scene(sys.argv[1]), compress=False, progress=False)
+    print("started", flush=True)
+    try:
+        prt.compress(data.transfer, "cpca", method="iterative", clusters=1024, components=8,
+                     progress=False)
+        print("finished")
+    except KeyboardInterrupt:
+        print("interrupted", flush=True)
+""")
+
+
+def test_ctrl_c_interrupts_a_compression(root):
+    """Clustering iterations check for Ctrl-C too (iterative CPCA 1024 x 8 on
+    the bunny takes minutes on two cores)."""
+    process = subprocess.Popen([sys.executable, "-c", COMPRESS,
+                                str(root / "scenes" / "bunny.toml")], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=os.environ)
+    assert process.stdout.readline().strip() == "started"
+    time.sleep(3.0)
+    sent = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=120)
+    assert "interrupted" in out, out + err
+    assert time.monotonic() - sent < 15
+    assert "CPCA" not in err  # progress=False: no bars

@@ -82,3 +82,76 @@ def test_register_refuses_a_class_of_the_wrong_interface():
 
     with pytest.raises(prt.Error, match="must be a class deriving from prt.Basis"):
         prt.register_basis("nope")(NotABasis)
+
+
+def test_every_parameter_helper_registers_and_validates():
+    @prt.register_basis("every_type")
+    class EveryType(prt.Basis):
+        parameters = {"flag": prt.boolean(True), "weights": prt.reals([1, 2], length=2),
+                      "scale": prt.real(0.5, min=0, max=1), "mode": prt.choice("a", ["a", "b"]),
+                      "label": prt.text("hello world")}
+
+        def __init__(self, flag, weights, scale, mode, label):
+            super().__init__()
+            self.seen = (flag, weights, scale, mode, label)
+
+        def size(self):
+            return 1
+
+        def evaluate(self, directions):
+            return np.full((len(directions), 1), 1 / np.sqrt(4 * np.pi))
+
+    assert prt.create_basis("every_type").seen == (True, [1.0, 2.0], 0.5, "a", "hello world")
+    assert prt.create_basis("every_type", flag=False, weights=[3, 4]).seen[:2] == (False, [3, 4])
+    with pytest.raises(prt.Error, match='"weights"'):
+        prt.create_basis("every_type", weights=[1, 2, 3])
+    prt.unregister("basis", "every_type")
+
+
+@pytest.mark.parametrize("spec, message", [
+    (prt.integer(5, min=0, max=3), "outside"),
+    (prt.integer(1, min=3, max=0), "min is above max"),
+    (prt.choice("c", ["a", "b"]), "not one of the choices"),
+])
+def test_bad_parameter_specs_are_refused_at_registration(spec, message):
+    class Spec(prt.Basis):
+        parameters = {"p": spec}
+
+    with pytest.raises(prt.Error, match=message):
+        prt.register_basis("bad_spec")(Spec)
+
+
+def test_returning_none_or_wrong_bands_is_one_clear_error():
+    @prt.register_compressor("returns_none")
+    class ReturnsNone(prt.Compressor):
+        def __init__(self):
+            super().__init__()
+
+        def encode(self, signal, mesh):
+            return None
+
+    with pytest.raises(prt.Error, match=r'compressor "returns_none" .*encode\(\) returned None'):
+        prt.compress(np.ones((4, 3), np.float32), "returns_none")
+
+    @prt.register_basis("bad_bands")
+    class BadBands(zonal_basis.Zonal):
+        def coefficient_bands(self):
+            return [0]
+
+    with pytest.raises(prt.Error, match=r"coefficient_bands\(\) returned 1 bands for 6"):
+        prt.Scene  # the pipeline asks for bands where it windows a light
+        prt.create_basis("bad_bands").save()  # save() is C++; bands next
+        prt._prt.Basis.coefficient_bands(prt.create_basis("bad_bands"))
+
+
+def test_a_library_name_is_refused_in_a_fresh_process():
+    import subprocess
+    import sys
+    out = subprocess.run([sys.executable, "-c", "import prt\nclass B(prt.Basis): pass\n"
+                          "prt.register_basis('sh')(B)"], capture_output=True, text=True)
+    assert out.returncode != 0 and "has that name" in out.stderr
+
+
+def test_the_kit_on_an_unknown_name_is_one_error():
+    with pytest.raises(prt.Error, match='no basis plug-in named "nothing_here"'):
+        run_check("basis", "nothing_here", "saved state restores an identical basis")

@@ -17,9 +17,10 @@ FileKind detect_file_kind(const std::filesystem::path& file);
 
 struct OutputRequest {
   std::filesystem::path path;
-  FileKind kind = FileKind::other;  // what the command will write there
-  std::string role = "output";      // e.g. "bake file", "image", for messages
-  bool create_folder = false;       // a scene's default output folder may be made
+  FileKind kind = FileKind::other;       // what the command will write there
+  std::string role = "output";           // e.g. "bake file", "image", for messages
+  bool create_folder = false;            // a scene's default output folder may be made
+  std::string force_option = "--force";  // how the caller says "overwrite", for messages
 };
 
 // Refuses, with one message naming the path, an output that is a directory,

@@ -192,6 +192,10 @@ class Relighting {
   const Basis& basis() const { return *basis_; }
   // The light vector of an environment in the light basis ([lighting] window applied).
   Eigen::MatrixX3d light(const Environment& environment) const;
+  // Throws unless `transfer` encodes this bake's transfer (vertices,
+  // coefficients, indices) and `light` has one finite row per light-basis
+  // coefficient: for inputs made elsewhere than the bake (the Python module).
+  void check_inputs(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light) const;
   // Lays a transfer out for relighting frame after frame (viewer, bench).
   RelightKernel prepare(const CompressedTransfer& transfer) const;
   Relit relight(const RelightKernel& kernel, const Eigen::MatrixX3d& light,

@@ -39,6 +39,8 @@ class Progress {
   static void request_interrupt();
   static void clear_interrupt();
   static bool interrupt_requested();
+  // Throws the same where long work has no bar (e.g. clustering iterations).
+  static void check_interrupt();
   void finish();
 
  private:

@@ -68,7 +68,9 @@ struct CompressedTransfer {
   void decode_row(Eigen::Index p, Eigen::Ref<Eigen::RowVectorXf> out) const;
   // Throws prt::Error unless the sizes and cluster indices agree with each
   // other and with `vertex_count`.
-  void validate(Eigen::Index vertex_count) const;
+  // `finite`: also refuse NaN and infinite values (an exact form of a
+  // signal that holds them keeps them).
+  void validate(Eigen::Index vertex_count, bool finite = true) const;
   // Floats stored: sum_p n'_k(p) + sum_k (n'_k + 1) n  (= m_p n' + m_c (n' + 1) n
   // when every cluster has n' components).
   double stored_floats() const;

@@ -177,6 +177,7 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
     // Components one at a time; classification by approximation error.
     for (int c = 1; c <= n_prime; ++c) {
       for (int iteration = 0; iteration < options.iterations_per_component; ++iteration) {
+        Progress::check_interrupt();
         Stopwatch clock;
         const auto models = fit_all(rows, result.labels, k, std::vector<int>(k, c));
         const std::vector<std::int32_t> before = result.labels;
@@ -198,6 +199,7 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
     const double budget = double(rows.total()) * n_prime + double(k) * n_prime * rows.cols();
     std::vector<double> sizes;
     for (int iteration = 0; iteration < options.adaptive_iterations; ++iteration) {
+      Progress::check_interrupt();
       Stopwatch clock;
       auto models = fit_all(rows, result.labels, k, std::vector<int>(k, widest), &sizes);
       count = allocate(models, sizes, budget, rows.cols());

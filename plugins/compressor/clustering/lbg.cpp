@@ -242,6 +242,7 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
   std::vector<double> distance(std::size_t(rows.local()), 0.0);
   double previous = std::numeric_limits<double>::infinity();
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+    Progress::check_interrupt();
     Stopwatch clock;
     if (options.alpha > 0 && iteration > 0)
       nearest_coherent(rows.x, result.means, *options.mesh, options.alpha, result.labels, distance);

@@ -8,6 +8,7 @@
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
 #include "prt/error.hpp"
+#include "prt/progress.hpp"
 #include "prt/segment_sum.hpp"
 
 namespace prt::clustering {
@@ -186,6 +187,7 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   // (the same solver on the same scatter gives the same bits anywhere).
   const int rank = rows.comm.rank(), ranks = rows.comm.size();
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) {
+    Progress::check_interrupt();  // one eigen-solve may take seconds (glossy rows)
     if (int(i % std::size_t(ranks)) == rank)
       principal_directions(scatter[i], models[std::size_t(which[i])]);
   });
