@@ -17,11 +17,11 @@ struct Fixture {
   explicit Fixture(Kit& kit)
       : registry(kit.registry),
         plugin(kit.plugin),
-        descriptor(registry.find(PluginKind::compressor, plugin)) {}
+        schema(registry.find(PluginKind::compressor, plugin).schema()) {}
   PluginRegistry& registry;
   std::string plugin;
-  const PluginDescriptor& descriptor;
-  bool has(const char* key) const { return descriptor.schema().find(key) != nullptr; }
+  ParamSchema schema;  // a copy: creating a Python plug-in may change the registry
+  bool has(const char* key) const { return schema.find(key) != nullptr; }
 
   std::shared_ptr<Compressor> make(std::map<std::string, std::int64_t> values = {}) {
     Params params;
@@ -63,7 +63,7 @@ static void compressor_check_0(Kit& kit) {
   KIT_CHECK(kit, c.dimension == s.dimension());
   KIT_CHECK(kit, c.decode().allFinite());
   const CompressionReport r = measure(s, c, nullptr, 0);
-  KIT_CHECK(kit, std::abs(r.squared_error - se(s, c)) <= 1e-5 * (1 + se(s, c)));
+  KIT_CHECK(kit, std::abs(r.squared_error - se(s, c)) <= 1.2e-5 * se(s, c));  // Catch's Approx
   KIT_CHECK(kit, r.stored_floats == c.stored_floats());
 }
 

@@ -354,19 +354,21 @@ std::shared_ptr<PluginObject> PluginRegistry::create_object(PluginKind kind,
                                                             const SourceLocation& where) {
   const PluginDescriptor& d = find(kind, name, where);
   params.validate(d.schema());
-  if (d.factory) {                         // in-process: no library to load
-    InProcessFactory factory = d.factory;  // a copy: the factory may register plug-ins
+  if (d.factory) {  // in-process: no library to load
+    // Copies: the factory (Python code) may register plug-ins, which changes plugins_.
+    InProcessFactory factory = d.factory;
+    const std::string origin = d.file.string();
     std::shared_ptr<PluginObject> object;
     try {
       object = factory(params);
     } catch (const Error&) {
       throw;
     } catch (const std::exception& e) {
-      throw Error(where, std::string(to_string(kind)) + " \"" + name + "\" (" + d.file.string() +
+      throw Error(where, std::string(to_string(kind)) + " \"" + name + "\" (" + origin +
                              ") failed to construct: " + e.what());
     }
     if (!object)
-      throw Error(where, std::string(to_string(kind)) + " \"" + name + "\" (" + d.file.string() +
+      throw Error(where, std::string(to_string(kind)) + " \"" + name + "\" (" + origin +
                              ") made no object");
     return object;
   }

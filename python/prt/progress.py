@@ -54,8 +54,9 @@ def progress_to(progress):
         tqdm_progress() if progress == "tqdm" else progress
     if callback is not None and not callable(callback):
         raise TypeError("progress must be None, False, \"tqdm\" or a callable")
+    previous = _prt.progress_callback()  # a call inside another's (e.g. from a plug-in)
     _prt.set_progress_callback(callback)
     try:
         yield progress is False
     finally:
-        _prt.set_progress_callback(None)
+        _prt.set_progress_callback(previous)

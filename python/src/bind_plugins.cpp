@@ -7,6 +7,7 @@
 #include "long_call.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/mesh.hpp"
+#include "prt/progress.hpp"
 #include "prt/renderer.hpp"
 #include "python_plugins.hpp"
 
@@ -162,6 +163,8 @@ void register_plugin(const std::string& kind_name, const std::string& name, py::
                      const py::list& specs, const std::string& description,
                      const std::string& version, const std::string& origin) {
   const PluginKind kind = kind_from(kind_name);
+  if (long_call_active())  // work running (e.g. a bake calling this plug-in) reads the registry
+    throw Error("cannot register plug-in \"" + name + "\" while a bake, render or check runs");
   registry();  // scanned first, so that a library plug-in's name is refused
   const py::object interface =
       py::module_::import("prt._prt").attr(kind == PluginKind::basis ? "Basis" : "Compressor");
@@ -178,7 +181,10 @@ void register_plugin(const std::string& kind_name, const std::string& name, py::
     try {
       instance = (*held)(**params_to_dict(params));
     } catch (py::error_already_set& e) {
-      throw Error(origin + ": constructor raised " + e.what());
+      if (!long_call_active() || !e.matches(PyExc_KeyboardInterrupt))
+        throw Error(origin + ": constructor raised " + e.what());
+      Progress::request_interrupt();
+      throw Error("interrupted");
     }
     PluginObject* raw = nullptr;
     try {

@@ -13,9 +13,9 @@ namespace prt::python {
 namespace {
 
 std::thread::id main_thread;
-py::object* progress_callback = nullptr;  // owned; touched with the GIL held
-py::object* pending_exception = nullptr;  // the callback's exception, to re-raise
-int depth = 0;                            // nested long calls (with the GIL)
+py::object* progress_callback_ = nullptr;  // owned; touched with the GIL held
+py::object* pending_exception = nullptr;   // the callback's exception, to re-raise
+int depth = 0;                             // nested long calls (with the GIL)
 struct sigaction previous_sigint {};
 
 void on_sigint(int) {
@@ -24,7 +24,7 @@ void on_sigint(int) {
 
 void deliver(const ProgressReport& report) {
   py::gil_scoped_acquire gil;
-  if (!progress_callback || progress_callback->is_none()) return Progress::draw_bar(report);
+  if (!progress_callback_ || progress_callback_->is_none()) return Progress::draw_bar(report);
   try {
     py::dict r;
     r["label"] = report.label;
@@ -35,7 +35,7 @@ void deliver(const ProgressReport& report) {
     r["elapsed"] = report.elapsed;
     r["eta"] = report.eta;
     r["final"] = report.final;
-    (*progress_callback)(r);
+    (*progress_callback_)(r);
   } catch (py::error_already_set& e) {
     // The callback failed (or saw KeyboardInterrupt): stop the work, then
     // raise its exception in the caller.
@@ -50,9 +50,17 @@ void remember_main_thread() {
   main_thread = std::this_thread::get_id();
 }
 
+bool long_call_active() {
+  return depth > 0;
+}
+
+py::object progress_callback() {
+  return progress_callback_ ? *progress_callback_ : py::none();
+}
+
 void set_progress_callback(py::object callback) {
-  delete progress_callback;
-  progress_callback = callback.is_none() ? nullptr : new py::object(std::move(callback));
+  delete progress_callback_;
+  progress_callback_ = callback.is_none() ? nullptr : new py::object(std::move(callback));
 }
 
 LongCallScope::LongCallScope() {
@@ -64,7 +72,12 @@ LongCallScope::LongCallScope() {
   Progress::set_sink(deliver);
   // Python's own SIGINT handler only sets a flag that the interpreter checks
   // between bytecodes, which never run while C++ works: ours stops the work.
-  if (std::this_thread::get_id() == main_thread) {
+  // Only where Python's own handler is in place: a user who ignores or
+  // handles SIGINT keeps their choice.
+  const py::module_ signal = py::module_::import("signal");
+  if (std::this_thread::get_id() == main_thread &&
+      signal.attr("getsignal")(signal.attr("SIGINT")).is(signal.attr("default_int_handler"))) {
+    installed_ = true;
     struct sigaction action {};
     action.sa_handler = on_sigint;
     sigemptyset(&action.sa_mask);
@@ -75,7 +88,7 @@ LongCallScope::LongCallScope() {
 LongCallScope::~LongCallScope() {
   --depth;
   if (!active_) return;
-  if (std::this_thread::get_id() == main_thread) sigaction(SIGINT, &previous_sigint, nullptr);
+  if (installed_) sigaction(SIGINT, &previous_sigint, nullptr);
   Progress::set_sink(nullptr);
   Progress::clear_interrupt();
 }

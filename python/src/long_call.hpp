@@ -29,10 +29,17 @@ class LongCallScope {
 
  private:
   bool active_ = false;
+  bool installed_ = false;  // our SIGINT handler, to restore the previous one
 };
 
 // Called at import (on the main thread, where Python handles signals).
 void remember_main_thread();
+
+// Whether a long call is running (Ctrl-C then stops it cooperatively).
+bool long_call_active();
+
+// The callable that receives progress reports (None: bars on stderr).
+py::object progress_callback();
 
 // Sets the callable that receives progress reports (None: bars on stderr).
 void set_progress_callback(py::object callback);

@@ -71,7 +71,8 @@ using namespace prt::python;
 PYBIND11_MODULE(_prt, m) {
   m.doc() = "PRT: precomputed radiance transfer (C++ core; use the package `prt`)";
   remember_main_thread();
-  static py::exception<Error> error(m, "Error", PyExc_ValueError);
+  // Never freed: released after Python has gone, it would touch a dead interpreter.
+  static auto& error = *new py::exception<Error>(m, "Error", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -81,6 +82,7 @@ PYBIND11_MODULE(_prt, m) {
       PyErr_SetString(error.ptr(), e.what());
     }
   });
+  m.def("progress_callback", &progress_callback, "The current progress callback (or None).");
   m.def("set_progress_callback", &set_progress_callback, py::arg("callback"),
         "Receives every progress report as a dict (label, unit, done, total, rate, elapsed, "
         "eta, final); None: bars on standard error.");

@@ -1,5 +1,6 @@
 #include "python_plugins.hpp"
 
+#include "long_call.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/mesh.hpp"
 #include "prt/progress.hpp"
@@ -27,6 +28,7 @@ py::object call_override(const Interface* self, const char* kind, const char* me
     return override(*args);
   } catch (py::error_already_set& e) {
     if (e.matches(PyExc_KeyboardInterrupt)) {
+      if (!long_call_active()) throw;  // no work to stop: Python sees its own exception
       Progress::request_interrupt();
       throw Error("interrupted");
     }
@@ -41,7 +43,7 @@ Result cast_result(const Interface* self, const char* kind, const char* method,
     throw Error(label_of(py::cast(self), kind) + ": " + method + "() returned None");
   if constexpr (std::is_same_v<Result, bool>)
     if (!py::isinstance<py::bool_>(value) &&
-        std::string(py::str(value.get_type().attr("__name__"))) != "bool_")
+        !py::isinstance(value, py::module_::import("numpy").attr("bool_")))
       throw Error(label_of(py::cast(self), kind) + ": " + method + "() returned a " +
                   std::string(py::str(value.get_type().attr("__name__"))) +
                   "; expected True or False");
@@ -115,10 +117,10 @@ Eigen::MatrixXd PyBasis::projection_matrix(const DirectionSet& set) const {
   {
     PRT_OVERRIDE(Basis, "basis", "projection_matrix");
     if (override) {
-      auto m = cast_result<Eigen::MatrixXd>(
-          this, "basis", "projection_matrix",
-          call_override(this, "basis", "projection_matrix", override,
-                        py::make_tuple(py::cast(set, py::return_value_policy::reference))));
+      auto m =
+          cast_result<Eigen::MatrixXd>(this, "basis", "projection_matrix",
+                                       call_override(this, "basis", "projection_matrix", override,
+                                                     py::make_tuple(py::cast(DirectionSet(set)))));
       check_shape(this, "projection_matrix", m, set.size(), size());
       return m;
     }
@@ -133,8 +135,7 @@ Eigen::MatrixXd PyBasis::project(const Eigen::MatrixXd& samples, const Direction
       auto m = cast_result<Eigen::MatrixXd>(
           this, "basis", "project",
           call_override(this, "basis", "project", override,
-                        py::make_tuple(py::cast(samples),
-                                       py::cast(set, py::return_value_policy::reference))));
+                        py::make_tuple(py::cast(samples), py::cast(DirectionSet(set)))));
       check_shape(this, "project", m, samples.rows(), size());
       return m;
     }
@@ -192,8 +193,9 @@ void PyBasis::fit(const FitData& data) {
   PRT_OVERRIDE(Basis, "basis", "fit");
   if (!override) return;
   py::dict d;
-  d["mesh"] = py::cast(data.mesh, py::return_value_policy::reference);
-  d["directions"] = py::cast(data.directions, py::return_value_policy::reference);
+  // Copies: a fitted basis may keep them, and the caller's live only for this call.
+  if (data.mesh) d["mesh"] = py::cast(Mesh(*data.mesh));
+  if (data.directions) d["directions"] = py::cast(DirectionSet(*data.directions));
   if (data.visibility) {
     const auto& bits = *data.visibility;
     py::array_t<std::uint8_t> v(
