@@ -745,14 +745,19 @@ Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& re
   return out;
 }
 
+void check_encoding(const BakeData& data, const CompressedTransfer& transfer,
+                    const std::string& what, bool finite) {
+  transfer.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()), finite);
+  const Eigen::Index columns =
+      data.transfer.dimension() > 0 ? data.transfer.dimension() : data.compressed.dimension;
+  if (transfer.dimension != columns)
+    throw Error(what + ": the encoding has " + std::to_string(transfer.dimension) +
+                " coefficients per vertex; this bake's transfer has " + std::to_string(columns));
+}
+
 void Relighting::check_inputs(const CompressedTransfer& transfer,
                               const Eigen::MatrixX3d& light) const {
-  transfer.validate(static_cast<Eigen::Index>(data_.mesh.vertex_count()));
-  const Eigen::Index columns =
-      data_.transfer.dimension() > 0 ? data_.transfer.dimension() : data_.compressed.dimension;
-  if (transfer.dimension != columns)
-    throw Error("relight: the encoding has " + std::to_string(transfer.dimension) +
-                " coefficients per vertex; this bake's transfer has " + std::to_string(columns));
+  check_encoding(data_, transfer, "relight");
   if (light.rows() != basis_->size() || !light.allFinite())
     throw Error("relight: the light must be a finite " + std::to_string(basis_->size()) +
                 " x 3 array (one row per coefficient of the light basis), not " +

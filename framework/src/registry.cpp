@@ -117,6 +117,14 @@ PluginDescriptor read_descriptor(const fs::path& file) {
 
 namespace {
 
+// `d` skipped because `other` has its kind and name.
+PluginProblem duplicate_problem(const PluginDescriptor& d, const PluginDescriptor& other) {
+  return {d.file, d.kind(), d.name(),
+          d.file.string() + ": duplicate " + to_string(d.kind()) + " plug-in name \"" + d.name() +
+              "\", also provided by " + other.file.string(),
+          true};
+}
+
 // In-process plug-ins and the registries alive, so that a registration
 // reaches every registry.
 struct InProcessTable {
@@ -174,11 +182,7 @@ void PluginRegistry::add_in_process(const PluginDescriptor& descriptor) {
   for (auto& p : plugins_)
     if (p.kind() == descriptor.kind() && p.name() == descriptor.name()) {
       if (!p.factory) {  // a library file has the name: the same answer as two files
-        problems_.push_back({descriptor.file, descriptor.kind(), descriptor.name(),
-                             descriptor.file.string() + ": duplicate " +
-                                 to_string(descriptor.kind()) + " plug-in name \"" +
-                                 descriptor.name() + "\", also provided by " + p.file.string(),
-                             true});
+        problems_.push_back(duplicate_problem(descriptor, p));
         return;
       }
       p = descriptor;
@@ -309,11 +313,7 @@ void PluginRegistry::scan_file(const fs::path& file) {
   }
   for (const auto& other : plugins_)
     if (other.kind() == d.kind() && other.name() == d.name()) {
-      problems_.push_back({file, d.kind(), d.name(),
-                           file.string() + ": duplicate " + to_string(d.kind()) +
-                               " plug-in name \"" + d.name() + "\", also provided by " +
-                               other.file.string(),
-                           true});
+      problems_.push_back(duplicate_problem(d, other));
       return;
     }
   plugins_.push_back(std::move(d));

@@ -9,6 +9,7 @@
 #include "prt/environment.hpp"
 #include "prt/mesh.hpp"
 #include "prt/output_file.hpp"
+#include "prt/pipeline.hpp"
 #include "prt/transport.hpp"
 
 namespace prt::python {
@@ -61,6 +62,15 @@ py::dict state_dict(const BasisState& state) {
 }
 
 }  // namespace
+
+py::array_t<std::uint8_t> visibility_array(const VisibilityBits& bits) {
+  py::array_t<std::uint8_t> out(
+      {static_cast<py::ssize_t>(bits.vertices()), static_cast<py::ssize_t>(bits.directions())});
+  auto a = out.mutable_unchecked<2>();
+  for (std::size_t v = 0; v < bits.vertices(); ++v)
+    for (std::size_t d = 0; d < bits.directions(); ++d) a(v, d) = bits.get(v, d);
+  return out;
+}
 
 void check_signal_and_mesh(const TransferSignal& signal, const Mesh* mesh) {
   if (signal.vertices() == 0 || signal.dimension() == 0)
@@ -342,16 +352,7 @@ void bind_types(py::module_& m) {
       .def_property_readonly("trace_seconds",
                              [](const Traced& t) { return t.result.trace_seconds; })
       .def(
-          "visibility",
-          [](const Traced& t) {
-            const auto& bits = t.result.visibility;
-            py::array_t<std::uint8_t> out({static_cast<py::ssize_t>(bits.vertices()),
-                                           static_cast<py::ssize_t>(bits.directions())});
-            auto a = out.mutable_unchecked<2>();
-            for (std::size_t v = 0; v < bits.vertices(); ++v)
-              for (std::size_t d = 0; d < bits.directions(); ++d) a(v, d) = bits.get(v, d);
-            return out;
-          },
+          "visibility", [](const Traced& t) { return visibility_array(t.result.visibility); },
           "Vertices x directions, 1 where the direction is unoccluded and above the surface "
           "(a copy, one byte per bit).");
 
@@ -389,13 +390,7 @@ void bind_types(py::module_& m) {
       .def_property(
           "compressed", [](const BakeData& d) { return d.compressed; },
           [](BakeData& d, const CompressedTransfer& c) {
-            c.validate(static_cast<Eigen::Index>(d.mesh.vertex_count()), false);
-            const Eigen::Index columns =
-                d.transfer.dimension() > 0 ? d.transfer.dimension() : d.compressed.dimension;
-            if (c.dimension != columns)
-              throw Error("compressed: the encoding has " + std::to_string(c.dimension) +
-                          " coefficients per vertex; this bake's transfer has " +
-                          std::to_string(columns));
+            check_encoding(d, c, "compressed", false);
             d.compressed = c;
           },
           "The compressed form relit by render(); assign another encoding of the "

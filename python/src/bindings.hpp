@@ -54,6 +54,9 @@ struct Traced {
   std::string key;
 };
 
+// Visibility bits unpacked: vertices x directions, one byte per bit (a copy).
+py::array_t<std::uint8_t> visibility_array(const VisibilityBits& bits);
+
 // Throws unless the signal has rows and columns and the mesh (if any) one
 // vertex per row.
 void check_signal_and_mesh(const TransferSignal& signal, const Mesh* mesh);

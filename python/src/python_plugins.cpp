@@ -196,15 +196,7 @@ void PyBasis::fit(const FitData& data) {
   // Copies: a fitted basis may keep them, and the caller's live only for this call.
   if (data.mesh) d["mesh"] = py::cast(Mesh(*data.mesh));
   if (data.directions) d["directions"] = py::cast(DirectionSet(*data.directions));
-  if (data.visibility) {
-    const auto& bits = *data.visibility;
-    py::array_t<std::uint8_t> v(
-        {static_cast<py::ssize_t>(bits.vertices()), static_cast<py::ssize_t>(bits.directions())});
-    auto a = v.mutable_unchecked<2>();
-    for (std::size_t p = 0; p < bits.vertices(); ++p)
-      for (std::size_t k = 0; k < bits.directions(); ++k) a(p, k) = bits.get(p, k);
-    d["visibility"] = v;
-  }
+  if (data.visibility) d["visibility"] = visibility_array(*data.visibility);
   call_override(this, "basis", "fit", override, py::make_tuple(d));
 }
 

@@ -109,9 +109,11 @@ def test_every_parameter_helper_registers_and_validates():
 
 
 @pytest.mark.parametrize("spec, message", [
-    (prt.integer(5, min=0, max=3), "outside"),
+    (prt.integer(5, min=0, max=3), r'"p" = 5 is out of range \[0, 3\] \(this is the schema\'s own '
+                                   r'default'),
     (prt.integer(1, min=3, max=0), "min is above max"),
-    (prt.choice("c", ["a", "b"]), "not one of the choices"),
+    (prt.choice("c", ["a", "b"]), r'"p" = "c" is not one of: a, b .*\(this is the schema\'s own '
+                                  r'default'),
 ])
 def test_bad_parameter_specs_are_refused_at_registration(spec, message):
     class Spec(prt.Basis):

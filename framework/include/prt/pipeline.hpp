@@ -159,6 +159,12 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
 // Writes a compression report into bake-file metrics.
 void record(const CompressionReport& report, std::map<std::string, double>& metrics);
 
+// Throws unless `transfer` encodes the bake's transfer: one row per vertex,
+// valid indices, the bake's coefficients per vertex (and finite values
+// when `finite`); `what` leads the message.
+void check_encoding(const BakeData& data, const CompressedTransfer& transfer,
+                    const std::string& what, bool finite = true);
+
 // Checks that `data` was baked with the scene's bases, material and parameters.
 void check_bake_matches(const BakeData& data, const SceneSpec& scene);
 // Throws unless the bake's transfer has one column per basis coefficient (per
