@@ -10,7 +10,7 @@ packages=(
   libeigen3-dev libembree-dev libopenmesh-dev libglfw3-dev libglm-dev
   libboost-dev libboost-filesystem-dev catch2 libtbb-dev libtomlplusplus-dev
   libcli11-dev nlohmann-json3-dev libopenexr-dev libhdf5-dev hdf5-tools libstb-dev libepoxy-dev libimgui-dev
-  xvfb xauth libgl1-mesa-dri openmpi-bin libopenmpi-dev
+  liblapack-dev xvfb xauth libgl1-mesa-dri openmpi-bin libopenmpi-dev
   python3-h5py python3-matplotlib python3-sklearn python3-numpy python3-pil
   pybind11-dev python3-dev python3-pytest python3-tqdm python3-nbclient python3-nbformat python3-ipykernel
 )

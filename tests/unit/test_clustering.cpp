@@ -1,3 +1,4 @@
+#include <Eigen/SVD>
 #include <catch2/catch.hpp>
 #include <map>
 #include <numeric>
@@ -167,4 +168,53 @@ TEST_CASE("reclassification stays within its error budget and lowers overdraw",
           average_overdraw(sphere, s.cluster_of_vertex));
     CHECK(se_of(x, s) == se_of(x, c));  // superclusters do not change the approximation
   }
+}
+
+TEST_CASE("PCA from the Gram matrix (fewer points than dimensions) equals the SVD",
+          "[clustering][extremes]") {
+  for (int members : {2, 7, 29, 31, 60}) {  // below, near and above n = 30
+    INFO(members << " members in 30 dimensions");
+    const MatrixXfRow x = blobs(members, 30, 1, std::uint64_t(members), 0.3f);
+    std::vector<std::uint32_t> all(static_cast<std::size_t>(members));
+    std::iota(all.begin(), all.end(), 0u);
+    const ClusterModel model = fit_cluster(x, all, 5);
+    const Eigen::MatrixXd centred = x.cast<double>().rowwise() - x.cast<double>().colwise().mean();
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred, Eigen::ComputeThinV);
+    const Eigen::Index rank = std::min<Eigen::Index>(5, members - 1);
+    for (Eigen::Index i = 0; i < rank; ++i) {
+      const double sigma = svd.singularValues()[i];
+      CHECK(model.eigenvalues[i] == Approx(sigma * sigma).epsilon(1e-10));
+      CHECK(std::abs(model.basis.row(i).dot(svd.matrixV().col(i))) == Approx(1).epsilon(1e-8));
+    }
+    for (Eigen::Index i = rank; i < 5; ++i) CHECK(model.basis.row(i).isZero());
+  }
+}
+
+TEST_CASE("a refit keeps the models of unchanged clusters and refits the others", "[clustering]") {
+  const MatrixXfRow x = blobs(400, 12, 4, 5);
+  std::vector<std::int32_t> labels(400);
+  for (int p = 0; p < 400; ++p) labels[std::size_t(p)] = p % 4;
+  const Rows rows(x);
+  const auto first = fit_models(rows, labels, 4, {3, 3, 3, 3});
+  std::vector<std::int32_t> moved = labels;
+  moved[1] = 2;  // point 1 leaves cluster 1 for cluster 2
+  FitReuse reuse{&first, changed_clusters(rows, labels, moved, 4), 3};
+  CHECK(reuse.unchanged == std::vector<char>{0, 1, 1, 0});
+  for (char& c : reuse.unchanged) c = !c;
+  // Mark the kept models so that reuse is visible.
+  std::vector<ClusterModel> marked = first;
+  for (auto& m : marked) m.eigenvalues[0] = -1;
+  reuse.previous = &marked;
+  const auto second = fit_models(rows, moved, 4, {3, 3, 3, 3}, nullptr, &reuse);
+  const auto fresh = fit_models(rows, moved, 4, {3, 3, 3, 3});
+  CHECK(second[0].eigenvalues[0] == -1);
+  CHECK(second[3].eigenvalues[0] == -1);
+  CHECK(second[1].basis == fresh[1].basis);
+  CHECK(second[2].basis == fresh[2].basis);
+  CHECK(second[1].eigenvalues[0] > 0);
+  // A kept model with too few directions is refitted.
+  reuse.minimum = 4;
+  const auto wider = fit_models(rows, moved, 4, {4, 4, 4, 4}, nullptr, &reuse);
+  CHECK(wider[0].eigenvalues[0] > 0);
+  CHECK(wider[0].basis.rows() == 4);
 }

@@ -184,3 +184,30 @@ TEST_CASE("compressed rows gather on rank 0 in vertex order", "[distributed]") {
     }
   });
 }
+
+TEST_CASE("small clusters (Gram matrices) and large ones (scatter) fit alike on any rank count",
+          "[distributed][clustering]") {
+  // Clusters 0-39 have 25 members in 30 dimensions (fitted from their Gram
+  // matrix, members gathered across ranks); 40-42 have thousands (scatter).
+  const MatrixXfRow x = clustered_rows(2 * kSegmentRows + 77, 30, 5);
+  std::vector<std::int32_t> labels(std::size_t(x.rows()));
+  for (std::size_t p = 0; p < labels.size(); ++p)
+    labels[p] = std::int32_t(p < 1000 ? p % 40 : 40 + p % 3);
+  // Members of small clusters on every rank: spread them over the shards.
+  std::swap_ranges(labels.begin() + 500, labels.begin() + 1000, labels.end() - 500);
+  const std::vector<int> components(43, 4);
+  const auto one = clustering::fit_models(clustering::Rows(x), labels, 43, components);
+  for (int ranks : {2, 3}) {
+    on_ranks(x, ranks, [&](int, const clustering::Rows& rows) {
+      const std::vector<std::int32_t> local(labels.begin() + rows.shard.first,
+                                            labels.begin() + rows.shard.last);
+      const auto shared = clustering::fit_models(rows, local, 43, components);
+      REQUIRE(shared.size() == one.size());
+      for (std::size_t k = 0; k < one.size(); ++k) {
+        CHECK(shared[k].mean == one[k].mean);
+        CHECK(shared[k].basis == one[k].basis);
+        CHECK(shared[k].eigenvalues == one[k].eigenvalues);
+      }
+    });
+  }
+}

@@ -18,60 +18,99 @@ namespace prt::clustering {
 
 namespace {
 
-std::vector<ClusterModel> fit_all(const Rows& rows, const std::vector<std::int32_t>& labels,
-                                  int clusters, const std::vector<int>& components,
-                                  std::vector<double>* counts = nullptr) {
-  return fit_models(rows, labels, clusters, components, counts);
+// The classification's float operands, as the columns of one matrix: every
+// mean, then component t of every cluster that has one (clusters[t] lists
+// them, from column start[t]).
+struct Classifier {
+  Eigen::MatrixXf columns;                 // n x (k + components)
+  Eigen::RowVectorXf mean_norms;           // k
+  Eigen::RowVectorXf mean_projections;     // per column: u . mean (0 for means)
+  std::vector<Eigen::Index> start;         // per component t
+  std::vector<std::vector<int>> clusters;  // per component t
+};
+
+Classifier classifier(const std::vector<ClusterModel>& models, int components) {
+  const int k = static_cast<int>(models.size());
+  const Eigen::Index n = models.empty() ? 0 : models.front().mean.size();
+  Classifier c;
+  Eigen::Index width = k;
+  for (int t = 0; t < components; ++t) {
+    std::vector<int> with;
+    for (int j = 0; j < k; ++j)
+      if (models[j].basis.rows() > t) with.push_back(j);
+    if (with.empty()) break;
+    c.start.push_back(width);
+    width += Eigen::Index(with.size());
+    c.clusters.push_back(std::move(with));
+  }
+  c.columns.resize(n, width);
+  c.mean_norms.resize(k);
+  c.mean_projections = Eigen::RowVectorXf::Zero(width);
+  for (int j = 0; j < k; ++j) {
+    c.columns.col(j) = models[j].mean.transpose().cast<float>();
+    c.mean_norms[j] = static_cast<float>(models[j].mean.squaredNorm());
+  }
+  for (std::size_t t = 0; t < c.clusters.size(); ++t)
+    for (std::size_t q = 0; q < c.clusters[t].size(); ++q) {
+      const ClusterModel& m = models[std::size_t(c.clusters[t][q])];
+      const Eigen::Index column = c.start[t] + Eigen::Index(q);
+      c.columns.col(column) = m.basis.row(Eigen::Index(t)).transpose().cast<float>();
+      c.mean_projections[column] = static_cast<float>(m.basis.row(Eigen::Index(t)).dot(m.mean));
+    }
+  return c;
 }
 
-// Assigns every row to the cluster of least approximation error:
-// |x - m_j|^2 - sum_i ((x - m_j) . u_ji)^2, from two float GEMMs per row block.
-// Returns the total error and fills each row's error.
-double classify(const Rows& rows, const std::vector<ClusterModel>& models,
+// Assigns every row to the cluster of least approximation error under the
+// first `components` directions of each model:
+// |x - m_j|^2 - sum_i ((x - m_j) . u_ji)^2, from one float GEMM per row
+// block; the sums over components vectorise over clusters. Returns the total
+// error and fills each row's error.
+double classify(const Rows& rows, const std::vector<ClusterModel>& models, int components,
                 std::vector<std::int32_t>& labels, std::vector<double>& errors) {
   const MatrixXfRow& x = rows.x;
   const int k = static_cast<int>(models.size());
-  const Eigen::Index n = x.cols();
-  std::vector<Eigen::Index> offset(k + 1, 0);
-  for (int j = 0; j < k; ++j) offset[j + 1] = offset[j] + models[j].basis.rows();
-  Eigen::MatrixXf means_t(n, k), basis_t(n, offset[k]);
-  Eigen::RowVectorXf mean_norms(k);
-  Eigen::RowVectorXf mean_projections(offset[k]);
-  for (int j = 0; j < k; ++j) {
-    means_t.col(j) = models[j].mean.transpose().cast<float>();
-    mean_norms[j] = static_cast<float>(models[j].mean.squaredNorm());
-    for (Eigen::Index i = 0; i < models[j].basis.rows(); ++i) {
-      basis_t.col(offset[j] + i) = models[j].basis.row(i).transpose().cast<float>();
-      mean_projections[offset[j] + i] =
-          static_cast<float>(models[j].basis.row(i).dot(models[j].mean));
-    }
-  }
-  for_each_row_block(Eigen::Index(0), x.rows(), Eigen::Index(512),
-                     [&](Eigen::Index begin, Eigen::Index end) {
-                       const Eigen::Index height = end - begin;
-                       const auto block = x.middleRows(begin, height);
-                       const Eigen::MatrixXf dots = block * means_t;
-                       Eigen::MatrixXf projections = block * basis_t;
-                       projections.rowwise() -= mean_projections;
-                       for (Eigen::Index i = 0; i < height; ++i) {
-                         const float row_norm = block.row(i).squaredNorm();
-                         float best = std::numeric_limits<float>::infinity();
-                         int best_label = 0;
-                         for (int j = 0; j < k; ++j) {
-                           float e = row_norm - 2.f * dots(i, j) + mean_norms[j];
-                           const Eigen::Index count = offset[j + 1] - offset[j];
-                           if (count)
-                             e -= projections.row(i).segment(offset[j], count).squaredNorm();
-                           if (e < best) best = e, best_label = j;
-                         }
-                         labels[begin + i] = best_label;
-                       }
-                     });
+  const Classifier c = classifier(models, components);
+  for_each_row_block(
+      Eigen::Index(0), x.rows(), Eigen::Index(256), [&](Eigen::Index begin, Eigen::Index end) {
+        const Eigen::Index height = end - begin;
+        const auto block = x.middleRows(begin, height);
+        const MatrixXfRow products = block * c.columns;
+        std::vector<float> sum(static_cast<std::size_t>(k)), error(static_cast<std::size_t>(k));
+        for (Eigen::Index i = 0; i < height; ++i) {
+          const float* p = products.row(i).data();
+          std::fill(sum.begin(), sum.end(), 0.f);
+          for (std::size_t t = 0; t < c.clusters.size(); ++t) {
+            const std::vector<int>& with = c.clusters[t];
+            const float* projection = p + c.start[t];
+            const float* offset = c.mean_projections.data() + c.start[t];
+            if (Eigen::Index(with.size()) == k) {
+              for (int j = 0; j < k; ++j) {
+                const float d = projection[j] - offset[j];
+                sum[std::size_t(j)] += d * d;
+              }
+            } else {
+              for (std::size_t q = 0; q < with.size(); ++q) {
+                const float d = projection[q] - offset[q];
+                sum[std::size_t(with[q])] += d * d;
+              }
+            }
+          }
+          const float row_norm = block.row(i).squaredNorm();
+          for (int j = 0; j < k; ++j)
+            error[std::size_t(j)] = row_norm - 2.f * p[j] + c.mean_norms[j] - sum[std::size_t(j)];
+          float best = std::numeric_limits<float>::infinity();
+          int best_label = 0;
+          for (int j = 0; j < k; ++j)
+            if (error[std::size_t(j)] < best) best = error[std::size_t(j)], best_label = j;
+          labels[std::size_t(begin + i)] = best_label;
+        }
+      });
   // Errors in double on every core; their sum through segments (the same
   // figure whatever the number of cores or ranks).
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 1024), [&](const auto& r) {
     for (Eigen::Index p = r.begin(); p < r.end(); ++p)
-      errors[p] = approximation_error(x, p, models[labels[p]]);
+      errors[std::size_t(p)] =
+          approximation_error(x, p, models[std::size_t(labels[std::size_t(p)])], components);
   });
   return rows.sum(errors);
 }
@@ -105,10 +144,10 @@ bool refill_empty(const Rows& rows, std::vector<std::int32_t>& labels, std::vect
   return moved;
 }
 
-IterationLog gemm_log(const Rows& rows, const std::vector<ClusterModel>& models, double seconds,
-                      double energy, const std::string& stage) {
+IterationLog gemm_log(const Rows& rows, const std::vector<ClusterModel>& models, int components,
+                      double seconds, double energy, const std::string& stage) {
   Eigen::Index cols = 0;
-  for (const auto& m : models) cols += 1 + m.basis.rows();
+  for (const auto& m : models) cols += 1 + std::min<Eigen::Index>(m.basis.rows(), components);
   return {seconds, energy, rows.local(), rows.cols(), cols, stage};
 }
 
@@ -156,6 +195,46 @@ void truncate(std::vector<ClusterModel>& models, const std::vector<int>& count) 
   }
 }
 
+// Refits the cluster models for a new labelling, keeping the models of the
+// clusters whose members did not change. Each fit computes one direction more
+// than asked (when there is room), so that moving to the next component count
+// refits only the clusters that changed.
+class Refitter {
+ public:
+  Refitter(const Rows& rows, int clusters) : rows_(rows), k_(clusters) {}
+
+  const std::vector<ClusterModel>& fit(const std::vector<std::int32_t>& labels, int components,
+                                       std::vector<double>* counts = nullptr) {
+    const int spare = static_cast<int>(std::min<Eigen::Index>(components + 1, rows_.cols()));
+    FitReuse reuse{&models_, {}, components};
+    const bool reusable = !models_.empty();
+    if (reusable) reuse.unchanged = changed_clusters(rows_, labels_, labels, k_);
+    if (reusable)
+      for (char& c : reuse.unchanged) c = !c;
+    models_ = fit_models(rows_, labels, k_, std::vector<int>(std::size_t(k_), spare), counts,
+                         reusable ? &reuse : nullptr);
+    labels_ = labels;
+    return models_;
+  }
+
+ private:
+  const Rows& rows_;
+  int k_;
+  std::vector<ClusterModel> models_;
+  std::vector<std::int32_t> labels_;
+};
+
+// The models with at most count[k] directions each.
+std::vector<ClusterModel> truncated(std::vector<ClusterModel> models,
+                                    const std::vector<int>& count) {
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    const Eigen::Index keep = std::min<Eigen::Index>(count[k], models[k].basis.rows());
+    models[k].basis.conservativeResize(keep, Eigen::NoChange);
+    models[k].eigenvalues.conservativeResize(keep);
+  }
+  return models;
+}
+
 }  // namespace
 
 CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
@@ -167,6 +246,7 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
   const int k = static_cast<int>(vq.means.rows());
   const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, rows.cols()));
   std::vector<double> errors(std::size_t(rows.local()), 0.0);
+  Refitter refitter(rows, k);
 
   std::optional<Progress> progress;
   if (options.method != Method::static_pca) {
@@ -179,11 +259,11 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
       for (int iteration = 0; iteration < options.iterations_per_component; ++iteration) {
         Progress::check_interrupt();
         Stopwatch clock;
-        const auto models = fit_all(rows, result.labels, k, std::vector<int>(k, c));
+        const auto& models = refitter.fit(result.labels, c);
         const std::vector<std::int32_t> before = result.labels;
-        const double energy = classify(rows, models, result.labels, errors);
+        const double energy = classify(rows, models, c, result.labels, errors);
         const bool refilled = refill_empty(rows, result.labels, errors, k);
-        result.log.push_back(gemm_log(rows, models, clock.seconds(), energy, "iterative"));
+        result.log.push_back(gemm_log(rows, models, c, clock.seconds(), energy, "iterative"));
         progress->add(1, 1);
         if (!refilled && !rows.any(before != result.labels)) {  // LBG: no point switched
           progress->add(options.iterations_per_component - iteration - 1, 0);
@@ -201,22 +281,24 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
     for (int iteration = 0; iteration < options.adaptive_iterations; ++iteration) {
       Progress::check_interrupt();
       Stopwatch clock;
-      auto models = fit_all(rows, result.labels, k, std::vector<int>(k, widest), &sizes);
+      auto models = truncated(refitter.fit(result.labels, widest, &sizes),
+                              std::vector<int>(std::size_t(k), widest));
       count = allocate(models, sizes, budget, rows.cols());
       truncate(models, count);
-      const double energy = classify(rows, models, result.labels, errors);
+      const double energy = classify(rows, models, widest, result.labels, errors);
       refill_empty(rows, result.labels, errors, k);
-      result.log.push_back(gemm_log(rows, models, clock.seconds(), energy, "adaptive"));
+      result.log.push_back(gemm_log(rows, models, widest, clock.seconds(), energy, "adaptive"));
       progress->add(1, 1);
     }
     // Final representatives for the final classification, same allocation.
-    auto models = fit_all(rows, result.labels, k, std::vector<int>(k, widest), &sizes);
+    auto models = truncated(refitter.fit(result.labels, widest, &sizes),
+                            std::vector<int>(std::size_t(k), widest));
     count = allocate(models, sizes, budget, rows.cols());
     truncate(models, count);
     result.models = std::move(models);
     return result;
   }
-  result.models = fit_all(rows, result.labels, k, count);
+  result.models = truncated(refitter.fit(result.labels, n_prime), count);
   return result;
 }
 

@@ -6,10 +6,13 @@
 
 namespace prt::clustering {
 
-double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model) {
+double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+                           Eigen::Index components) {
+  const Eigen::Index c =
+      components < 0 ? model.basis.rows() : std::min(components, model.basis.rows());
   const Eigen::RowVectorXd d = x.row(p).cast<double>() - model.mean;
   double error = d.squaredNorm();
-  if (model.basis.rows() > 0) error -= (model.basis * d.transpose()).squaredNorm();
+  if (c > 0) error -= (model.basis.topRows(c) * d.transpose()).squaredNorm();
   return std::max(error, 0.0);
 }
 

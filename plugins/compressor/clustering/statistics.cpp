@@ -10,6 +10,7 @@
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
 #include "prt/segment_sum.hpp"
+#include "prt/symmetric_eigen.hpp"
 
 namespace prt::clustering {
 
@@ -80,27 +81,106 @@ ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labe
 
 namespace {
 
-// Scatter sum_p (x_p - m)(x_p - m)^T of each cluster in `which` (lower
-// triangles): a block per cluster, only for the clusters a segment touches,
-// in passes over groups of clusters whose blocks stay within kGroupBytes
-// (the tree holds a few partials per thread at once).
+// Rows of each cluster among the local rows, in row order.
+struct LocalMembers {
+  std::vector<Eigen::Index> start;  // cluster j: rows[start[j] .. start[j + 1])
+  std::vector<Eigen::Index> rows;
+};
+
+LocalMembers local_members(const std::vector<std::int32_t>& labels, int k) {
+  LocalMembers m;
+  m.start.assign(std::size_t(k) + 1, 0);
+  for (std::int32_t l : labels)
+    if (l >= 0) ++m.start[std::size_t(l) + 1];
+  for (int j = 0; j < k; ++j) m.start[std::size_t(j) + 1] += m.start[std::size_t(j)];
+  m.rows.resize(std::size_t(m.start[std::size_t(k)]));
+  std::vector<Eigen::Index> at(m.start.begin(), m.start.end() - 1);
+  for (std::size_t p = 0; p < labels.size(); ++p)
+    if (labels[p] >= 0) m.rows[std::size_t(at[std::size_t(labels[p])]++)] = Eigen::Index(p);
+  return m;
+}
+
+// In a distributed run, the member rows of the clusters this rank fits from
+// their Gram matrix, in global row order, sent by the ranks that hold them
+// (rank r's rows all precede rank r + 1's).
+std::map<int, MatrixXfRow> gram_rows(const Rows& rows, const LocalMembers& members,
+                                     const std::vector<int>& which, const std::vector<bool>& gram,
+                                     const std::vector<double>& counts) {
+  const Eigen::Index n = rows.cols();
+  const int rank = rows.comm.rank(), ranks = rows.comm.size();
+  std::map<int, MatrixXfRow> out;
+  // Per root: every rank sends, for each Gram cluster the root solves, its
+  // local member count and rows.
+  for (int root = 0; root < ranks; ++root) {
+    std::vector<char> mine;
+    for (std::size_t i = std::size_t(root); i < which.size(); i += std::size_t(ranks)) {
+      if (!gram[i]) continue;
+      const int cluster = which[i];
+      const std::int64_t count =
+          members.start[std::size_t(cluster) + 1] - members.start[std::size_t(cluster)];
+      const char* head = reinterpret_cast<const char*>(&count);
+      mine.insert(mine.end(), head, head + sizeof count);
+      for (Eigen::Index q = members.start[std::size_t(cluster)];
+           q < members.start[std::size_t(cluster) + 1]; ++q) {
+        const char* row =
+            reinterpret_cast<const char*>(rows.x.row(members.rows[std::size_t(q)]).data());
+        mine.insert(mine.end(), row, row + sizeof(float) * std::size_t(n));
+      }
+    }
+    const std::vector<std::vector<char>> parts = rows.comm.gather(mine, root);
+    if (root != rank) continue;
+    std::vector<std::size_t> read(std::size_t(ranks), 0);
+    for (std::size_t i = std::size_t(root); i < which.size(); i += std::size_t(ranks)) {
+      if (!gram[i]) continue;
+      MatrixXfRow& y = out[int(i)];
+      y.resize(Eigen::Index(counts[std::size_t(which[i])]), n);
+      Eigen::Index at = 0;
+      for (int r = 0; r < ranks; ++r) {
+        const std::vector<char>& part = parts[std::size_t(r)];
+        std::size_t& from = read[std::size_t(r)];
+        std::int64_t count = 0;
+        if (from + sizeof count > part.size())
+          throw Error("clustering: rank " + std::to_string(r) + " sent too few member rows");
+        std::memcpy(&count, &part[from], sizeof count);
+        from += sizeof count;
+        const std::size_t bytes = std::size_t(count) * std::size_t(n) * sizeof(float);
+        if (count < 0 || at + count > y.rows() || from + bytes > part.size())
+          throw Error("clustering: rank " + std::to_string(r) + " sent a wrong member count");
+        std::memcpy(y.row(at).data(), &part[from], bytes);
+        from += bytes;
+        at += count;
+      }
+      if (at != y.rows()) throw Error("clustering: the ranks sent too few member rows");
+    }
+  }
+  return out;
+}
+
+// Scatter sum_p (x_p - m)(x_p - m)^T of each cluster in `which` that is not
+// fitted from its Gram matrix: a block per cluster, only for the clusters a
+// segment touches, in passes over groups of clusters whose blocks stay within
+// kGroupBytes (the tree holds a few partials per thread at once).
 constexpr std::size_t kGroupBytes = std::size_t(64) << 20;
 
-std::vector<Eigen::MatrixXd> cluster_scatter(const Rows& rows,
-                                             const std::vector<std::int32_t>& labels,
-                                             const RowMatrixXd& means,
-                                             const std::vector<int>& which) {
+std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
+                                               const std::vector<std::int32_t>& labels,
+                                               const RowMatrixXd& means,
+                                               const std::vector<int>& which,
+                                               const std::vector<bool>& gram) {
   const Eigen::Index n = rows.cols();
   // Every rank receives every rank's subtree roots: the bound is shared.
   const std::size_t group =
       std::max<std::size_t>(1, kGroupBytes / std::size_t(rows.comm.size()) /
                                    (sizeof(double) * std::size_t(n) * std::size_t(n)));
+  std::vector<int> scattered;
+  for (std::size_t i = 0; i < which.size(); ++i)
+    if (!gram[i]) scattered.push_back(int(i));
   Blocks total;
   std::vector<bool> wanted(static_cast<std::size_t>(means.rows()), false);
-  for (std::size_t start = 0; start < which.size(); start += group) {
+  for (std::size_t start = 0; start < scattered.size(); start += group) {
     std::fill(wanted.begin(), wanted.end(), false);
-    for (std::size_t i = start; i < std::min(which.size(), start + group); ++i)
-      wanted[std::size_t(which[i])] = true;
+    for (std::size_t i = start; i < std::min(scattered.size(), start + group); ++i)
+      wanted[std::size_t(which[std::size_t(scattered[i])])] = true;
     Blocks part = segment_sum_blocks(
         rows.shard,
         [&](Eigen::Index s) {
@@ -131,10 +211,10 @@ std::vector<Eigen::MatrixXd> cluster_scatter(const Rows& rows,
         rows.comm);
     total.merge(part);
   }
-  std::vector<Eigen::MatrixXd> scatter(which.size());
-  for (std::size_t i = 0; i < which.size(); ++i) {
+  std::map<int, Eigen::MatrixXd> scatter;
+  for (int i : scattered) {
     Eigen::MatrixXd& m = scatter[i];
-    const auto it = total.find(which[i]);
+    const auto it = total.find(which[std::size_t(i)]);
     m = Eigen::MatrixXd::Zero(n, n);
     if (it == total.end()) continue;
     std::size_t at = 0;
@@ -144,30 +224,45 @@ std::vector<Eigen::MatrixXd> cluster_scatter(const Rows& rows,
   return scatter;
 }
 
-// The principal directions of one cluster from its scatter.
-void principal_directions(const Eigen::MatrixXd& scatter, ClusterModel& model) {
+// Keeps the leading eigenpairs as the model's principal directions: rows of
+// `directions` (not yet normalised), stopping at the numerical rank.
+void keep_directions(const Eigen::VectorXd& values, const Eigen::MatrixXd& directions,
+                     ClusterModel& model) {
   const Eigen::Index c = model.basis.rows();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(scatter);
-  const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
-  const double largest = std::max(values.size() ? values[values.size() - 1] : 0.0, 0.0);
+  const double largest = std::max(values.size() ? values[0] : 0.0, 0.0);
   const double cutoff = std::max(largest * 1e-12, 1e-300);
   for (Eigen::Index i = 0; i < c && i < values.size(); ++i) {
-    const Eigen::Index column = values.size() - 1 - i;
-    const double lambda = values[column];
+    const double lambda = values[i];
     if (!(lambda > cutoff)) break;  // rank reached: the rest stay zero
-    const Eigen::RowVectorXd direction = solver.eigenvectors().col(column).transpose();
-    const double norm = direction.norm();
+    const double norm = directions.col(i).norm();
     if (!(norm > 0) || !std::isfinite(norm)) break;
-    model.basis.row(i) = direction / norm;
+    model.basis.row(i) = directions.col(i).transpose() / norm;
     model.eigenvalues[i] = lambda;
   }
+}
+
+// The principal directions of one cluster from its n x n scatter.
+void directions_from_scatter(const Eigen::MatrixXd& scatter, ClusterModel& model) {
+  const Eigenpairs pairs = largest_eigenpairs(scatter, model.basis.rows());
+  keep_directions(pairs.values, pairs.vectors, model);
+}
+
+// The same from the m x m Gram matrix of its m < n centred members Y: the
+// scatter Y^T Y and Y Y^T share their nonzero eigenvalues, and Y^T w is the
+// scatter's eigenvector for the Gram's eigenvector w. m^3 instead of n^3.
+void directions_from_gram(const RowMatrixXd& centred, ClusterModel& model) {
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(centred.rows(), centred.rows());
+  gram.selfadjointView<Eigen::Lower>().rankUpdate(centred);
+  gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
+  const Eigenpairs pairs = largest_eigenpairs(gram, model.basis.rows());
+  keep_directions(pairs.values, centred.transpose() * pairs.vectors, model);
 }
 
 }  // namespace
 
 std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::int32_t>& labels,
                                      int k, const std::vector<int>& components,
-                                     std::vector<double>* counts) {
+                                     std::vector<double>* counts, const FitReuse* reuse) {
   const Eigen::Index n = rows.cols();
   const ClusterSums sums = cluster_sums(rows, labels, k);
   std::vector<ClusterModel> models(static_cast<std::size_t>(k));
@@ -175,6 +270,11 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   std::vector<int> which;
   for (int j = 0; j < k; ++j) {
     const int c = std::max(0, components[std::size_t(j)]);
+    if (reuse && reuse->unchanged[std::size_t(j)] &&
+        (*reuse->previous)[std::size_t(j)].basis.rows() >= std::min(c, reuse->minimum)) {
+      models[std::size_t(j)] = (*reuse->previous)[std::size_t(j)];  // same members, same model
+      continue;
+    }
     models[std::size_t(j)] = {Eigen::RowVectorXd::Zero(n), RowMatrixXd::Zero(c, n),
                               Eigen::VectorXd::Zero(c)};
     if (sums.counts[std::size_t(j)] == 0) continue;
@@ -182,14 +282,41 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     models[std::size_t(j)].mean = means.row(j);
     if (c > 0) which.push_back(j);
   }
-  const std::vector<Eigen::MatrixXd> scatter = cluster_scatter(rows, labels, means, which);
+  // Small clusters from their Gram matrix (members gathered where they are
+  // solved), the others from their scatter summed over segments. The choice
+  // depends on the global count only, so every rank makes it alike.
+  std::vector<bool> gram(which.size());
+  for (std::size_t i = 0; i < which.size(); ++i)
+    gram[i] = sums.counts[std::size_t(which[i])] < double(n);
+  const LocalMembers members = local_members(labels, k);
+  // A single process reads members where they are; ranks gather them.
+  const std::map<int, MatrixXfRow> gram_members =
+      rows.distributed() ? gram_rows(rows, members, which, gram, sums.counts)
+                         : std::map<int, MatrixXfRow>();
+  const std::map<int, Eigen::MatrixXd> scatter = cluster_scatter(rows, labels, means, which, gram);
   // Each rank solves every size-th cluster and the ranks share the results
-  // (the same solver on the same scatter gives the same bits anywhere).
+  // (the same solver on the same matrix gives the same bits anywhere).
   const int rank = rows.comm.rank(), ranks = rows.comm.size();
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) {
-    Progress::check_interrupt();  // one eigen-solve may take seconds (glossy rows)
-    if (int(i % std::size_t(ranks)) == rank)
-      principal_directions(scatter[i], models[std::size_t(which[i])]);
+    Progress::check_interrupt();  // one eigen-solve may take a while (glossy rows)
+    if (int(i % std::size_t(ranks)) != rank) return;
+    ClusterModel& model = models[std::size_t(which[i])];
+    if (gram[i]) {
+      RowMatrixXd centred;
+      if (rows.distributed()) {
+        centred = gram_members.at(int(i)).cast<double>().rowwise() - model.mean;
+      } else {
+        const int j = which[i];
+        centred.resize(members.start[std::size_t(j) + 1] - members.start[std::size_t(j)],
+                       rows.cols());
+        for (Eigen::Index q = 0; q < centred.rows(); ++q)
+          centred.row(q) = rows.x.row(members.rows[std::size_t(members.start[std::size_t(j)] + q)])
+                               .cast<double>() -
+                           model.mean;
+      }
+      directions_from_gram(centred, model);
+    } else
+      directions_from_scatter(scatter.at(int(i)), model);
   });
   if (ranks > 1) {
     std::vector<double> mine;
@@ -215,6 +342,23 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   }
   if (counts) *counts = sums.counts;
   return models;
+}
+
+std::vector<char> changed_clusters(const Rows& rows, const std::vector<std::int32_t>& before,
+                                   const std::vector<std::int32_t>& after, int k) {
+  std::vector<char> changed(std::size_t(k), 0);
+  const auto mark = [&](std::int32_t l) {
+    if (l >= 0 && l < k) changed[std::size_t(l)] = 1;
+  };
+  if (before.size() != after.size()) throw Error("clustering: labellings of different sizes");
+  for (std::size_t p = 0; p < after.size(); ++p)
+    if (before[p] != after[p]) mark(before[p]), mark(after[p]);
+  if (!rows.distributed()) return changed;
+  const std::vector<double> mine(changed.begin(), changed.end());
+  for (const auto& theirs : allgather(rows.comm, mine))
+    for (std::size_t j = 0; j < changed.size() && j < theirs.size(); ++j)
+      if (theirs[j] != 0) changed[j] = 1;
+  return changed;
 }
 
 ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,

@@ -99,13 +99,29 @@ struct ClusterModel {
   Eigen::VectorXd eigenvalues;  // D_i^2 of each basis row, descending
 };
 
-// Mean and PCA of every cluster: the eigen-solve of each cluster's n x n
-// scatter about its mean (both summed over segments). Clusters with fewer
-// points than components, single points and identical points give zero rows,
-// never NaN. `counts` gets each cluster's size.
+// A previous fit that fit_models may keep: clusters whose members are
+// unchanged since it get its model back (the same bits a refit would give)
+// when it has at least min(components, minimum) directions.
+struct FitReuse {
+  const std::vector<ClusterModel>* previous = nullptr;
+  std::vector<char> unchanged;  // per cluster
+  int minimum = 0;
+};
+
+// Mean and PCA of every cluster: the largest eigenpairs of each cluster's
+// n x n scatter about its mean (summed over segments), or for clusters with
+// fewer than n points of their Gram matrix. Clusters with fewer points than
+// components, single points and identical points give zero rows, never NaN.
+// `counts` gets each cluster's size.
 std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::int32_t>& labels,
                                      int clusters, const std::vector<int>& components,
-                                     std::vector<double>* counts = nullptr);
+                                     std::vector<double>* counts = nullptr,
+                                     const FitReuse* reuse = nullptr);
+
+// Per cluster: whether any row entered or left it between two labellings
+// (on every rank).
+std::vector<char> changed_clusters(const Rows& rows, const std::vector<std::int32_t>& before,
+                                   const std::vector<std::int32_t>& after, int clusters);
 
 // PCA of the rows `members` of x (one cluster of fit_models).
 ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
@@ -144,8 +160,10 @@ inline CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
   return cpca(Rows(x), options);
 }
 
-// Squared approximation error of row p under a cluster model.
-double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model);
+// Squared approximation error of row p under a cluster model (its first
+// `components` directions; all of them when negative).
+double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+                           Eigen::Index components = -1);
 
 // --- cluster coherence (Sloan 2003 §5, Chen 2005 ch. 4) ---
 

@@ -1,0 +1,102 @@
+#include <Eigen/Eigenvalues>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "prt/symmetric_eigen.hpp"
+
+using prt::Eigenpairs;
+using prt::largest_eigenpairs;
+
+namespace {
+Eigen::MatrixXd random_psd(Eigen::Index n, Eigen::Index rank, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd y(n, rank);
+  for (auto& v : y.reshaped()) v = g(rng);
+  return y * y.transpose();
+}
+
+// A v = lambda v and V^T V = I, relative to the largest eigenvalue.
+void check_pairs(const Eigen::MatrixXd& a, const Eigenpairs& pairs, double tolerance) {
+  const double top = std::max(1e-300, std::abs(pairs.values[0]));
+  CHECK((a * pairs.vectors - pairs.vectors * pairs.values.asDiagonal()).cwiseAbs().maxCoeff() /
+            top <
+        tolerance);
+  const Eigen::MatrixXd gram = pairs.vectors.transpose() * pairs.vectors;
+  CHECK((gram - Eigen::MatrixXd::Identity(gram.rows(), gram.cols())).cwiseAbs().maxCoeff() <
+        tolerance);
+  for (Eigen::Index i = 1; i < pairs.values.size(); ++i)
+    CHECK(pairs.values[i] <= pairs.values[i - 1]);
+}
+}  // namespace
+
+TEST_CASE("largest eigenpairs equal the full solver's", "[eigen][extremes]") {
+  for (Eigen::Index n : {2, 3, 17, 100, 240}) {
+    const Eigen::MatrixXd a = random_psd(n, n + 3, std::uint64_t(n));
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> full(a);
+    for (Eigen::Index count : {Eigen::Index(1), std::min<Eigen::Index>(9, n), n}) {
+      INFO("n " << n << ", count " << count);
+      const Eigenpairs pairs = largest_eigenpairs(a, count);
+      REQUIRE(pairs.values.size() == count);
+      REQUIRE(pairs.vectors.cols() == count);
+      for (Eigen::Index i = 0; i < count; ++i) {
+        const double expected = full.eigenvalues()[n - 1 - i];
+        CHECK(pairs.values[i] ==
+              Approx(expected).epsilon(1e-12).margin(1e-12 * full.eigenvalues()[n - 1]));
+      }
+      check_pairs(a, pairs, 1e-12);
+      // Well-separated vectors agree with the full solver's up to sign.
+      const double gap = full.eigenvalues()[n - 1] - full.eigenvalues()[n - 2];
+      if (gap > 1e-3 * full.eigenvalues()[n - 1])
+        CHECK(std::abs(pairs.vectors.col(0).dot(full.eigenvectors().col(n - 1))) ==
+              Approx(1.0).epsilon(1e-10));
+    }
+  }
+}
+
+TEST_CASE("largest eigenpairs at the extremes", "[eigen][extremes]") {
+  // Rank-deficient: the largest pairs are exact, the rest are zero.
+  const Eigen::MatrixXd low = random_psd(60, 4, 7);
+  const Eigenpairs pairs = largest_eigenpairs(low, 8);
+  REQUIRE(pairs.values.size() == 8);
+  check_pairs(low, pairs, 1e-12);
+  CHECK(std::abs(pairs.values[5]) < 1e-12 * pairs.values[0]);
+  // Repeated eigenvalues (identity): any orthonormal vectors, unit values.
+  const Eigenpairs identity = largest_eigenpairs(Eigen::MatrixXd::Identity(30, 30), 5);
+  check_pairs(Eigen::MatrixXd::Identity(30, 30), identity, 1e-12);
+  CHECK((identity.values.array() - 1).abs().maxCoeff() < 1e-14);
+  // Magnitudes near the ends of the double range keep their relative accuracy.
+  for (double scale : {1e-300, 1e-150, 1e150, 1e300}) {
+    INFO("scale " << scale);
+    const Eigen::MatrixXd base = random_psd(40, 40, 11);
+    const Eigen::MatrixXd a = base * (scale / base.cwiseAbs().maxCoeff());
+    const Eigenpairs p = largest_eigenpairs(a, 3);
+    REQUIRE(p.values.size() == 3);
+    CHECK(p.values.allFinite());
+    CHECK(p.vectors.allFinite());
+    check_pairs(a, p, 1e-12);
+  }
+  // Zero, 1 x 1, empty, count beyond n, count zero, non-finite.
+  const Eigenpairs zero = largest_eigenpairs(Eigen::MatrixXd::Zero(5, 5), 2);
+  CHECK(zero.values == Eigen::VectorXd::Zero(2));
+  CHECK(zero.vectors.allFinite());
+  const Eigenpairs one = largest_eigenpairs(Eigen::MatrixXd::Constant(1, 1, -2.5), 4);
+  REQUIRE(one.values.size() == 1);
+  CHECK(one.values[0] == -2.5);
+  CHECK(largest_eigenpairs(Eigen::MatrixXd(0, 0), 3).values.size() == 0);
+  CHECK(largest_eigenpairs(random_psd(6, 6, 1), 0).values.size() == 0);
+  CHECK(largest_eigenpairs(random_psd(6, 6, 1), 10).values.size() == 6);
+  Eigen::MatrixXd bad = random_psd(6, 6, 2);
+  bad(2, 3) = bad(3, 2) = std::numeric_limits<double>::quiet_NaN();
+  CHECK(largest_eigenpairs(bad, 2).values.size() == 0);
+  bad(2, 3) = bad(3, 2) = std::numeric_limits<double>::infinity();
+  CHECK(largest_eigenpairs(bad, 2).values.size() == 0);
+  // Indefinite: the largest (most positive) first.
+  Eigen::MatrixXd indefinite = Eigen::MatrixXd::Zero(3, 3);
+  indefinite.diagonal() << -5, 1, 3;
+  const Eigenpairs signs = largest_eigenpairs(indefinite, 2);
+  CHECK(signs.values[0] == Approx(3));
+  CHECK(signs.values[1] == Approx(1));
+}
