@@ -31,19 +31,28 @@ void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int
 
 // constants(i, 3 r + c) = (vector_i read as rows x N_i) l, for the cluster's
 // mean (i = 0) and its n'_k representatives, into `out` ((n'_k + 1) rows x 3
-// rows): dots of each stored row with the light's three columns (lazy: no
-// packing of operands that are read once).
+// rows).
 void cluster_constants_into(const CompressedTransfer& t, Eigen::Index k, int rows,
                             const Eigen::MatrixX3f& l, float* out) {
   const Eigen::Index n_i = l.rows();
   const int n_k = t.components_of(k);
-  Eigen::Map<Rows3>(out, rows, 3).noalias() =
-      Eigen::Map<const MatrixXfRow>(t.means.row(k).data(), rows, n_i).lazyProduct(l);
+  // Each stored row dotted with the light's three contiguous channels (one
+  // vectorised dot each, the row staying in L1): a lazy product of a dynamic
+  // row-major matrix with a column-major one did not vectorise, and the
+  // constants took most of a frame.
+  using Vector = Eigen::Map<const Eigen::VectorXf>;
+  const Vector red(l.col(0).data(), n_i), green(l.col(1).data(), n_i), blue(l.col(2).data(), n_i);
+  const auto rows_into = [&](const float* stored, Eigen::Index count, float* into) {
+    for (Eigen::Index r = 0; r < count; ++r) {
+      const Vector row(stored + r * n_i, n_i);
+      into[3 * r] = row.dot(red);
+      into[3 * r + 1] = row.dot(green);
+      into[3 * r + 2] = row.dot(blue);
+    }
+  };
+  rows_into(t.means.row(k).data(), rows, out);
   // Row-major n'_k x (rows N_i) is the same memory as (n'_k rows) x N_i.
-  if (n_k > 0)
-    Eigen::Map<Rows3>(out + 3 * rows, Eigen::Index(n_k) * rows, 3).noalias() =
-        Eigen::Map<const MatrixXfRow>(t.representatives[k].data(), Eigen::Index(n_k) * rows, n_i)
-            .lazyProduct(l);
+  if (n_k > 0) rows_into(t.representatives[k].data(), Eigen::Index(n_k) * rows, out + 3 * rows);
 }
 
 // out_c[j] = C_0c + sum_i w_i[j] C_ic for `count` <= kBlock vertices whose
