@@ -108,9 +108,10 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
   // Errors in double on every core; their sum through segments (the same
   // figure whatever the number of cores or ranks).
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 1024), [&](const auto& r) {
+    ErrorScratch scratch;
     for (Eigen::Index p = r.begin(); p < r.end(); ++p)
-      errors[std::size_t(p)] =
-          approximation_error(x, p, models[std::size_t(labels[std::size_t(p)])], components);
+      errors[std::size_t(p)] = approximation_error(
+          x, p, models[std::size_t(labels[std::size_t(p)])], components, scratch);
   });
   return rows.sum(errors);
 }
@@ -188,11 +189,19 @@ std::vector<int> allocate(const std::vector<ClusterModel>& models,
   return count;
 }
 
+// Keeps at most count[k] directions of each model.
 void truncate(std::vector<ClusterModel>& models, const std::vector<int>& count) {
   for (std::size_t k = 0; k < models.size(); ++k) {
-    models[k].basis.conservativeResize(count[k], Eigen::NoChange);
-    models[k].eigenvalues.conservativeResize(count[k]);
+    const Eigen::Index keep = std::min<Eigen::Index>(count[k], models[k].basis.rows());
+    models[k].basis.conservativeResize(keep, Eigen::NoChange);
+    models[k].eigenvalues.conservativeResize(keep);
   }
+}
+
+std::vector<ClusterModel> truncated(std::vector<ClusterModel> models,
+                                    const std::vector<int>& count) {
+  truncate(models, count);
+  return models;
 }
 
 // Refits the cluster models for a new labelling, keeping the models of the
@@ -208,9 +217,10 @@ class Refitter {
     const int spare = static_cast<int>(std::min<Eigen::Index>(components + 1, rows_.cols()));
     FitReuse reuse{&models_, {}, components};
     const bool reusable = !models_.empty();
-    if (reusable) reuse.unchanged = changed_clusters(rows_, labels_, labels, k_);
-    if (reusable)
+    if (reusable) {
+      reuse.unchanged = changed_clusters(rows_, labels_, labels, k_);
       for (char& c : reuse.unchanged) c = !c;
+    }
     models_ = fit_models(rows_, labels, k_, std::vector<int>(std::size_t(k_), spare), counts,
                          reusable ? &reuse : nullptr);
     labels_ = labels;
@@ -223,17 +233,6 @@ class Refitter {
   std::vector<ClusterModel> models_;
   std::vector<std::int32_t> labels_;
 };
-
-// The models with at most count[k] directions each.
-std::vector<ClusterModel> truncated(std::vector<ClusterModel> models,
-                                    const std::vector<int>& count) {
-  for (std::size_t k = 0; k < models.size(); ++k) {
-    const Eigen::Index keep = std::min<Eigen::Index>(count[k], models[k].basis.rows());
-    models[k].basis.conservativeResize(keep, Eigen::NoChange);
-    models[k].eigenvalues.conservativeResize(keep);
-  }
-  return models;
-}
 
 }  // namespace
 

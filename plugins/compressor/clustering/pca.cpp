@@ -7,13 +7,22 @@
 namespace prt::clustering {
 
 double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
-                           Eigen::Index components) {
+                           Eigen::Index components, ErrorScratch& scratch) {
   const Eigen::Index c =
       components < 0 ? model.basis.rows() : std::min(components, model.basis.rows());
-  const Eigen::RowVectorXd d = x.row(p).cast<double>() - model.mean;
-  double error = d.squaredNorm();
-  if (c > 0) error -= (model.basis.topRows(c) * d.transpose()).squaredNorm();
+  scratch.centred.noalias() = x.row(p).cast<double>() - model.mean;
+  double error = scratch.centred.squaredNorm();
+  if (c > 0) {
+    scratch.projections.noalias() = model.basis.topRows(c) * scratch.centred.transpose();
+    error -= scratch.projections.squaredNorm();
+  }
   return std::max(error, 0.0);
+}
+
+double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+                           Eigen::Index components) {
+  ErrorScratch scratch;
+  return approximation_error(x, p, model, components, scratch);
 }
 
 CompressedTransfer assemble(const MatrixXfRow& x, const std::vector<std::int32_t>& labels,

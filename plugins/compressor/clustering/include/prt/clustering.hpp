@@ -164,6 +164,13 @@ inline CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
 // `components` directions; all of them when negative).
 double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
                            Eigen::Index components = -1);
+// The same with buffers reused from row to row (no allocation per row).
+struct ErrorScratch {
+  Eigen::RowVectorXd centred;
+  Eigen::VectorXd projections;
+};
+double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+                           Eigen::Index components, ErrorScratch& scratch);
 
 // --- cluster coherence (Sloan 2003 §5, Chen 2005 ch. 4) ---
 
