@@ -40,11 +40,9 @@ Eigenpairs largest_eigenpairs(const Eigen::MatrixXd& a, Eigen::Index count) {
     out.vectors = Eigen::MatrixXd::Identity(n, count);
     return out;
   }
-  if (n == 1) {
-    out.values = Eigen::VectorXd::Constant(1, a(0, 0));
-    out.vectors = Eigen::MatrixXd::Ones(1, 1);
-    return out;
-  }
+  // LAPACK 3.11's dstemr orders the pair of a 2 x 2 matrix by magnitude
+  // (Reference-LAPACK issue 826, fixed in 3.12): tiny sizes go to Eigen.
+  if (n <= 2) return full_solve(a, count);
   Eigen::MatrixXd scaled = a / scale;
   const Eigen::Tridiagonalization<Eigen::MatrixXd> tridiagonal(scaled);
   Eigen::VectorXd d = tridiagonal.diagonal();

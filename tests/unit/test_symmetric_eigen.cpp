@@ -99,4 +99,16 @@ TEST_CASE("largest eigenpairs at the extremes", "[eigen][extremes]") {
   const Eigenpairs signs = largest_eigenpairs(indefinite, 2);
   CHECK(signs.values[0] == Approx(3));
   CHECK(signs.values[1] == Approx(1));
+  // 2 x 2 with the negative eigenvalue the larger in magnitude (LAPACK 3.11's
+  // dstemr ordered this pair by magnitude).
+  Eigen::Matrix2d pair;
+  pair << -5, 0.5, 0.5, 1;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> exact{Eigen::MatrixXd(pair)};
+  const Eigenpairs top = largest_eigenpairs(pair, 1);
+  REQUIRE(top.values.size() == 1);
+  CHECK(top.values[0] == Approx(exact.eigenvalues()[1]));
+  const Eigenpairs both = largest_eigenpairs(pair, 2);
+  CHECK(both.values[0] == Approx(exact.eigenvalues()[1]));
+  CHECK(both.values[1] == Approx(exact.eigenvalues()[0]));
+  check_pairs(pair, both, 1e-12);
 }

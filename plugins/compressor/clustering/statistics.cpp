@@ -146,7 +146,7 @@ std::map<int, MatrixXfRow> gram_rows(const Rows& rows, const LocalMembers& membe
         const std::size_t bytes = std::size_t(count) * std::size_t(n) * sizeof(float);
         if (count < 0 || at + count > y.rows() || from + bytes > part.size())
           throw Error("clustering: rank " + std::to_string(r) + " sent a wrong member count");
-        std::memcpy(y.row(at).data(), &part[from], bytes);
+        if (count > 0) std::memcpy(y.data() + at * n, &part[from], bytes);
         from += bytes;
         at += count;
       }
@@ -255,7 +255,17 @@ void directions_from_gram(const RowMatrixXd& centred, ClusterModel& model) {
   gram.selfadjointView<Eigen::Lower>().rankUpdate(centred);
   gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
   const Eigenpairs pairs = largest_eigenpairs(gram, model.basis.rows());
-  keep_directions(pairs.values, centred.transpose() * pairs.vectors, model);
+  if (pairs.values.size() == 0) return;  // not finite: the model keeps zero rows
+  // Y^T w_i loses orthogonality as eps lambda_max / lambda_i: one modified
+  // Gram-Schmidt pass, largest first (a rounding-level change for the others).
+  Eigen::MatrixXd directions = centred.transpose() * pairs.vectors;
+  for (Eigen::Index i = 0; i < directions.cols(); ++i) {
+    for (Eigen::Index j = 0; j < i; ++j)
+      directions.col(i) -= directions.col(j).dot(directions.col(i)) * directions.col(j);
+    const double norm = directions.col(i).norm();
+    if (norm > 0 && std::isfinite(norm)) directions.col(i) /= norm;
+  }
+  keep_directions(pairs.values, directions, model);
 }
 
 }  // namespace

@@ -100,8 +100,10 @@ struct ClusterModel {
 };
 
 // A previous fit that fit_models may keep: clusters whose members are
-// unchanged since it get its model back (the same bits a refit would give)
-// when it has at least min(components, minimum) directions.
+// unchanged since it get its model back when it has at least
+// min(components, minimum) directions (what a refit asking the same number of
+// directions would give; asked for more, MRRR's vectors may differ in their
+// last bits). Deterministic on any number of cores or ranks either way.
 struct FitReuse {
   const std::vector<ClusterModel>* previous = nullptr;
   std::vector<char> unchanged;  // per cluster
