@@ -199,8 +199,7 @@ TEST_CASE("a refit keeps the models of unchanged clusters and refits the others"
   std::vector<std::int32_t> moved = labels;
   moved[1] = 2;  // point 1 leaves cluster 1 for cluster 2
   FitReuse reuse{&first, changed_clusters(rows, labels, moved, 4), 3};
-  CHECK(reuse.unchanged == std::vector<char>{0, 1, 1, 0});
-  for (char& c : reuse.unchanged) c = !c;
+  CHECK(reuse.changed == std::vector<char>{0, 1, 1, 0});
   // Mark the kept models so that reuse is visible.
   std::vector<ClusterModel> marked = first;
   for (auto& m : marked) m.eigenvalues[0] = -1;

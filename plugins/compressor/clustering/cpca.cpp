@@ -215,12 +215,9 @@ class Refitter {
   const std::vector<ClusterModel>& fit(const std::vector<std::int32_t>& labels, int components,
                                        std::vector<double>* counts = nullptr) {
     const int spare = static_cast<int>(std::min<Eigen::Index>(components + 1, rows_.cols()));
-    FitReuse reuse{&models_, {}, components};
     const bool reusable = !models_.empty();
-    if (reusable) {
-      reuse.unchanged = changed_clusters(rows_, labels_, labels, k_);
-      for (char& c : reuse.unchanged) c = !c;
-    }
+    FitReuse reuse{&models_, {}, components};
+    if (reusable) reuse.changed = changed_clusters(rows_, labels_, labels, k_);
     models_ = fit_models(rows_, labels, k_, std::vector<int>(std::size_t(k_), spare), counts,
                          reusable ? &reuse : nullptr);
     labels_ = labels;

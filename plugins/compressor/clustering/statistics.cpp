@@ -81,29 +81,11 @@ ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labe
 
 namespace {
 
-// Rows of each cluster among the local rows, in row order.
-struct LocalMembers {
-  std::vector<Eigen::Index> start;  // cluster j: rows[start[j] .. start[j + 1])
-  std::vector<Eigen::Index> rows;
-};
-
-LocalMembers local_members(const std::vector<std::int32_t>& labels, int k) {
-  LocalMembers m;
-  m.start.assign(std::size_t(k) + 1, 0);
-  for (std::int32_t l : labels)
-    if (l >= 0) ++m.start[std::size_t(l) + 1];
-  for (int j = 0; j < k; ++j) m.start[std::size_t(j) + 1] += m.start[std::size_t(j)];
-  m.rows.resize(std::size_t(m.start[std::size_t(k)]));
-  std::vector<Eigen::Index> at(m.start.begin(), m.start.end() - 1);
-  for (std::size_t p = 0; p < labels.size(); ++p)
-    if (labels[p] >= 0) m.rows[std::size_t(at[std::size_t(labels[p])]++)] = Eigen::Index(p);
-  return m;
-}
-
 // In a distributed run, the member rows of the clusters this rank fits from
 // their Gram matrix, in global row order, sent by the ranks that hold them
 // (rank r's rows all precede rank r + 1's).
-std::map<int, MatrixXfRow> gram_rows(const Rows& rows, const LocalMembers& members,
+std::map<int, MatrixXfRow> gram_rows(const Rows& rows,
+                                     const std::vector<std::vector<std::uint32_t>>& members,
                                      const std::vector<int>& which, const std::vector<bool>& gram,
                                      const std::vector<double>& counts) {
   const Eigen::Index n = rows.cols();
@@ -116,14 +98,12 @@ std::map<int, MatrixXfRow> gram_rows(const Rows& rows, const LocalMembers& membe
     for (std::size_t i = std::size_t(root); i < which.size(); i += std::size_t(ranks)) {
       if (!gram[i]) continue;
       const int cluster = which[i];
-      const std::int64_t count =
-          members.start[std::size_t(cluster) + 1] - members.start[std::size_t(cluster)];
+      const std::vector<std::uint32_t>& local = members[std::size_t(cluster)];
+      const std::int64_t count = static_cast<std::int64_t>(local.size());
       const char* head = reinterpret_cast<const char*>(&count);
       mine.insert(mine.end(), head, head + sizeof count);
-      for (Eigen::Index q = members.start[std::size_t(cluster)];
-           q < members.start[std::size_t(cluster) + 1]; ++q) {
-        const char* row =
-            reinterpret_cast<const char*>(rows.x.row(members.rows[std::size_t(q)]).data());
+      for (std::uint32_t p : local) {
+        const char* row = reinterpret_cast<const char*>(rows.x.row(p).data());
         mine.insert(mine.end(), row, row + sizeof(float) * std::size_t(n));
       }
     }
@@ -247,6 +227,15 @@ void directions_from_scatter(const Eigen::MatrixXd& scatter, ClusterModel& model
   keep_directions(pairs.values, pairs.vectors, model);
 }
 
+// Rows `members` of x less the mean, in double.
+RowMatrixXd centred_rows(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
+                         const Eigen::RowVectorXd& mean) {
+  RowMatrixXd centred(static_cast<Eigen::Index>(members.size()), x.cols());
+  for (std::size_t q = 0; q < members.size(); ++q)
+    centred.row(Eigen::Index(q)) = x.row(members[q]).cast<double>() - mean;
+  return centred;
+}
+
 // The same from the m x m Gram matrix of its m < n centred members Y: the
 // scatter Y^T Y and Y Y^T share their nonzero eigenvalues, and Y^T w is the
 // scatter's eigenvector for the Gram's eigenvector w. m^3 instead of n^3.
@@ -280,7 +269,7 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   std::vector<int> which;
   for (int j = 0; j < k; ++j) {
     const int c = std::max(0, components[std::size_t(j)]);
-    if (reuse && reuse->unchanged[std::size_t(j)] &&
+    if (reuse && !reuse->changed[std::size_t(j)] &&
         (*reuse->previous)[std::size_t(j)].basis.rows() >= std::min(c, reuse->minimum)) {
       models[std::size_t(j)] = (*reuse->previous)[std::size_t(j)];  // same members, same model
       continue;
@@ -298,7 +287,7 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   std::vector<bool> gram(which.size());
   for (std::size_t i = 0; i < which.size(); ++i)
     gram[i] = sums.counts[std::size_t(which[i])] < double(n);
-  const LocalMembers members = local_members(labels, k);
+  const auto members = members_of(labels, k);
   // A single process reads members where they are; ranks gather them.
   const std::map<int, MatrixXfRow> gram_members =
       rows.distributed() ? gram_rows(rows, members, which, gram, sums.counts)
@@ -311,21 +300,13 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     Progress::check_interrupt();  // one eigen-solve may take a while (glossy rows)
     if (int(i % std::size_t(ranks)) != rank) return;
     ClusterModel& model = models[std::size_t(which[i])];
-    if (gram[i]) {
-      RowMatrixXd centred;
-      if (rows.distributed()) {
-        centred = gram_members.at(int(i)).cast<double>().rowwise() - model.mean;
-      } else {
-        const int j = which[i];
-        centred.resize(members.start[std::size_t(j) + 1] - members.start[std::size_t(j)],
-                       rows.cols());
-        for (Eigen::Index q = 0; q < centred.rows(); ++q)
-          centred.row(q) = rows.x.row(members.rows[std::size_t(members.start[std::size_t(j)] + q)])
-                               .cast<double>() -
-                           model.mean;
-      }
-      directions_from_gram(centred, model);
-    } else
+    if (gram[i])
+      directions_from_gram(
+          rows.distributed()
+              ? RowMatrixXd(gram_members.at(int(i)).cast<double>().rowwise() - model.mean)
+              : centred_rows(rows.x, members[std::size_t(which[i])], model.mean),
+          model);
+    else
       directions_from_scatter(scatter.at(int(i)), model);
   });
   if (ranks > 1) {

@@ -99,14 +99,14 @@ struct ClusterModel {
   Eigen::VectorXd eigenvalues;  // D_i^2 of each basis row, descending
 };
 
-// A previous fit that fit_models may keep: clusters whose members are
-// unchanged since it get its model back when it has at least
+// A previous fit that fit_models may keep: clusters whose members have not
+// changed since it get its model back when it has at least
 // min(components, minimum) directions (what a refit asking the same number of
 // directions would give; asked for more, MRRR's vectors may differ in their
 // last bits). Deterministic on any number of cores or ranks either way.
 struct FitReuse {
   const std::vector<ClusterModel>* previous = nullptr;
-  std::vector<char> unchanged;  // per cluster
+  std::vector<char> changed;  // per cluster, as changed_clusters gives it
   int minimum = 0;
 };
 
