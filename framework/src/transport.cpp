@@ -20,6 +20,7 @@
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_blocks.hpp"
+#include "prt/visible_products.hpp"
 
 namespace prt {
 
@@ -322,102 +323,6 @@ Eigen::MatrixXd rows_from_bits(const Mesh& mesh, const DirectionSet& set, std::s
   return rows;
 }
 
-using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-// Eight doubles (one AVX-512 register; the compiler splits it on narrower
-// machines), loaded without alignment requirements.
-typedef double Packet __attribute__((vector_size(64)));
-
-// out.row(slot) = sum over the visible k of (n . d_k / pi) rows.row(k), with
-// rows padded to `Packets` x 8 columns. Directions outside, vertices inside:
-// each row of P is loaded once per block (into registers, Packets <= 13
-// covers SH order 10) and added to the sums of the block's vertices that see
-// it, which stay in L1. A dense block product would also multiply the zeros
-// of the occluded and below-horizon directions; a vertex-outer loop would
-// stream P (megabytes at 4,096 directions) from memory per vertex.
-template <int Packets>
-void visible_sums_fixed(Eigen::Index n, const Mesh& mesh, const DirectionSet& set,
-                        const RowMatrixXd& rows, const std::uint32_t* vertices, std::size_t count,
-                        const std::uint64_t* bits, Eigen::MatrixXf& out) {
-  const std::size_t words = VisibilityBits::words_for(set.size());
-  std::vector<Packet> sums(count * Packets, Packet{});
-  std::vector<Eigen::Vector3d> normals(count);
-  for (std::size_t slot = 0; slot < count; ++slot)
-    normals[slot] = mesh.normals[vertices[slot]].cast<double>() / M_PI;
-  // Per word of 64 directions, the transposed bits: which of (up to 64)
-  // slots see each direction, so that the inner loop visits only the pairs
-  // that see each other (no bit test per slot and direction).
-  std::uint64_t seen_by[64];
-  for (std::size_t first = 0; first < count; first += 64) {
-    const std::size_t last = std::min(count, first + 64);
-    for (std::size_t w = 0; w < words; ++w) {
-      std::fill(std::begin(seen_by), std::end(seen_by), 0);
-      std::uint64_t any = 0;
-      for (std::size_t slot = first; slot < last; ++slot) {
-        const std::uint64_t word = bits[slot * words + w];
-        any |= word;
-        for (std::uint64_t b = word; b; b &= b - 1)
-          seen_by[std::countr_zero(b)] |= std::uint64_t(1) << (slot - first);
-      }
-      for (; any; any &= any - 1) {
-        const int bit = std::countr_zero(any);
-        const std::size_t k = 64 * w + bit;
-        const Eigen::Vector3d d = set.directions.row(k).transpose();
-        Packet row[Packets];
-        std::memcpy(row, rows.row(k).data(), sizeof row);
-        for (std::uint64_t m = seen_by[bit]; m; m &= m - 1) {
-          const std::size_t slot = first + std::countr_zero(m);
-          const double c = normals[slot].dot(d);
-          Packet* sum = &sums[slot * Packets];
-          for (int p = 0; p < Packets; ++p) sum[p] += c * row[p];
-        }
-      }
-    }
-  }
-  for (std::size_t slot = 0; slot < count; ++slot) {
-    const double* values = reinterpret_cast<const double*>(&sums[slot * Packets]);
-    for (Eigen::Index i = 0; i < n; ++i) out(slot, i) = static_cast<float>(values[i]);
-  }
-}
-
-void visible_sums_dynamic(Eigen::Index n, const Mesh& mesh, const DirectionSet& set,
-                          const RowMatrixXd& rows, const std::uint32_t* vertices, std::size_t count,
-                          const std::uint64_t* bits, Eigen::MatrixXf& out) {
-  const std::size_t words = VisibilityBits::words_for(set.size());
-  Eigen::RowVectorXd sum(rows.cols());
-  for (std::size_t slot = 0; slot < count; ++slot) {
-    const Eigen::Vector3d normal = mesh.normals[vertices[slot]].cast<double>() / M_PI;
-    sum.setZero();
-    for (std::size_t w = 0; w < words; ++w)
-      for (std::uint64_t b = bits[slot * words + w]; b; b &= b - 1) {
-        const std::size_t k = 64 * w + std::countr_zero(b);
-        sum.noalias() += normal.dot(set.directions.row(k)) * rows.row(k);
-      }
-    out.row(slot) = sum.head(n).cast<float>();
-  }
-}
-
-template <int... P>
-void visible_sums_dispatch(std::integer_sequence<int, P...>, Eigen::Index n, const Mesh& mesh,
-                           const DirectionSet& set, const RowMatrixXd& rows,
-                           const std::uint32_t* vertices, std::size_t count,
-                           const std::uint64_t* bits, Eigen::MatrixXf& out) {
-  const auto packets = static_cast<int>(rows.cols() / 8);
-  const bool done =
-      ((packets == P + 1
-            ? (visible_sums_fixed<P + 1>(n, mesh, set, rows, vertices, count, bits, out), true)
-            : false) ||
-       ...);
-  if (!done) visible_sums_dynamic(n, mesh, set, rows, vertices, count, bits, out);
-}
-
-void visible_sums(Eigen::Index n, const Mesh& mesh, const DirectionSet& set,
-                  const RowMatrixXd& rows, const std::uint32_t* vertices, std::size_t count,
-                  const std::uint64_t* bits, Eigen::MatrixXf& out) {
-  visible_sums_dispatch(std::make_integer_sequence<int, 13>(), n, mesh, set, rows, vertices, count,
-                        bits, out);
-}
-
 }  // namespace
 
 TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
@@ -426,20 +331,15 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
   if (projection.rows() != set.size())
     throw Error("projection matrix has " + std::to_string(projection.rows()) + " rows for " +
                 std::to_string(set.size()) + " directions");
-  const std::size_t words = VisibilityBits::words_for(set.size());
-  // P row-major, padded with zeros to whole packets of 8: each visible
-  // direction adds one contiguous row.
-  RowMatrixXd rows = RowMatrixXd::Zero(projection.rows(), (projection.cols() + 7) / 8 * 8);
-  rows.leftCols(projection.cols()) = projection;
-  const Eigen::Index n = projection.cols();
+  const PaddedRows rows(projection);
   auto project = [&](const std::uint32_t* vertices, std::size_t count,
                      const std::vector<std::uint64_t>& bits) -> Eigen::MatrixXf {
     // Per vertex, the sum over its visible directions of (n . d_k / pi) P_k:
     // only the rays that escaped cost flops (a dense block product would
     // also multiply the zeros of occluded and below-horizon directions).
-    Eigen::MatrixXf out(count, n);
-    visible_sums(n, mesh, set, rows, vertices, count, bits.data(), out);
-    return out;
+    PaddedRows sums;
+    visible_times(mesh, set, vertices, count, bits.data(), rows, sums);
+    return sums.block(0, static_cast<Eigen::Index>(count)).cast<float>();
   };
   return trace_and_project(mesh, set, projection.cols(), project, options, progress);
 }
@@ -466,16 +366,19 @@ void transport_rows(const Mesh& mesh, const DirectionSet& set, const VisibilityB
 TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
                                   const VisibilityBits& visibility, const Basis& basis) {
   TransferSignal out;
+  if (!basis.has_fast_projection(set)) {
+    // T P over the visible pairs only, as the bake's own projection.
+    out.coefficients =
+        visible_times(mesh, set, visibility, basis.projection_matrix(set)).cast<float>();
+    return out;
+  }
   out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), basis.size());
-  const bool fast = basis.has_fast_projection(set);
-  const Eigen::MatrixXd projection = fast ? Eigen::MatrixXd() : basis.projection_matrix(set);
   // Fixed blocks: a GEMM's rows depend on the block's shape (row_blocks.hpp).
   for_each_row_block(
       std::size_t(0), mesh.vertex_count(), kBlock, [&](std::size_t begin, std::size_t end) {
         Eigen::MatrixXd rows;
         transport_rows(mesh, set, visibility, begin, end, rows);
-        out.coefficients.middleRows(begin, end - begin) =
-            (fast ? basis.project(rows, set) : Eigen::MatrixXd(rows * projection)).cast<float>();
+        out.coefficients.middleRows(begin, end - begin) = basis.project(rows, set).cast<float>();
       });
   return out;
 }

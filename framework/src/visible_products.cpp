@@ -1,0 +1,257 @@
+#include "prt/visible_products.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <utility>
+
+#include "prt/error.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+PaddedRows::PaddedRows(Eigen::Index rows, Eigen::Index cols)
+    : rows_(rows),
+      cols_(cols),
+      stride_((cols + 7) / 8 * 8),
+      data_(static_cast<std::size_t>(rows * stride_), 0.0) {}
+
+PaddedRows::PaddedRows(const Eigen::MatrixXd& matrix) {
+  assign(matrix);
+}
+
+void PaddedRows::resize(Eigen::Index rows, Eigen::Index cols) {
+  rows_ = rows;
+  cols_ = cols;
+  stride_ = (cols + 7) / 8 * 8;
+  // Whole rows of zeros: the padding columns must stay zero.
+  data_.assign(static_cast<std::size_t>(rows * stride_), 0.0);
+}
+
+PaddedRows::ConstBlock PaddedRows::block(Eigen::Index first, Eigen::Index count) const {
+  return ConstBlock(row(first), count, cols_, Eigen::OuterStride<>(stride_));
+}
+
+namespace {
+
+// 64 x 64 bits: bit c of a[r] becomes bit r of a[c]. Swaps ever smaller
+// off-diagonal blocks (32, 16, ..., 1) in place: 6 x 32 steps, no bit loop.
+void transpose_64x64(std::uint64_t a[64]) {
+  std::uint64_t mask = 0x00000000FFFFFFFFull;
+  for (int width = 32; width != 0; width >>= 1, mask ^= mask << width)
+    for (int r = 0; r < 64; r = (r + width + 1) & ~width) {
+      const std::uint64_t t = ((a[r] >> width) ^ a[r + width]) & mask;
+      a[r + width] ^= t;
+      a[r] ^= t << width;
+    }
+}
+
+}  // namespace
+
+TransposedVisibility::TransposedVisibility(const VisibilityBits& visibility)
+    : vertices_(visibility.vertices()),
+      directions_(visibility.directions()),
+      words_per_direction_(VisibilityBits::words_for(vertices_)),
+      bits_(directions_ * words_per_direction_, 0) {
+  const std::size_t vertex_words = VisibilityBits::words_for(directions_);
+  // A task takes 8 words of directions (a cache line of each vertex's bits)
+  // and walks the vertices in squares of 64: it reads whole lines and writes
+  // each of its rows in order.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_words, 8), [&](const auto& range) {
+    std::uint64_t square[64];
+    for (std::size_t column = 0; column < words_per_direction_; ++column)
+      for (std::size_t w = range.begin(); w < range.end(); ++w) {
+        for (std::size_t i = 0; i < 64; ++i) {
+          const std::size_t vertex = 64 * column + i;
+          square[i] = vertex < vertices_ ? visibility.words(vertex)[w] : 0;
+        }
+        transpose_64x64(square);
+        for (std::size_t i = 0; i < 64 && 64 * w + i < directions_; ++i)
+          bits_[(64 * w + i) * words_per_direction_ + column] = square[i];
+      }
+  });
+}
+
+namespace {
+
+// Eight doubles (one AVX-512 register; the compiler splits it on narrower
+// machines), moved from and to rows of doubles with unaligned loads and
+// stores (memcpy: an attribute on a typedef is lost in templates).
+typedef double Packet __attribute__((vector_size(64)));
+inline Packet load(const double* from) {
+  Packet value;
+  std::memcpy(&value, from, sizeof value);
+  return value;
+}
+inline void store(double* to, const Packet& value) {
+  std::memcpy(to, &value, sizeof value);
+}
+constexpr int kMaxPanel = 16;  // packets summed in registers at once (128 columns)
+
+// Both products are one kernel: output row r sums (a_r . b_j) rows.row(j)
+// over the set bits j of its bit row, with a the vertices' normals / pi and
+// b the directions (T X), or the other way round over the transposed bits
+// (T^T Y). Bits are visited a word (64 gathered rows) at a time, a tile that
+// stays in L1 (32 KB at 64 columns) while every output row of a call reads
+// it. Measured for the bunny at 6,144 directions and 58 columns, one pass on
+// two cores: 0.31 s with 512-row tiles (in L2), 0.21 s with 64, 0.25 s with
+// 32 (the sums' loads and stores per tile then count).
+struct MaskedSums {
+  const std::uint64_t* bits;  // bit rows, `words` words each
+  std::size_t words;
+  const double* a;  // x, y, z per output row
+  const double* b;  // x, y, z per gathered row
+  const PaddedRows* rows;
+};
+
+// out_row += sum over the set bits of `tile` (gathered rows 64 word + bit)
+// of (a . b_j) rows.row(j), for one panel of packets. The sum stays in
+// registers and adds rows in increasing order, so tiles change no bit of it.
+template <int Packets>
+struct TileKernel {
+  static void run(int first_packet, const MaskedSums& m, const double* a, std::uint64_t tile,
+                  std::size_t word, double* out_row) {
+    double* target = out_row + 8 * first_packet;
+    Packet sum[Packets];
+    for (int p = 0; p < Packets; ++p) sum[p] = load(target + 8 * p);
+    // Only rows with a set bit are read: bits past the last row are never set.
+    const auto stride = static_cast<std::size_t>(m.rows->stride());
+    const double* base = m.rows->row(0) + 64 * word * stride + 8 * first_packet;
+    const double* b = m.b + 3 * 64 * word;
+    for (; tile; tile &= tile - 1) {
+      const auto j = static_cast<std::size_t>(std::countr_zero(tile));
+      const double c = a[0] * b[3 * j] + a[1] * b[3 * j + 1] + a[2] * b[3 * j + 2];
+      const double* row = base + j * stride;
+      for (int p = 0; p < Packets; ++p) sum[p] += c * load(row + 8 * p);
+    }
+    for (int p = 0; p < Packets; ++p) store(target + 8 * p, sum[p]);
+  }
+};
+
+// Calls Kernel<P>::run(first_packet, args...) for panels covering `packets`
+// packets: whole panels of kMaxPanel, then the rest with its own fixed size.
+template <template <int> class Kernel, int... P, class... Args>
+void for_each_panel(std::integer_sequence<int, P...>, Eigen::Index packets, Args&&... args) {
+  for (int first = 0; first < packets; first += kMaxPanel) {
+    const int width = static_cast<int>(std::min<Eigen::Index>(kMaxPanel, packets - first));
+    ((width == P + 1 ? (Kernel<P + 1>::run(first, args...), true) : false) || ...);
+  }
+}
+
+// out.row(i) (zeroed first) for output rows [first, last) of `m`.
+void masked_sums(const MaskedSums& m, std::size_t first, std::size_t last, PaddedRows& out,
+                 Eigen::Index first_out_row) {
+  const Eigen::Index packets = m.rows->stride() / 8;
+  for (std::size_t r = first; r < last; ++r)
+    std::fill_n(out.row(first_out_row + Eigen::Index(r - first)), out.stride(), 0.0);
+  if (packets == 0) return;
+  for (std::size_t word = 0; word < m.words; ++word)
+    for (std::size_t r = first; r < last; ++r)
+      if (const std::uint64_t tile = m.bits[r * m.words + word])
+        for_each_panel<TileKernel>(std::make_integer_sequence<int, kMaxPanel>(), packets, m,
+                                   m.a + 3 * r, tile, word,
+                                   out.row(first_out_row + Eigen::Index(r - first)));
+}
+
+// Rows of x, y, z of `count` vectors, scaled.
+std::vector<double> coordinates(const auto& vectors, std::size_t count, double scale) {
+  std::vector<double> xyz(3 * count);
+  for (std::size_t i = 0; i < count; ++i)
+    for (int c = 0; c < 3; ++c) xyz[3 * i + c] = double(vectors(i, c)) * scale;
+  return xyz;
+}
+
+void check_rows(Eigen::Index rows, std::size_t expected, const char* what, const char* of) {
+  if (rows != static_cast<Eigen::Index>(expected))
+    throw Error(std::string(what) + " has " + std::to_string(rows) + " rows for " +
+                std::to_string(expected) + " " + of);
+}
+
+}  // namespace
+
+void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_t* vertices,
+                   std::size_t count, const std::uint64_t* bits, const PaddedRows& right,
+                   PaddedRows& out) {
+  const auto s = static_cast<std::size_t>(set.size());
+  check_rows(right.rows(), s, "visible_times: the right-hand matrix", "directions");
+  const std::size_t words = VisibilityBits::words_for(s);
+  const auto normal = [&](std::size_t i, int c) { return mesh.normals[vertices[i]][c]; };
+  const std::vector<double> a = coordinates(normal, count, 1 / M_PI);
+  const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
+  const std::vector<double> b = coordinates(direction, s, 1.0);
+  out = PaddedRows(static_cast<Eigen::Index>(count), right.cols());
+  masked_sums({bits, words, a.data(), b.data(), &right}, 0, count, out, 0);
+}
+
+void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
+                   const PaddedRows& right, PaddedRows& out) {
+  const auto s = static_cast<std::size_t>(set.size());
+  check_rows(right.rows(), s, "visible_times: the right-hand matrix", "directions");
+  check_rows(Eigen::Index(mesh.vertex_count()), visibility.vertices(), "visible_times: the mesh",
+             "vertices of visibility");
+  const auto normal = [&](std::size_t i, int c) { return mesh.normals[i][c]; };
+  const std::vector<double> a = coordinates(normal, mesh.vertex_count(), 1 / M_PI);
+  const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
+  const std::vector<double> b = coordinates(direction, s, 1.0);
+  if (out.rows() != Eigen::Index(visibility.vertices()) || out.cols() != right.cols())
+    out = PaddedRows(Eigen::Index(visibility.vertices()), right.cols());
+  const MaskedSums m{visibility.words(0), VisibilityBits::words_for(s), a.data(), b.data(), &right};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, visibility.vertices(), 256),
+                    [&](const auto& range) {
+                      masked_sums(m, range.begin(), range.end(), out, Eigen::Index(range.begin()));
+                    });
+}
+
+Eigen::MatrixXd visible_times(const Mesh& mesh, const DirectionSet& set,
+                              const VisibilityBits& visibility, const Eigen::MatrixXd& right) {
+  PaddedRows out;
+  visible_times(mesh, set, visibility, PaddedRows(right), out);
+  return out.matrix();
+}
+
+void visible_transpose_times(const Mesh& mesh, const DirectionSet& set,
+                             const TransposedVisibility& transposed, const PaddedRows& left,
+                             PaddedRows& out) {
+  const auto s = static_cast<std::size_t>(set.size());
+  check_rows(left.rows(), transposed.vertices(), "visible_transpose_times: the left matrix",
+             "vertices");
+  check_rows(set.size(), transposed.directions(), "visible_transpose_times: the direction set",
+             "directions of visibility");
+  check_rows(Eigen::Index(mesh.vertex_count()), transposed.vertices(),
+             "visible_transpose_times: the mesh", "vertices of visibility");
+  const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
+  const std::vector<double> a = coordinates(direction, s, 1 / M_PI);
+  const auto normal = [&](std::size_t i, int c) { return mesh.normals[i][c]; };
+  const std::vector<double> b = coordinates(normal, mesh.vertex_count(), 1.0);
+  const MaskedSums m{transposed.words(0), transposed.words_per_direction(), a.data(), b.data(),
+                     &left};
+  if (out.rows() != set.size() || out.cols() != left.cols())
+    out = PaddedRows(set.size(), left.cols());
+  // Each output row sums its vertices in order: any split of the rows
+  // among threads gives the same bits. Tasks of up to 512 directions: each
+  // reads all of `left` once (as a tile of 64 vertices at a time, in L1),
+  // with its output rows in L2.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s, 512), [&](const auto& range) {
+    masked_sums(m, range.begin(), range.end(), out, Eigen::Index(range.begin()));
+  });
+}
+
+Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& set,
+                                        const TransposedVisibility& transposed,
+                                        const Eigen::MatrixXd& left) {
+  PaddedRows out;
+  visible_transpose_times(mesh, set, transposed, PaddedRows(left), out);
+  return out.matrix();
+}
+
+Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& set,
+                                        const VisibilityBits& visibility,
+                                        const Eigen::MatrixXd& left) {
+  return visible_transpose_times(mesh, set, TransposedVisibility(visibility), left);
+}
+
+}  // namespace prt

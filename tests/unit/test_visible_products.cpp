@@ -1,0 +1,62 @@
+// The sparse visibility products against dense products of the transport rows.
+#include <tbb/global_control.h>
+
+#include <catch2/catch.hpp>
+
+#include "../common/scenes.hpp"
+#include "prt/transport.hpp"
+#include "prt/visible_products.hpp"
+
+using namespace prt;
+
+namespace {
+double relative_error(const Eigen::MatrixXd& got, const Eigen::MatrixXd& want) {
+  return (got - want).norm() / std::max(want.norm(), 1e-300);
+}
+}  // namespace
+
+TEST_CASE("visible products equal dense products of the transport rows", "[visible]") {
+  // More than 64 vertices (several blocks) and 6 x 5 x 5 = 150 directions
+  // (a partial last word).
+  const Mesh scene = test::sphere_over_plane();
+  const DirectionSet set = DirectionSet::cubemap(5);
+  const TransportResult traced = test::trace_visibility_only(scene, set);
+  REQUIRE(scene.vertex_count() > 200);
+  Eigen::MatrixXd t;
+  transport_rows(scene, set, traced.visibility, 0, scene.vertex_count(), t);
+  REQUIRE(t.cwiseAbs().sum() > 0);
+  REQUIRE((t.array() == 0).count() > t.size() / 4);  // the kernels must skip real zeros
+
+  // Column counts around the packet (8) and panel (128) sizes.
+  for (const Eigen::Index columns : {1, 7, 8, 9, 58, 128, 129, 300}) {
+    CAPTURE(columns);
+    const Eigen::MatrixXd right = Eigen::MatrixXd::Random(set.size(), columns);
+    const Eigen::MatrixXd left = Eigen::MatrixXd::Random(t.rows(), columns);
+    CHECK(relative_error(visible_times(scene, set, traced.visibility, right), t * right) < 1e-13);
+    CHECK(relative_error(visible_transpose_times(scene, set, traced.visibility, left),
+                         t.transpose() * left) < 1e-13);
+  }
+}
+
+TEST_CASE("visible products give the same bits on one core and on all", "[visible]") {
+  const Mesh scene = test::sphere_over_plane();
+  const DirectionSet set = DirectionSet::cubemap(8);
+  const TransportResult traced = test::trace_visibility_only(scene, set);
+  const Eigen::MatrixXd left = Eigen::MatrixXd::Random(scene.vertex_count(), 20);
+  const Eigen::MatrixXd right = Eigen::MatrixXd::Random(set.size(), 20);
+  const Eigen::MatrixXd all_t = visible_transpose_times(scene, set, traced.visibility, left);
+  const Eigen::MatrixXd all = visible_times(scene, set, traced.visibility, right);
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  CHECK(visible_transpose_times(scene, set, traced.visibility, left) == all_t);
+  CHECK(visible_times(scene, set, traced.visibility, right) == all);
+}
+
+TEST_CASE("visible products refuse mismatched shapes", "[visible]") {
+  const Mesh scene = test::sphere_over_plane();
+  const DirectionSet set = DirectionSet::cubemap(4);
+  const TransportResult traced = test::trace_visibility_only(scene, set);
+  CHECK_THROWS_WITH(visible_times(scene, set, traced.visibility, Eigen::MatrixXd(5, 3)),
+                    Catch::Contains("rows for 96 directions"));
+  CHECK_THROWS_WITH(visible_transpose_times(scene, set, traced.visibility, Eigen::MatrixXd(5, 3)),
+                    Catch::Contains("vertices"));
+}
