@@ -2,8 +2,9 @@
 
 #include <mpi.h>
 
+#include <algorithm>
 #include <climits>
-#include <numeric>
+#include <cstdlib>
 
 #include "prt/error.hpp"
 
@@ -11,14 +12,26 @@ namespace prt {
 
 namespace {
 
-int message_size(std::size_t bytes) {
-  if (bytes > static_cast<std::size_t>(INT_MAX))
-    throw Error("MPI: a message of " + std::to_string(bytes) + " bytes is over MPI's 2 GB limit");
-  return static_cast<int>(bytes);
-}
-
 void check(int status, const char* call) {
   if (status != MPI_SUCCESS) throw Error(std::string("MPI: ") + call + " failed");
+}
+
+// The most bytes one MPI call moves: MPI's counts and displacements are
+// ints, so larger messages go in rounds. PRT_MPI_MAX_MESSAGE (bytes) lowers
+// it, for tests of the rounds on small meshes.
+std::size_t max_message() {
+  static const std::size_t limit = [] {
+    const char* text = std::getenv("PRT_MPI_MAX_MESSAGE");
+    if (!text) return static_cast<std::size_t>(INT_MAX);
+    char* end = nullptr;
+    const unsigned long long value = std::strtoull(text, &end, 10);
+    if (end == text || *end != '\0' || value < 64 ||
+        value > static_cast<unsigned long long>(INT_MAX))
+      throw Error(std::string("PRT_MPI_MAX_MESSAGE=\"") + text +
+                  "\": expected a byte count from 64 to " + std::to_string(INT_MAX));
+    return static_cast<std::size_t>(value);
+  }();
+  return limit;
 }
 
 // Adds the wall time of a scope to a counter.
@@ -28,12 +41,61 @@ struct Timed {
   ~Timed() { total += MPI_Wtime() - start; }
 };
 
-// Splits the received bytes by the senders' counts.
-std::vector<std::vector<char>> split(const std::vector<char>& all, const std::vector<int>& counts,
-                                     const std::vector<int>& offsets) {
-  std::vector<std::vector<char>> out(counts.size());
-  for (std::size_t r = 0; r < counts.size(); ++r)
-    out[r].assign(all.begin() + offsets[r], all.begin() + offsets[r] + counts[r]);
+// Every rank's message size, on every rank.
+std::vector<unsigned long long> all_sizes(std::size_t mine, int ranks) {
+  const unsigned long long size = mine;
+  std::vector<unsigned long long> sizes(static_cast<std::size_t>(ranks));
+  check(MPI_Allgather(&size, 1, MPI_UNSIGNED_LONG_LONG, sizes.data(), 1, MPI_UNSIGNED_LONG_LONG,
+                      MPI_COMM_WORLD),
+        "MPI_Allgather");
+  return sizes;
+}
+
+// Messages in rounds: in round j each rank sends bytes [j p, (j + 1) p) of
+// its message, p = max_message() / ranks, so that one round's bytes (and
+// every displacement) fit in an int. Small messages take one round.
+struct Rounds {
+  std::size_t piece, count;
+  Rounds(const std::vector<unsigned long long>& sizes)
+      : piece(std::max<std::size_t>(1, max_message() / sizes.size())),
+        count(std::max<std::size_t>(
+            1, (*std::max_element(sizes.begin(), sizes.end()) + piece - 1) / piece)) {}
+  // Bytes of a message of `size` sent in round j.
+  int part(unsigned long long size, std::size_t j) const {
+    const unsigned long long first = static_cast<unsigned long long>(j) * piece;
+    return size > first ? static_cast<int>(std::min<unsigned long long>(piece, size - first)) : 0;
+  }
+};
+
+// Gathers every rank's message in rounds, onto `root` or (root < 0) onto
+// every rank.
+std::vector<std::vector<char>> gather_in_rounds(const std::vector<char>& mine, int root, int rank,
+                                                int ranks) {
+  const std::vector<unsigned long long> sizes = all_sizes(mine.size(), ranks);
+  const Rounds rounds(sizes);
+  const bool receives = root < 0 || rank == root;
+  std::vector<std::vector<char>> out(receives ? sizes.size() : 0);
+  for (std::size_t r = 0; r < out.size(); ++r) out[r].resize(sizes[r]);
+  std::vector<int> counts(sizes.size()), offsets(sizes.size());
+  std::vector<char> round;
+  for (std::size_t j = 0; j < rounds.count; ++j) {
+    int total = 0;
+    for (std::size_t r = 0; r < sizes.size(); ++r)
+      offsets[r] = total, counts[r] = rounds.part(sizes[r], j), total += counts[r];
+    round.resize(receives ? static_cast<std::size_t>(total) : 0);
+    const char* send = mine.data() + std::min(mine.size(), j * rounds.piece);
+    const int sending = rounds.part(mine.size(), j);
+    if (root < 0)
+      check(MPI_Allgatherv(send, sending, MPI_BYTE, round.data(), counts.data(), offsets.data(),
+                           MPI_BYTE, MPI_COMM_WORLD),
+            "MPI_Allgatherv");
+    else
+      check(MPI_Gatherv(send, sending, MPI_BYTE, round.data(), counts.data(), offsets.data(),
+                        MPI_BYTE, root, MPI_COMM_WORLD),
+            "MPI_Gatherv");
+    for (std::size_t r = 0; r < out.size(); ++r)
+      std::copy_n(round.data() + offsets[r], counts[r], out[r].data() + j * rounds.piece);
+  }
   return out;
 }
 
@@ -42,6 +104,7 @@ std::vector<std::vector<char>> split(const std::vector<char>& all, const std::ve
 MpiCommunicator::MpiCommunicator() {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  max_message();  // a bad PRT_MPI_MAX_MESSAGE stops every rank before any work
 }
 
 void MpiCommunicator::barrier() const {
@@ -51,39 +114,22 @@ void MpiCommunicator::barrier() const {
 
 std::vector<std::vector<char>> MpiCommunicator::allgather(const std::vector<char>& mine) const {
   const Timed timed{seconds_};
-  const int count = message_size(mine.size());
-  std::vector<int> counts(size_), offsets(size_, 0);
-  check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD),
-        "MPI_Allgather");
-  std::size_t total = 0;
-  for (int r = 0; r < size_; ++r) offsets[r] = message_size(total), total += counts[r];
-  message_size(total);
-  std::vector<char> all(total);
-  ++calls_, sent_ += double(mine.size()) * (size_ - 1), received_ += double(total - mine.size());
-  check(MPI_Allgatherv(mine.data(), count, MPI_BYTE, all.data(), counts.data(), offsets.data(),
-                       MPI_BYTE, MPI_COMM_WORLD),
-        "MPI_Allgatherv");
-  return split(all, counts, offsets);
+  std::vector<std::vector<char>> all = gather_in_rounds(mine, -1, rank_, size_);
+  double total = 0;
+  for (const auto& part : all) total += double(part.size());
+  ++calls_, sent_ += double(mine.size()) * (size_ - 1), received_ += total - double(mine.size());
+  return all;
 }
 
 std::vector<std::vector<char>> MpiCommunicator::gather(const std::vector<char>& mine,
                                                        int root) const {
   const Timed timed{seconds_};
-  const int count = message_size(mine.size());
-  std::vector<int> counts(size_), offsets(size_, 0);
-  check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, MPI_COMM_WORLD),
-        "MPI_Gather");
-  std::size_t total = 0;
-  if (rank_ == root)
-    for (int r = 0; r < size_; ++r) offsets[r] = message_size(total), total += counts[r];
-  std::vector<char> all(rank_ == root ? total : 0);
+  std::vector<std::vector<char>> all = gather_in_rounds(mine, root, rank_, size_);
+  double total = 0;
+  for (const auto& part : all) total += double(part.size());
   ++calls_, sent_ += rank_ == root ? 0.0 : double(mine.size());
-  received_ += rank_ == root ? double(total - mine.size()) : 0.0;
-  check(MPI_Gatherv(mine.data(), count, MPI_BYTE, all.data(), counts.data(), offsets.data(),
-                    MPI_BYTE, root, MPI_COMM_WORLD),
-        "MPI_Gatherv");
-  if (rank_ != root) return {};
-  return split(all, counts, offsets);
+  received_ += rank_ == root ? total - double(mine.size()) : 0.0;
+  return all;
 }
 
 void MpiCommunicator::broadcast(std::vector<char>& bytes, int root) const {
@@ -93,7 +139,10 @@ void MpiCommunicator::broadcast(std::vector<char>& bytes, int root) const {
   bytes.resize(size);
   ++calls_, sent_ += rank_ == root ? double(size) * (size_ - 1) : 0.0;
   received_ += rank_ == root ? 0.0 : double(size);
-  check(MPI_Bcast(bytes.data(), message_size(size), MPI_BYTE, root, MPI_COMM_WORLD), "MPI_Bcast");
+  for (std::size_t first = 0; first < bytes.size(); first += max_message()) {
+    const int count = static_cast<int>(std::min(max_message(), bytes.size() - first));
+    check(MPI_Bcast(bytes.data() + first, count, MPI_BYTE, root, MPI_COMM_WORLD), "MPI_Bcast");
+  }
 }
 
 }  // namespace prt
