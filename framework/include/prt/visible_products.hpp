@@ -36,7 +36,7 @@ class PaddedRows {
                Eigen::OuterStride<>>(data_.data(), rows_, cols_, Eigen::OuterStride<>(stride_)) =
         matrix;
   }
-  void resize(Eigen::Index rows, Eigen::Index cols);  // values unspecified
+  void resize(Eigen::Index rows, Eigen::Index cols);  // zeros, keeping the storage
 
   Eigen::Index rows() const { return rows_; }
   Eigen::Index cols() const { return cols_; }
