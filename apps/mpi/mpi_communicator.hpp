@@ -21,6 +21,7 @@ class MpiCommunicator final : public Communicator {
 
  private:
   int rank_ = 0, size_ = 1;
+  std::size_t max_message_ = 0;  // bytes one MPI call moves at most
   mutable std::size_t calls_ = 0;
   mutable double sent_ = 0, received_ = 0, seconds_ = 0;
 };

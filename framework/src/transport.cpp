@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <numeric>
 #include <optional>
 #include <random>
 #include <utility>
@@ -365,14 +366,31 @@ void transport_rows(const Mesh& mesh, const DirectionSet& set, const VisibilityB
 
 TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
                                   const VisibilityBits& visibility, const Basis& basis) {
+  if (visibility.vertices() != mesh.vertex_count() ||
+      visibility.directions() != static_cast<std::size_t>(set.size()))
+    throw Error("project_visibility: visibility of " + std::to_string(visibility.vertices()) +
+                " vertices x " + std::to_string(visibility.directions()) +
+                " directions for a mesh of " + std::to_string(mesh.vertex_count()) + " and " +
+                std::to_string(set.size()) + " directions");
   TransferSignal out;
+  out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), basis.size());
   if (!basis.has_fast_projection(set)) {
-    // T P over the visible pairs only, as the bake's own projection.
-    out.coefficients =
-        visible_times(mesh, set, visibility, basis.projection_matrix(set)).cast<float>();
+    // T P over the visible pairs only, as the bake's own projection, a block
+    // of rows at a time (double sums for a block, float for the whole mesh).
+    const PaddedRows projection(basis.projection_matrix(set));
+    for_each_row_block(std::size_t(0), mesh.vertex_count(), std::size_t(1024),
+                       [&](std::size_t begin, std::size_t end) {
+                         std::vector<std::uint32_t> vertices(end - begin);
+                         std::iota(vertices.begin(), vertices.end(),
+                                   static_cast<std::uint32_t>(begin));
+                         PaddedRows sums;
+                         visible_times(mesh, set, vertices.data(), vertices.size(),
+                                       visibility.words(begin), projection, sums);
+                         out.coefficients.middleRows(begin, end - begin) =
+                             sums.block(0, Eigen::Index(end - begin)).cast<float>();
+                       });
     return out;
   }
-  out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), basis.size());
   // Fixed blocks: a GEMM's rows depend on the block's shape (row_blocks.hpp).
   for_each_row_block(
       std::size_t(0), mesh.vertex_count(), kBlock, [&](std::size_t begin, std::size_t end) {

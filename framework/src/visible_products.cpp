@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <utility>
 
 #include "prt/error.hpp"
@@ -58,9 +59,9 @@ TransposedVisibility::TransposedVisibility(const VisibilityBits& visibility)
       words_per_direction_(VisibilityBits::words_for(vertices_)),
       bits_(directions_ * words_per_direction_, 0) {
   const std::size_t vertex_words = VisibilityBits::words_for(directions_);
-  // A task takes 8 words of directions (a cache line of each vertex's bits)
-  // and walks the vertices in squares of 64: it reads whole lines and writes
-  // each of its rows in order.
+  // A task takes up to 8 words of directions (a cache line or two of each
+  // vertex's bits) and walks the vertices in squares of 64, writing each of
+  // its rows in order.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_words, 8), [&](const auto& range) {
     std::uint64_t square[64];
     for (std::size_t column = 0; column < words_per_direction_; ++column)
@@ -193,6 +194,8 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBi
   check_rows(right.rows(), s, "visible_times: the right-hand matrix", "directions");
   check_rows(Eigen::Index(mesh.vertex_count()), visibility.vertices(), "visible_times: the mesh",
              "vertices of visibility");
+  check_rows(set.size(), visibility.directions(), "visible_times: the direction set",
+             "directions of visibility");
   const auto normal = [&](std::size_t i, int c) { return mesh.normals[i][c]; };
   const std::vector<double> a = coordinates(normal, mesh.vertex_count(), 1 / M_PI);
   const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
@@ -223,10 +226,11 @@ void visible_transpose_times(const Mesh& mesh, const DirectionSet& set,
              "directions of visibility");
   check_rows(Eigen::Index(mesh.vertex_count()), transposed.vertices(),
              "visible_transpose_times: the mesh", "vertices of visibility");
+  // a . b = d . (n / pi): the same products, rounded alike, as T's own.
   const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
-  const std::vector<double> a = coordinates(direction, s, 1 / M_PI);
+  const std::vector<double> a = coordinates(direction, s, 1.0);
   const auto normal = [&](std::size_t i, int c) { return mesh.normals[i][c]; };
-  const std::vector<double> b = coordinates(normal, mesh.vertex_count(), 1.0);
+  const std::vector<double> b = coordinates(normal, mesh.vertex_count(), 1 / M_PI);
   const MaskedSums m{transposed.words(0), transposed.words_per_direction(), a.data(), b.data(),
                      &left};
   if (out.rows() != set.size() || out.cols() != left.cols())

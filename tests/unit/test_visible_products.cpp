@@ -27,14 +27,19 @@ TEST_CASE("visible products equal dense products of the transport rows", "[visib
   REQUIRE(t.cwiseAbs().sum() > 0);
   REQUIRE((t.array() == 0).count() > t.size() / 4);  // the kernels must skip real zeros
 
-  // Column counts around the packet (8) and panel (128) sizes.
-  for (const Eigen::Index columns : {1, 7, 8, 9, 58, 128, 129, 300}) {
+  // Column counts around the packet (8) and panel (128) sizes, and none.
+  for (const Eigen::Index columns : {0, 1, 7, 8, 9, 58, 128, 129, 300}) {
     CAPTURE(columns);
     const Eigen::MatrixXd right = Eigen::MatrixXd::Random(set.size(), columns);
     const Eigen::MatrixXd left = Eigen::MatrixXd::Random(t.rows(), columns);
-    CHECK(relative_error(visible_times(scene, set, traced.visibility, right), t * right) < 1e-13);
-    CHECK(relative_error(visible_transpose_times(scene, set, traced.visibility, left),
-                         t.transpose() * left) < 1e-13);
+    const Eigen::MatrixXd product = visible_times(scene, set, traced.visibility, right);
+    const Eigen::MatrixXd transposed = visible_transpose_times(scene, set, traced.visibility, left);
+    REQUIRE(product.rows() == t.rows());
+    REQUIRE(product.cols() == columns);
+    REQUIRE(transposed.rows() == t.cols());
+    REQUIRE(transposed.cols() == columns);
+    CHECK(relative_error(product, t * right) < 1e-13);
+    CHECK(relative_error(transposed, t.transpose() * left) < 1e-13);
   }
 }
 
@@ -51,6 +56,17 @@ TEST_CASE("visible products give the same bits on one core and on all", "[visibl
   CHECK(visible_times(scene, set, traced.visibility, right) == all);
 }
 
+TEST_CASE("visible products of no vertices are empty", "[visible]") {
+  const Mesh empty;
+  const DirectionSet set = DirectionSet::cubemap(4);
+  const VisibilityBits none(0, static_cast<std::size_t>(set.size()));
+  CHECK(visible_times(empty, set, none, Eigen::MatrixXd::Ones(set.size(), 5)).rows() == 0);
+  const Eigen::MatrixXd transposed =
+      visible_transpose_times(empty, set, none, Eigen::MatrixXd(0, 5));
+  CHECK(transposed.rows() == set.size());
+  CHECK(transposed.isZero());
+}
+
 TEST_CASE("visible products refuse mismatched shapes", "[visible]") {
   const Mesh scene = test::sphere_over_plane();
   const DirectionSet set = DirectionSet::cubemap(4);
@@ -59,4 +75,9 @@ TEST_CASE("visible products refuse mismatched shapes", "[visible]") {
                     Catch::Contains("rows for 96 directions"));
   CHECK_THROWS_WITH(visible_transpose_times(scene, set, traced.visibility, Eigen::MatrixXd(5, 3)),
                     Catch::Contains("vertices"));
+  // Bits traced over another direction set.
+  const DirectionSet other = DirectionSet::cubemap(5);
+  CHECK_THROWS_WITH(
+      visible_times(scene, other, traced.visibility, Eigen::MatrixXd::Zero(other.size(), 3)),
+      Catch::Contains("directions of visibility"));
 }

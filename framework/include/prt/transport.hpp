@@ -33,9 +33,9 @@ class VisibilityBits {
   std::size_t directions() const { return directions_; }
   std::size_t vertices() const { return words_per_vertex_ ? bits_.size() / words_per_vertex_ : 0; }
   std::size_t count_visible(std::size_t vertex) const;
-  std::uint64_t* words(std::size_t vertex) { return &bits_[vertex * words_per_vertex_]; }
+  std::uint64_t* words(std::size_t vertex) { return bits_.data() + vertex * words_per_vertex_; }
   const std::uint64_t* words(std::size_t vertex) const {
-    return &bits_[vertex * words_per_vertex_];
+    return bits_.data() + vertex * words_per_vertex_;
   }
 
  private:

@@ -66,7 +66,7 @@ class TransposedVisibility {
   std::size_t directions() const { return directions_; }
   std::size_t words_per_direction() const { return words_per_direction_; }
   const std::uint64_t* words(std::size_t direction) const {
-    return &bits_[direction * words_per_direction_];
+    return bits_.data() + direction * words_per_direction_;
   }
   bool get(std::size_t direction, std::size_t vertex) const {
     return (words(direction)[vertex / 64] >> (vertex % 64)) & 1u;
