@@ -31,16 +31,16 @@ namespace prt {
 
 namespace {
 
-// m's columns made orthonormal, in place. Tall matrices (a row per vertex) go by Cholesky QR
-// twice: two Gram products and triangular solves in fixed row blocks on every
-// core, where Householder QR ran on one core (0.17 s of the bunny's 2 s fit).
-// Cholesky QR is accurate while cond(m) < ~1e7; a worse-conditioned or
-// rank-deficient m, and small ones, go by Householder.
 void householder_columns(Eigen::MatrixXd& m) {
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(m);
   m = qr.householderQ() * Eigen::MatrixXd::Identity(m.rows(), m.cols());
 }
 
+// m's columns made orthonormal, in place. Tall matrices (a row per vertex) go
+// by Cholesky QR twice: two Gram products and triangular solves in fixed row
+// blocks on every core, where Householder QR ran on one core (0.17 s of the
+// bunny's 2 s fit). Two passes are accurate while cond(m) < ~1e8; a
+// worse-conditioned or rank-deficient m, and small ones, go by Householder.
 void orthonormalize(Eigen::MatrixXd& m) {
   constexpr Eigen::Index kBlock = 1024;  // fixed: the same bits on any number of cores
   if (m.rows() < 4 * kBlock) return householder_columns(m);
@@ -56,11 +56,9 @@ void orthonormalize(Eigen::MatrixXd& m) {
     for (std::size_t b = 1; b < parts.size(); ++b) gram += parts[b];
     const Eigen::LLT<Eigen::MatrixXd> llt(gram);
     const Eigen::VectorXd diagonal = llt.matrixL().toDenseMatrix().diagonal();
-    // m is untouched when this fails: the second pass's m spans the same
-    // columns as the first's.
     // The diagonal's spread bounds cond(m) from below only (by up to ~100x at
-    // tens of columns): 1e-5 keeps cond well under the ~1e8 where two
-    // passes stop being accurate.
+    // tens of columns): 1e-5 keeps cond well under ~1e8. m is untouched when
+    // this fails, and the second pass's m spans the first's columns.
     if (llt.info() != Eigen::Success || !diagonal.allFinite() ||
         diagonal.minCoeff() <= 1e-5 * diagonal.maxCoeff())
       return householder_columns(m);
