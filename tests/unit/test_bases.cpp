@@ -159,6 +159,29 @@ TEST_CASE("eigentransport: the randomized SVD finds the exact principal subspace
   CHECK_THROWS_WITH(make("eigen", {})->evaluate(lattice.directions), Catch::Contains("not fitted"));
 }
 
+TEST_CASE("eigentransport: identical transport rows (rank 0) give a finite orthonormal basis",
+          "[eigen]") {
+  // An open plane: every vertex sees the same upper hemisphere, so C = T W -
+  // mean is zero. 5,041 vertices: Cholesky QR's Gram matrix is zero there and
+  // the fit must take its Householder fallback, not divide by zero.
+  const Mesh plane = make_plane(70, 5.f);
+  REQUIRE(plane.vertex_count() > 4096);
+  const DirectionSet lattice = DirectionSet::cubemap(4);
+  const TransportResult r = test::trace_visibility_only(plane, lattice);
+  auto eigen = make("eigen", {{"d", std::int64_t(4)}});
+  eigen->fit({&plane, &lattice, &r.visibility});
+  const Eigen::MatrixXd fitted = eigen->save().matrices.at("eigentransports");
+  REQUIRE(fitted.allFinite());
+  CHECK((fitted * fitted.transpose() - Eigen::MatrixXd::Identity(fitted.rows(), fitted.rows()))
+            .cwiseAbs()
+            .maxCoeff() < 1e-10);
+  // The mean transport is all there is: the basis reproduces it exactly.
+  const Eigen::RowVectorXd mean = eigen->save().matrices.at("mean");
+  CHECK((mean * fitted.transpose() * fitted - mean).norm() < 1e-10 * mean.norm());
+  // No variance: the fraction captured is all of it, not rounding noise over zero.
+  CHECK(eigen->save().matrices.at("captured_variance")(0, 0) == 1.0);
+}
+
 TEST_CASE("eigentransport: a seed gives the same basis on one core and on all", "[eigen]") {
   const Mesh scene = eigen_test_scene(GENERATE(false, true));
   const DirectionSet lattice = DirectionSet::cubemap(4);

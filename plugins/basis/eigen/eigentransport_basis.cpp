@@ -181,10 +181,11 @@ class Eigentransport final : public Basis {
       orthonormalize(q);
     }
     // ||C||_F^2 = ||T W||_F^2 - v ||mean||^2 (C's rows are centred). It loses
-    // digits when the mean holds nearly all the energy (the relative error is
-    // eps ||T W||^2 / ||C||^2); it only scales `variance` and the captured
-    // fraction, and is clamped at 0 for identical rows.
-    const double total_energy = std::max(0.0, transport_energy - double(v) * mean_.squaredNorm());
+    // digits when the mean holds nearly all the energy (the error is ~eps
+    // ||T W||^2); below 1e-12 ||T W||^2 the rows are the same up to rounding,
+    // there is no variance, and the singular values are rounding noise.
+    const double total_energy = transport_energy - double(v) * mean_.squaredNorm();
+    const bool no_variance = !(total_energy > 1e-12 * transport_energy);
     const Eigen::MatrixXd small = c_transpose_times(q).transpose();  // Q^T C
     Eigen::BDCSVD<Eigen::MatrixXd> svd(small, Eigen::ComputeThinV);
 
@@ -215,7 +216,9 @@ class Eigentransport final : public Basis {
     } else {
       eigen_ = pcs;
     }
-    captured_variance_ = sigma.head(components).squaredNorm() / std::max(total_energy, 1e-300);
+    // The fraction of the variance the eigentransports hold (all of none).
+    captured_variance_ =
+        no_variance ? 1.0 : std::min(1.0, sigma.head(components).squaredNorm() / total_energy);
   }
 
   BasisState save() const override {
