@@ -104,8 +104,10 @@ constexpr int kMaxPanel = 16;  // packets summed in registers at once (128 colum
 struct MaskedSums {
   const std::uint64_t* bits;  // bit rows, `words` words each
   std::size_t words;
-  const double* a;  // x, y, z per output row
-  const double* b;  // x, y, z per gathered row
+  // x, y, z per output row and per gathered row: the normals / pi, built
+  // per call, and the set's directions, already rows of x, y, z.
+  const double* a;
+  const double* b;
   const PaddedRows* rows;
 };
 
@@ -158,7 +160,7 @@ void masked_sums(const MaskedSums& m, std::size_t first, std::size_t last, Padde
                                    out.row(first_out_row + Eigen::Index(r - first)));
 }
 
-// Rows of x, y, z of `count` vectors, scaled.
+// Rows of x, y, z of `count` vectors (the mesh's normals are floats), scaled.
 std::vector<double> coordinates(const auto& vectors, std::size_t count, double scale) {
   std::vector<double> xyz(3 * count);
   for (std::size_t i = 0; i < count; ++i)
@@ -182,10 +184,8 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_
   const std::size_t words = VisibilityBits::words_for(s);
   const auto normal = [&](std::size_t i, int c) { return mesh.normals[vertices[i]][c]; };
   const std::vector<double> a = coordinates(normal, count, 1 / M_PI);
-  const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
-  const std::vector<double> b = coordinates(direction, s, 1.0);
   out = PaddedRows(static_cast<Eigen::Index>(count), right.cols());
-  masked_sums({bits, words, a.data(), b.data(), &right}, 0, count, out, 0);
+  masked_sums({bits, words, a.data(), set.directions.data(), &right}, 0, count, out, 0);
 }
 
 void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
@@ -198,11 +198,10 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBi
              "directions of visibility");
   const auto normal = [&](std::size_t i, int c) { return mesh.normals[i][c]; };
   const std::vector<double> a = coordinates(normal, mesh.vertex_count(), 1 / M_PI);
-  const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
-  const std::vector<double> b = coordinates(direction, s, 1.0);
   if (out.rows() != Eigen::Index(visibility.vertices()) || out.cols() != right.cols())
     out = PaddedRows(Eigen::Index(visibility.vertices()), right.cols());
-  const MaskedSums m{visibility.words(0), VisibilityBits::words_for(s), a.data(), b.data(), &right};
+  const MaskedSums m{visibility.words(0), VisibilityBits::words_for(s), a.data(),
+                     set.directions.data(), &right};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, visibility.vertices(), 256),
                     [&](const auto& range) {
                       masked_sums(m, range.begin(), range.end(), out, Eigen::Index(range.begin()));
@@ -227,12 +226,10 @@ void visible_transpose_times(const Mesh& mesh, const DirectionSet& set,
   check_rows(Eigen::Index(mesh.vertex_count()), transposed.vertices(),
              "visible_transpose_times: the mesh", "vertices of visibility");
   // a . b = d . (n / pi): the same products, rounded alike, as T's own.
-  const auto direction = [&](std::size_t k, int c) { return set.directions(Eigen::Index(k), c); };
-  const std::vector<double> a = coordinates(direction, s, 1.0);
   const auto normal = [&](std::size_t i, int c) { return mesh.normals[i][c]; };
   const std::vector<double> b = coordinates(normal, mesh.vertex_count(), 1 / M_PI);
-  const MaskedSums m{transposed.words(0), transposed.words_per_direction(), a.data(), b.data(),
-                     &left};
+  const MaskedSums m{transposed.words(0), transposed.words_per_direction(), set.directions.data(),
+                     b.data(), &left};
   if (out.rows() != set.size() || out.cols() != left.cols())
     out = PaddedRows(set.size(), left.cols());
   // Each output row sums its vertices in order: any split of the rows

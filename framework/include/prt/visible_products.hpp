@@ -68,9 +68,6 @@ class TransposedVisibility {
   const std::uint64_t* words(std::size_t direction) const {
     return bits_.data() + direction * words_per_direction_;
   }
-  bool get(std::size_t direction, std::size_t vertex) const {
-    return (words(direction)[vertex / 64] >> (vertex % 64)) & 1u;
-  }
 
  private:
   std::size_t vertices_, directions_, words_per_direction_;
