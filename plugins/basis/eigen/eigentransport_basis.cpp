@@ -8,7 +8,6 @@
 // light are then both plain projections (the mean-compensated coefficients of
 // §4.3: T Bᵀ and L Bᵀ, no full-dimensional mean at run time), and shading is a
 // d-term dot product.
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Cholesky>
@@ -17,7 +16,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <mutex>
 #include <random>
 
 #include "prt/basis.hpp"
