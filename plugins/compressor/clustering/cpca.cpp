@@ -2,6 +2,7 @@
 // approximation error, components added one at a time, §4.2) and adaptive
 // (per-cluster component counts by D_i^2 / m_k under a total budget, §4.3).
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <numeric>
 #include <optional>
 
+#include "first_minimum.hpp"
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
@@ -70,12 +72,25 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
   const MatrixXfRow& x = rows.x;
   const int k = static_cast<int>(models.size());
   const Classifier c = classifier(models, components);
+  // Per thread: the block's products and the per-cluster sums and errors,
+  // kept across blocks (a fresh 2 MB product per block cost page faults).
+  struct Scratch {
+    MatrixXfRow products;
+    std::vector<float> sum, error;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
   for_each_row_block(
       Eigen::Index(0), x.rows(), Eigen::Index(256), [&](Eigen::Index begin, Eigen::Index end) {
         const Eigen::Index height = end - begin;
         const auto block = x.middleRows(begin, height);
-        const MatrixXfRow products = block * c.columns;
-        std::vector<float> sum(static_cast<std::size_t>(k)), error(static_cast<std::size_t>(k));
+        Scratch& local = scratch.local();
+        MatrixXfRow& products = local.products;
+        products.resize(height, c.columns.cols());
+        products.noalias() = block * c.columns;
+        std::vector<float>& sum = local.sum;
+        std::vector<float>& error = local.error;
+        sum.resize(std::size_t(k));
+        error.resize(std::size_t(k));
         for (Eigen::Index i = 0; i < height; ++i) {
           const float* p = products.row(i).data();
           std::fill(sum.begin(), sum.end(), 0.f);
@@ -98,11 +113,7 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
           const float row_norm = block.row(i).squaredNorm();
           for (int j = 0; j < k; ++j)
             error[std::size_t(j)] = row_norm - 2.f * p[j] + c.mean_norms[j] - sum[std::size_t(j)];
-          float best = std::numeric_limits<float>::infinity();
-          int best_label = 0;
-          for (int j = 0; j < k; ++j)
-            if (error[std::size_t(j)] < best) best = error[std::size_t(j)], best_label = j;
-          labels[std::size_t(begin + i)] = best_label;
+          labels[std::size_t(begin + i)] = first_minimum(error.data(), k);
         }
       });
   // Errors in double on every core; their sum through segments (the same
@@ -121,7 +132,7 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
 // something moved.
 bool refill_empty(const Rows& rows, std::vector<std::int32_t>& labels, std::vector<double>& errors,
                   int clusters) {
-  std::vector<double> count = cluster_sums(rows, labels, clusters).counts;
+  std::vector<double> count = cluster_counts(rows, labels, clusters);
   bool moved = false;
   for (int j = 0; j < clusters; ++j) {
     if (count[j] > 0) continue;

@@ -1,5 +1,6 @@
 // Sums over the rows of a (possibly distributed) signal: per-cluster sums,
 // counts and scatter matrices, through segment_sum's fixed tree.
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
@@ -77,6 +78,22 @@ ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labe
   result.sums = Eigen::Map<const RowMatrixXd>(total.data(), k, n);
   result.counts.assign(total.begin() + std::ptrdiff_t(k) * n, total.end());
   return result;
+}
+
+std::vector<double> cluster_counts(const Rows& rows, const std::vector<std::int32_t>& labels,
+                                   int k) {
+  std::vector<double> total = segment_sum(
+      rows.shard,
+      [&](Eigen::Index s) {
+        const auto [begin, end] = rows.segment_rows(s);
+        std::vector<double> out(std::size_t(k), 0.0);
+        for (Eigen::Index p = begin; p < end; ++p)
+          if (labels[std::size_t(p)] >= 0) out[std::size_t(labels[std::size_t(p)])] += 1;
+        return out;
+      },
+      rows.comm);
+  if (total.empty()) total.assign(std::size_t(k), 0.0);
+  return total;
 }
 
 namespace {
@@ -227,13 +244,13 @@ void directions_from_scatter(const Eigen::MatrixXd& scatter, ClusterModel& model
   keep_directions(pairs.values, pairs.vectors, model);
 }
 
-// Rows `members` of x less the mean, in double.
-RowMatrixXd centred_rows(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
-                         const Eigen::RowVectorXd& mean) {
-  RowMatrixXd centred(static_cast<Eigen::Index>(members.size()), x.cols());
+// Rows `members` of x less the mean, in double, into `centred` (its storage
+// reused from cluster to cluster: a fresh matrix per cluster cost page faults).
+void centred_rows(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
+                  const Eigen::RowVectorXd& mean, RowMatrixXd& centred) {
+  centred.resize(static_cast<Eigen::Index>(members.size()), x.cols());
   for (std::size_t q = 0; q < members.size(); ++q)
     centred.row(Eigen::Index(q)) = x.row(members[q]).cast<double>() - mean;
-  return centred;
 }
 
 // The same from the m x m Gram matrix of its m < n centred members Y: the
@@ -296,18 +313,18 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   // Each rank solves every size-th cluster and the ranks share the results
   // (the same solver on the same matrix gives the same bits anywhere).
   const int rank = rows.comm.rank(), ranks = rows.comm.size();
+  tbb::enumerable_thread_specific<RowMatrixXd> centred;
   tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) {
     Progress::check_interrupt();  // one eigen-solve may take a while (glossy rows)
     if (int(i % std::size_t(ranks)) != rank) return;
     ClusterModel& model = models[std::size_t(which[i])];
-    if (gram[i])
-      directions_from_gram(
-          rows.distributed()
-              ? RowMatrixXd(gram_members.at(int(i)).cast<double>().rowwise() - model.mean)
-              : centred_rows(rows.x, members[std::size_t(which[i])], model.mean),
-          model);
+    if (!gram[i]) return directions_from_scatter(scatter.at(int(i)), model);
+    RowMatrixXd& y = centred.local();
+    if (rows.distributed())
+      y = gram_members.at(int(i)).cast<double>().rowwise() - model.mean;
     else
-      directions_from_scatter(scatter.at(int(i)), model);
+      centred_rows(rows.x, members[std::size_t(which[i])], model.mean, y);
+    directions_from_gram(y, model);
   });
   if (ranks > 1) {
     std::vector<double> mine;

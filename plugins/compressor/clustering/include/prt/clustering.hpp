@@ -52,6 +52,9 @@ struct ClusterSums {
   std::vector<double> counts;  // k
 };
 ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labels, int clusters);
+// The counts alone (the same figures as cluster_sums' counts; no row is read).
+std::vector<double> cluster_counts(const Rows& rows, const std::vector<std::int32_t>& labels,
+                                   int clusters);
 
 // One iteration of an iterative algorithm, for benchmarks: its wall time and
 // the shape (rows x inner x cols) of its dominant matrix product.
