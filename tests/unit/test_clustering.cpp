@@ -1,10 +1,12 @@
 #include <Eigen/SVD>
 #include <catch2/catch.hpp>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <random>
 #include <set>
 
+#include "../../plugins/compressor/clustering/first_minimum.hpp"
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
 
@@ -216,4 +218,33 @@ TEST_CASE("a refit keeps the models of unchanged clusters and refits the others"
   const auto wider = fit_models(rows, moved, 4, {4, 4, 4, 4}, nullptr, &reuse);
   CHECK(wider[0].eigenvalues[0] > 0);
   CHECK(wider[0].basis.rows() == 4);
+}
+
+TEST_CASE("first_minimum: the first smallest, as a scalar scan with <", "[clustering][extremes]") {
+  const auto scalar = [](const std::vector<float>& v) {
+    float best = std::numeric_limits<float>::infinity();
+    int at = 0;
+    for (std::size_t j = 0; j < v.size(); ++j)
+      if (v[j] < best) best = v[j], at = static_cast<int>(j);
+    return at;
+  };
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<int> small(0, 5);  // few values: many ties
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int count = 0; count <= 70; ++count)
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<float> v(static_cast<std::size_t>(count));
+      for (float& x : v) x = float(small(rng)) - 2.5f;
+      if (count > 0 && trial % 4 == 1) v[std::size_t(trial) % v.size()] = nan;  // NaN is skipped
+      if (count > 0 && trial % 4 == 2) v.assign(v.size(), inf);                 // all infinite
+      if (count > 0 && trial % 4 == 3) v.assign(v.size(), nan);                 // all NaN
+      INFO("count " << count << ", trial " << trial);
+      CHECK(first_minimum(v.data(), count) == scalar(v));
+    }
+  // A NaN in the first 16 lanes does not hide a later minimum in that lane.
+  std::vector<float> v(40, 1.f);
+  v[3] = nan;
+  v[19] = -1.f;  // lane 3 of the second packet
+  CHECK(first_minimum(v.data(), 40) == 19);
 }

@@ -24,7 +24,8 @@ inline int first_minimum(const float* values, int count) {
       std::memcpy(&v, values + j, sizeof v);
       low = (v < low) | (low != low) ? v : low;  // a NaN lane takes the next value
     }
-    for (int lane = 0; lane < kLanes; ++lane) smallest = low[lane] < smallest ? low[lane] : smallest;
+    for (int lane = 0; lane < kLanes; ++lane)
+      smallest = low[lane] < smallest ? low[lane] : smallest;
   }
   for (; j < count; ++j) smallest = values[j] < smallest ? values[j] : smallest;
   if (!(smallest < inf)) return 0;  // all NaN or infinite: the first, as a scalar scan keeps

@@ -37,36 +37,36 @@ void nearest_means(const MatrixXfRow& x, const RowMatrixXd& means, std::vector<s
     std::vector<std::int32_t> which;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
-  for_each_row_block(Eigen::Index(0), x.rows(), kRowBlock,
-                     [&](Eigen::Index begin, Eigen::Index end) {
-                       const Eigen::Index rows = end - begin;
-                       Scratch& local = scratch.local();
-                       local.dots.resize(rows, mt.cols());
-                       local.dots.noalias() = x.middleRows(begin, rows) * mt;
-                       local.best.resize(std::size_t(rows));
-                       local.which.assign(std::size_t(rows), 0);
-                       float* best = local.best.data();
-                       std::int32_t* which = local.which.data();
-                       const float* column = local.dots.data();
-                       for (Eigen::Index i = 0; i < rows; ++i) best[i] = mean_norms[0] - 2.f * column[i];
-                       // Strictly smaller replaces: the first nearest mean wins ties.
-                       for (Eigen::Index j = 1; j < mt.cols(); ++j) {
-                         column = local.dots.col(j).data();
-                         const float norm = mean_norms[j];
-                         const std::int32_t index = static_cast<std::int32_t>(j);
-                         for (Eigen::Index i = 0; i < rows; ++i) {
-                           const float d = norm - 2.f * column[i];
-                           const bool closer = d < best[i];
-                           best[i] = closer ? d : best[i];
-                           which[i] = closer ? index : which[i];
-                         }
-                       }
-                       for (Eigen::Index i = 0; i < rows; ++i) {
-                         label[begin + i] = which[i];
-                         distance[begin + i] = std::max(
-                             0.0, double(best[i]) + double(x.row(begin + i).squaredNorm()));
-                       }
-                     });
+  for_each_row_block(
+      Eigen::Index(0), x.rows(), kRowBlock, [&](Eigen::Index begin, Eigen::Index end) {
+        const Eigen::Index rows = end - begin;
+        Scratch& local = scratch.local();
+        local.dots.resize(rows, mt.cols());
+        local.dots.noalias() = x.middleRows(begin, rows) * mt;
+        local.best.resize(std::size_t(rows));
+        local.which.assign(std::size_t(rows), 0);
+        float* best = local.best.data();
+        std::int32_t* which = local.which.data();
+        const float* column = local.dots.data();
+        for (Eigen::Index i = 0; i < rows; ++i) best[i] = mean_norms[0] - 2.f * column[i];
+        // Strictly smaller replaces: the first nearest mean wins ties.
+        for (Eigen::Index j = 1; j < mt.cols(); ++j) {
+          column = local.dots.col(j).data();
+          const float norm = mean_norms[j];
+          const std::int32_t index = static_cast<std::int32_t>(j);
+          for (Eigen::Index i = 0; i < rows; ++i) {
+            const float d = norm - 2.f * column[i];
+            const bool closer = d < best[i];
+            best[i] = closer ? d : best[i];
+            which[i] = closer ? index : which[i];
+          }
+        }
+        for (Eigen::Index i = 0; i < rows; ++i) {
+          label[begin + i] = which[i];
+          distance[begin + i] =
+              std::max(0.0, double(best[i]) + double(x.row(begin + i).squaredNorm()));
+        }
+      });
 }
 
 // Chen's E_ij = |x_i - mean_j| + alpha * min_{k in j, k != i} |P_i - P_k|, with
