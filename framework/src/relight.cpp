@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cstring>
 #include <mutex>
 #include <numeric>
 
@@ -18,7 +19,8 @@ namespace {
 using Rows3 = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 // Vertices of one cluster handled together: small enough for the partial sums
-// to stay in registers / L1, large enough for the loops to vectorise.
+// to stay in registers / L1, large enough for the loops to vectorise; a
+// multiple of the 16 lanes below.
 constexpr int kBlock = 64;
 
 void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int rows) {
@@ -29,6 +31,66 @@ void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int
                 std::to_string(n_i));
 }
 
+// 16 floats in registers (GCC vector extension: AVX-512 where built for it).
+typedef float Lanes __attribute__((vector_size(64)));
+constexpr int kLanes = 16;
+static_assert(kBlock % kLanes == 0, "blocks are whole packets");
+
+Lanes load_lanes(const float* p) {
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// Sum of the lanes by halving (4 shuffles and adds, not a chain of 15).
+float sum_lanes(Lanes v) {
+  typedef int Indices __attribute__((vector_size(64)));
+  v += __builtin_shuffle(v, Indices{8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7});
+  v += __builtin_shuffle(v, Indices{4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3});
+  v += __builtin_shuffle(v, Indices{2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1});
+  v += __builtin_shuffle(v, Indices{1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0});
+  return v[0];
+}
+
+// into[3 r + c] = row r of `stored` (count rows of n_i floats) . light
+// channel c, for `Group` rows at a time: the group's 3 Group sums stay in
+// registers while the light's three channels stream past once per group
+// (three separate dots per row read the row three times and reduced each
+// sum across lanes on its own).
+template <int Group>
+void light_dots_group(const float* stored, Eigen::Index n_i, const float* red, const float* green,
+                      const float* blue, float* into) {
+  Lanes sums[Group][3] = {};
+  Eigen::Index d = 0;
+  for (; d + kLanes <= n_i; d += kLanes) {
+    const Lanes r = load_lanes(red + d), g = load_lanes(green + d), b = load_lanes(blue + d);
+    for (int q = 0; q < Group; ++q) {
+      const Lanes m = load_lanes(stored + q * n_i + d);
+      sums[q][0] += m * r;
+      sums[q][1] += m * g;
+      sums[q][2] += m * b;
+    }
+  }
+  for (int q = 0; q < Group; ++q) {
+    float tail[3] = {0, 0, 0};
+    for (Eigen::Index e = d; e < n_i; ++e) {
+      const float m = stored[q * n_i + e];
+      tail[0] += m * red[e];
+      tail[1] += m * green[e];
+      tail[2] += m * blue[e];
+    }
+    for (int c = 0; c < 3; ++c) into[3 * q + c] = sum_lanes(sums[q][c]) + tail[c];
+  }
+}
+
+void light_dots(const float* stored, Eigen::Index count, Eigen::Index n_i, const float* red,
+                const float* green, const float* blue, float* into) {
+  Eigen::Index r = 0;
+  for (; r + 4 <= count; r += 4)
+    light_dots_group<4>(stored + r * n_i, n_i, red, green, blue, into + 3 * r);
+  for (; r < count; ++r) light_dots_group<1>(stored + r * n_i, n_i, red, green, blue, into + 3 * r);
+}
+
 // constants(i, 3 r + c) = (vector_i read as rows x N_i) l, for the cluster's
 // mean (i = 0) and its n'_k representatives, into `out` ((n'_k + 1) rows x 3
 // rows).
@@ -36,47 +98,38 @@ void cluster_constants_into(const CompressedTransfer& t, Eigen::Index k, int row
                             const Eigen::MatrixX3f& l, float* out) {
   const Eigen::Index n_i = l.rows();
   const int n_k = t.components_of(k);
-  // Each stored row dotted with the light's three contiguous channels (one
-  // vectorised dot each, the row staying in L1): a lazy product of a dynamic
-  // row-major matrix with a column-major one did not vectorise, and the
-  // constants took most of a frame.
-  using Vector = Eigen::Map<const Eigen::VectorXf>;
-  const Vector red(l.col(0).data(), n_i), green(l.col(1).data(), n_i), blue(l.col(2).data(), n_i);
-  const auto rows_into = [&](const float* stored, Eigen::Index count, float* into) {
-    for (Eigen::Index r = 0; r < count; ++r) {
-      const Vector row(stored + r * n_i, n_i);
-      into[3 * r] = row.dot(red);
-      into[3 * r + 1] = row.dot(green);
-      into[3 * r + 2] = row.dot(blue);
-    }
-  };
-  rows_into(t.means.row(k).data(), rows, out);
+  const float *red = l.col(0).data(), *green = l.col(1).data(), *blue = l.col(2).data();
+  light_dots(t.means.row(k).data(), rows, n_i, red, green, blue, out);
   // Row-major n'_k x (rows N_i) is the same memory as (n'_k rows) x N_i.
-  if (n_k > 0) rows_into(t.representatives[k].data(), Eigen::Index(n_k) * rows, out + 3 * rows);
+  if (n_k > 0)
+    light_dots(t.representatives[k].data(), Eigen::Index(n_k) * rows, n_i, red, green, blue,
+               out + 3 * rows);
 }
 
 // out_c[j] = C_0c + sum_i w_i[j] C_ic for `count` <= kBlock vertices whose
-// weights are stored component-major (w_i at weights + i * stride). N >= 0
-// fixes n' at compile time so that the loops unroll; N = -1 reads n_dyn.
+// weights are stored component-major (w_i at weights + i * stride). 16
+// vertices' three sums stay in registers over all n' components. N >= 0
+// fixes n' at compile time so that the loop unrolls; N = -1 reads n_dyn.
 template <int N>
 void diffuse_block(const float* constants, const float* weights, std::int64_t stride, int n_dyn,
                    int count, float* r, float* g, float* b) {
   const int n = N >= 0 ? N : n_dyn;
-  for (int j = 0; j < count; ++j) {
-    r[j] = constants[0];
-    g[j] = constants[1];
-    b[j] = constants[2];
-  }
-  for (int i = 0; i < n; ++i) {
-    const float* w = weights + i * stride;
-    const float cr = constants[3 * (i + 1)], cg = constants[3 * (i + 1) + 1],
-                cb = constants[3 * (i + 1) + 2];
-#pragma GCC ivdep
-    for (int j = 0; j < count; ++j) {
-      r[j] += w[j] * cr;
-      g[j] += w[j] * cg;
-      b[j] += w[j] * cb;
+  // The last packet reads past `count` into the next stored weights (the
+  // weights end with kLanes floats of padding); its extra lanes are
+  // written to r, g, b (kBlock floats each) and never read.
+  for (int j = 0; j < count; j += kLanes) {
+    Lanes red = Lanes{} + constants[0], green = Lanes{} + constants[1],
+          blue = Lanes{} + constants[2];
+    for (int i = 0; i < n; ++i) {
+      const Lanes w = load_lanes(weights + i * stride + j);
+      const float* c = constants + 3 * (i + 1);
+      red += w * c[0];
+      green += w * c[1];
+      blue += w * c[2];
     }
+    std::memcpy(r + j, &red, sizeof red);
+    std::memcpy(g + j, &green, sizeof green);
+    std::memcpy(b + j, &blue, sizeof blue);
   }
 }
 
@@ -119,56 +172,51 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
   // The layout indexes by these: refuse what validate() would (a bad index
   // here would be an out-of-bounds write).
   if (static_cast<Eigen::Index>(t.representatives.size()) != clusters ||
-      t.weights.rows() != t.vertices())
+      t.weights.rows() != t.vertices() ||
+      static_cast<Eigen::Index>(t.cluster_of_vertex.size()) != t.vertices())
     throw Error("relight: compressed transfer has inconsistent sizes");
   for (auto k : t.cluster_of_vertex)
     if (k < 0 || k >= clusters) throw Error("relight: cluster index out of range");
   for (Eigen::Index k = 0; k < clusters; ++k)
     if (t.components_of(k) > t.components || t.representatives[k].cols() != t.dimension)
       throw Error("relight: a representative block has the wrong size");
-  cluster_begin_.assign(clusters + 1, 0);
-  for (auto k : t.cluster_of_vertex) ++cluster_begin_[k + 1];
-  std::partial_sum(cluster_begin_.begin(), cluster_begin_.end(), cluster_begin_.begin());
-  vertex_order_.resize(t.cluster_of_vertex.size());
-  std::vector<std::int64_t> next(cluster_begin_.begin(), cluster_begin_.end() - 1);
-  for (std::size_t p = 0; p < t.cluster_of_vertex.size(); ++p)
-    vertex_order_[next[t.cluster_of_vertex[p]]++] = static_cast<std::int32_t>(p);
-  rank_.resize(vertex_order_.size());
-  for (std::size_t j = 0; j < vertex_order_.size(); ++j)
-    rank_[vertex_order_[j]] = static_cast<std::int32_t>(j);
-  // Component-major weights per cluster: component i of the cluster's j-th
-  // vertex at weight_begin_[k] + i * size_k + j, so sums vectorise over vertices.
-  weight_begin_.assign(clusters + 1, 0);
+  // Where each cluster's constants go: (n'_k + 1) stored vectors of 3 rows floats.
+  constant_begin_.assign(clusters + 1, 0);
   for (Eigen::Index k = 0; k < clusters; ++k)
-    weight_begin_[k + 1] =
-        weight_begin_[k] + (cluster_begin_[k + 1] - cluster_begin_[k]) * t.components_of(k);
-  weights_.resize(static_cast<std::size_t>(weight_begin_.back()));
-  tbb::parallel_for(Eigen::Index(0), clusters, [&](Eigen::Index k) {
-    const std::int64_t size = cluster_begin_[k + 1] - cluster_begin_[k];
-    const int n_k = t.components_of(k);
-    for (std::int64_t j = 0; j < size; ++j) {
-      const std::int32_t p = vertex_order_[cluster_begin_[k] + j];
-      for (int i = 0; i < n_k; ++i) weights_[weight_begin_[k] + i * size + j] = t.weights(p, i);
+    constant_begin_[k + 1] = constant_begin_[k] + std::int64_t(t.components_of(k) + 1) * 3 * rows;
+  // One range per core, at least 4,096 vertices each (a task per range).
+  // Results do not depend on the split.
+  const Eigen::Index vertices = t.vertices();
+  const Eigen::Index count = std::clamp<Eigen::Index>(
+      std::min<Eigen::Index>(tbb::this_task_arena::max_concurrency(), vertices / 4096), 1, 256);
+  parts_.resize(std::size_t(count));
+  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index q) {
+    Part& part = parts_[std::size_t(q)];
+    const Eigen::Index first = vertices * q / count, last = vertices * (q + 1) / count;
+    part.cluster_begin.assign(clusters + 1, 0);
+    for (Eigen::Index p = first; p < last; ++p) ++part.cluster_begin[t.cluster_of_vertex[p] + 1];
+    std::partial_sum(part.cluster_begin.begin(), part.cluster_begin.end(),
+                     part.cluster_begin.begin());
+    part.vertices.resize(std::size_t(last - first));
+    std::vector<std::int64_t> next(part.cluster_begin.begin(), part.cluster_begin.end() - 1);
+    for (Eigen::Index p = first; p < last; ++p)
+      part.vertices[next[t.cluster_of_vertex[p]]++] = static_cast<std::int32_t>(p);
+    // Component i of the cluster's j-th vertex at weight_begin[k] + i * size_k
+    // + j, so sums vectorise over vertices.
+    part.weight_begin.assign(clusters + 1, 0);
+    for (Eigen::Index k = 0; k < clusters; ++k)
+      part.weight_begin[k + 1] =
+          part.weight_begin[k] +
+          (part.cluster_begin[k + 1] - part.cluster_begin[k]) * t.components_of(k);
+    // kLanes floats of padding: the sums read whole packets (diffuse_block).
+    part.weights.assign(static_cast<std::size_t>(part.weight_begin.back()) + kLanes, 0.f);
+    for (Eigen::Index k = 0; k < clusters; ++k) {
+      const std::int64_t begin = part.cluster_begin[k], size = part.cluster_begin[k + 1] - begin;
+      for (int i = 0; i < t.components_of(k); ++i)
+        for (std::int64_t j = 0; j < size; ++j)
+          part.weights[part.weight_begin[k] + i * size + j] =
+              t.weights(part.vertices[begin + j], i);
     }
-  });
-}
-
-void RelightKernel::to_mesh_order(const float* sorted, Eigen::MatrixX3f& out) const {
-  float* red = out.col(0).data();
-  float* green = out.col(1).data();
-  float* blue = out.col(2).data();
-  tbb::this_task_arena::isolate([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<Eigen::Index>(0, out.rows(), 4096),
-        [&](const auto& range) {
-          for (Eigen::Index p = range.begin(); p < range.end(); ++p) {
-            const float* rgb = sorted + 3 * std::size_t(rank_[p]);  // one cache line per vertex
-            red[p] = rgb[0];
-            green[p] = rgb[1];
-            blue[p] = rgb[2];
-          }
-        },
-        tbb::static_partitioner());
   });
 }
 
@@ -176,24 +224,38 @@ template <class Sums>
 void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scratch_floats,
                                      const Sums& sums) const {
   const CompressedTransfer& t = *transfer_;
-  const int width = 3 * rows_;  // floats of one stored vector's constant
-  // One parallel pass (a second would cost a wake-up of the other cores per
-  // frame): each cluster's constants, then its vertices' sums.
-  // Isolated: a thread waiting here must not pick up an outer task that
-  // relights this kernel again (its buffer is in use).
+  // The kernel's own buffer when free; a caller relighting the same kernel
+  // concurrently (or re-entrantly, from a task) gets a fresh one.
+  std::unique_lock lock(scratch_->mutex, std::try_to_lock);
+  std::vector<float> fresh;
+  std::vector<float>& constants = lock.owns_lock() ? scratch_->constants : fresh;
+  constants.resize(static_cast<std::size_t>(constant_begin_.back()));
+  // Two parallel passes: every cluster's constants, split over the cores,
+  // then a task per part for the sums. (Each part computing the constants of
+  // its own clusters repeated them on every core: slower.) Isolated: a
+  // thread waiting here must not pick up an outer task that relights this
+  // kernel again.
   tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(
         tbb::blocked_range<Eigen::Index>(0, t.clusters()),
         [&](const auto& range) {
-          // Buffers per task, sized for the largest cluster: no allocation per cluster.
-          std::vector<float> constants(std::size_t(t.components + 1) * width);
-          std::vector<float> scratch(scratch_floats);
-          for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
-            const std::int64_t begin = cluster_begin_[k], size = cluster_begin_[k + 1] - begin;
-            if (size == 0) continue;
-            cluster_constants_into(t, k, rows_, l, constants.data());
-            sums(k, constants.data(), vertex_order_.data() + begin, size,
-                 weights_.data() + weight_begin_[k], scratch.data());
+          for (Eigen::Index k = range.begin(); k < range.end(); ++k)
+            cluster_constants_into(t, k, rows_, l, constants.data() + constant_begin_[k]);
+        },
+        tbb::static_partitioner());
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, parts_.size(), 1),
+        [&](const auto& range) {
+          std::vector<float> scratch(scratch_floats);  // per task, not per cluster
+          for (std::size_t q = range.begin(); q < range.end(); ++q) {
+            const Part& part = parts_[q];
+            for (Eigen::Index k = 0; k < t.clusters(); ++k) {
+              const std::int64_t begin = part.cluster_begin[k],
+                                 size = part.cluster_begin[k + 1] - begin;
+              if (size == 0) continue;
+              sums(k, constants.data() + constant_begin_[k], part.vertices.data() + begin, size,
+                   part.weights.data() + part.weight_begin[k], scratch.data());
+            }
           }
         },
         tbb::static_partitioner());
@@ -224,78 +286,96 @@ void RelightKernel::radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* e
     return;
   }
   const Eigen::MatrixX3f l = light.cast<float>();
-  // Sums are written in cluster order, RGB interleaved (each core writes its
-  // own contiguous runs: cores share only the lines at run boundaries), then gathered
-  // to mesh order (one cache line per vertex). The buffer is reused across
-  // frames: no page faults of a fresh array each frame.
-  // The kernel's own buffer when free; a caller relighting the same kernel
-  // concurrently (or re-entrantly, from a task) gets a fresh one.
-  std::unique_lock lock(scratch_->mutex, std::try_to_lock);
-  std::vector<float> fresh;
-  std::vector<float>& sorted_buffer = lock.owns_lock() ? scratch_->sorted : fresh;
-  sorted_buffer.resize(3 * std::size_t(t.vertices()));
-  float* sorted = sorted_buffer.data();
   out.resize(t.vertices(), 3);
-  const std::int32_t* first = vertex_order_.data();
+  float* red = out.col(0).data();
+  float* green = out.col(1).data();
+  float* blue = out.col(2).data();
   if (!exit_values) {
     for_each_cluster(l, 0,
                      [&](Eigen::Index k, const float* constants, const std::int32_t* vertices,
                          std::int64_t size, const float* weights, float*) {
                        const int n_k = t.components_of(k);
                        const DiffuseBlock block = diffuse_kernel(n_k);
-                       const std::int64_t at = vertices - first;
                        alignas(64) float r[kBlock], g[kBlock], b[kBlock];
                        for (std::int64_t j0 = 0; j0 < size; j0 += kBlock) {
                          const int count =
                              static_cast<int>(std::min<std::int64_t>(kBlock, size - j0));
                          block(constants, weights + j0, size, n_k, count, r, g, b);
-                         float* rgb = sorted + 3 * (at + j0);
+                         const std::int32_t* at = vertices + j0;
                          for (int j = 0; j < count; ++j) {
-                           rgb[3 * j] = r[j];
-                           rgb[3 * j + 1] = g[j];
-                           rgb[3 * j + 2] = b[j];
+                           red[at[j]] = r[j];
+                           green[at[j]] = g[j];
+                           blue[at[j]] = b[j];
                          }
                        }
                      });
-    to_mesh_order(sorted, out);
     return;
   }
-  // Glossy, fused: d_i(p) = y(v_p) . C_i (3 floats per stored vector) for a
-  // block of vertices as one small product, then d_0 + sum_i w_pi d_i.
+  // Glossy, fused: d_i(p) = y(v_p) . C_i (3 floats per stored vector), then
+  // d_0 + sum_i w_pi d_i, for 16 vertices at a time, one per lane: each
+  // lane sums over its own exit values in a fixed order, so a vertex's
+  // result does not depend on which vertices share its packet (a block
+  // product rounds a row by the block's shape, and the blocks depend on how
+  // the mesh is split).
   const MatrixXfRow& y = *exit_values;
+  constexpr int kGroup = 8;                    // dots kept in registers at once
   const Eigen::Index most = t.components + 1;  // stored vectors of the largest cluster
-  const std::size_t scratch = std::size_t(rows_ * 3 * most + kBlock * rows_ + kBlock * 3 * most);
+  const Eigen::Index widest = (3 * most + kGroup - 1) / kGroup * kGroup;
+  const std::size_t scratch = std::size_t(rows_ * widest + (rows_ + widest) * kLanes);
   for_each_cluster(
       l, scratch,
       [&](Eigen::Index k, const float* constants, const std::int32_t* vertices, std::int64_t size,
           const float* weights, float* buffer) {
         const int n_k = t.components_of(k);
-        const Eigen::Index vectors = n_k + 1;
-        // C as N_r x 3 (n'_k + 1): column 3 i + c is C_i's channel c.
-        Eigen::Map<MatrixXfRow> c_by_row(buffer, rows_, 3 * vectors);
-        Eigen::Map<MatrixXfRow> y_block(buffer + rows_ * 3 * most, kBlock, rows_);
-        Eigen::Map<MatrixXfRow> d(buffer + rows_ * 3 * most + kBlock * rows_, kBlock, 3 * vectors);
-        for (Eigen::Index i = 0; i < vectors; ++i)
-          c_by_row.middleCols<3>(3 * i) =
-              Eigen::Map<const Rows3>(constants + 3 * rows_ * i, rows_, 3);
-        for (std::int64_t j0 = 0; j0 < size; j0 += kBlock) {
-          const int count = static_cast<int>(std::min<std::int64_t>(kBlock, size - j0));
-          for (int j = 0; j < count; ++j) y_block.row(j) = y.row(vertices[j0 + j]);
-          d.topRows(count).noalias() = y_block.topRows(count) * c_by_row;
-          for (int j = 0; j < count; ++j) {
-            float s[3] = {d(j, 0), d(j, 1), d(j, 2)};
-            for (int i = 0; i < n_k; ++i) {
-              const float w = weights[i * size + j0 + j];
-              for (int c = 0; c < 3; ++c) s[c] += w * d(j, 3 * (i + 1) + c);
+        const Eigen::Index width = (3 * (n_k + 1) + kGroup - 1) / kGroup * kGroup;
+        // C as N_r x 3 (n'_k + 1), padded with zero columns to whole groups:
+        // column 3 i + c is C_i's channel c.
+        float* c_by_row = buffer;
+        float* exit = buffer + rows_ * width;              // N_r x 16: lane j is vertex j's values
+        float* dots = exit + std::size_t(rows_) * kLanes;  // width x 16
+        std::fill(c_by_row, c_by_row + rows_ * width, 0.f);
+        for (int i = 0; i <= n_k; ++i)
+          for (int r = 0; r < rows_; ++r)
+            for (int c = 0; c < 3; ++c)
+              c_by_row[r * width + 3 * i + c] = constants[3 * rows_ * i + 3 * r + c];
+        for (std::int64_t j0 = 0; j0 < size; j0 += kLanes) {
+          const int count = static_cast<int>(std::min<std::int64_t>(kLanes, size - j0));
+          // The next packet's exit values (rows scattered over the mesh):
+          // requested now, they arrive while this packet's dots run.
+          for (std::int64_t j = j0 + kLanes; j < std::min<std::int64_t>(size, j0 + 2 * kLanes);
+               ++j) {
+            const char* next = reinterpret_cast<const char*>(y.row(vertices[j]).data());
+            for (int line = 0; line < rows_ * int(sizeof(float)); line += 64)
+              __builtin_prefetch(next + line);
+          }
+          for (int j = 0; j < kLanes; ++j) {
+            const float* values = y.row(vertices[j0 + std::min(j, count - 1)]).data();
+            for (int r = 0; r < rows_; ++r) exit[r * kLanes + j] = values[r];
+          }
+          for (Eigen::Index o = 0; o < width; o += kGroup) {
+            Lanes sums[kGroup] = {};
+            for (int r = 0; r < rows_; ++r) {
+              const Lanes e = load_lanes(exit + r * kLanes);
+              const float* c = c_by_row + r * width + o;
+              for (int g = 0; g < kGroup; ++g) sums[g] += e * c[g];
             }
-            float* rgb = sorted + 3 * (vertices - first + j0 + j);
-            rgb[0] = s[0];
-            rgb[1] = s[1];
-            rgb[2] = s[2];
+            std::memcpy(dots + o * kLanes, sums, sizeof sums);
+          }
+          Lanes rgb[3];
+          for (int c = 0; c < 3; ++c) rgb[c] = load_lanes(dots + c * kLanes);
+          for (int i = 0; i < n_k; ++i) {
+            // Past `count`, the weights' padding or the next vector's: unused lanes.
+            const Lanes w = load_lanes(weights + i * size + j0);
+            for (int c = 0; c < 3; ++c) rgb[c] += w * load_lanes(dots + (3 * (i + 1) + c) * kLanes);
+          }
+          for (int j = 0; j < count; ++j) {
+            const std::int32_t p = vertices[j0 + j];
+            red[p] = rgb[0][j];
+            green[p] = rgb[1][j];
+            blue[p] = rgb[2][j];
           }
         }
       });
-  to_mesh_order(sorted, out);
 }
 
 MatrixXfRow RelightKernel::exit_coefficients(const Eigen::MatrixX3d& light) const {
@@ -340,7 +420,8 @@ MatrixXfRow RelightKernel::exit_coefficients(const Eigen::MatrixX3d& light) cons
 double RelightKernel::streamed_bytes(bool with_exit_values) const {
   const CompressedTransfer& t = *transfer_;
   // Weights as stored compactly (n'_k per vertex), not padded to the largest n'.
-  const double weights = t.sparse() ? double(t.weights.size()) : double(weights_.size());
+  double weights = t.sparse() ? double(t.weights.size()) : 0.0;
+  for (const Part& part : parts_) weights += double(part.weight_begin.back());
   double bytes = weights * sizeof(float) +
                  double(t.cluster_of_vertex.size()) * sizeof(std::int32_t) +
                  double(t.vertices()) * 3 * sizeof(float);

@@ -1,3 +1,5 @@
+#include <tbb/task_arena.h>
+
 #include <catch2/catch.hpp>
 #include <memory>
 
@@ -113,4 +115,31 @@ TEST_CASE("the glossy relight kernel dots each exit vector with the exit values"
   const MatrixXfRow wrong = MatrixXfRow::Zero(vertices, rows + 1);
   CHECK_THROWS_WITH(kernel.radiance(light, &wrong), Catch::Contains("exit values"));
   CHECK_THROWS(RelightKernel(c, 7));  // 20 coefficients do not form 7 rows
+}
+
+TEST_CASE("the relight kernel's result does not depend on how many parts it is split in",
+          "[relight]") {
+  // 9,000 vertices: one part in a one-thread arena, one per core (at least
+  // 4,096 vertices each) otherwise; 100 coefficients: six packets and a tail.
+  const int vertices = 9000;
+  const CompressedTransfer c = mixed_clusters(100, vertices);
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(100, 3);
+  const Eigen::MatrixX3f expected = (c.decode().cast<double>() * light).cast<float>();
+  const auto radiance = [&](int threads, const MatrixXfRow* values, int rows) {
+    Eigen::MatrixX3f out;
+    tbb::task_arena(threads).execute([&] {
+      const RelightKernel kernel(c, rows);
+      kernel.radiance(rows == 1 ? light : Eigen::MatrixX3d(light.topRows(100 / rows)), values, out);
+    });
+    return out;
+  };
+  const Eigen::MatrixX3f one = radiance(1, nullptr, 1);
+  CHECK((one - expected).cwiseAbs().maxCoeff() < 1e-4f);
+  CHECK(radiance(tbb::this_task_arena::max_concurrency(), nullptr, 1) == one);
+  CHECK(radiance(3, nullptr, 1) == one);
+  const MatrixXfRow values = MatrixXfRow::Random(vertices, 4);  // glossy: 4 rows of 25
+  const Eigen::MatrixX3f glossy = radiance(1, &values, 4);
+  CHECK(glossy.allFinite());
+  CHECK(radiance(tbb::this_task_arena::max_concurrency(), &values, 4) == glossy);
+  CHECK(radiance(3, &values, 4) == glossy);
 }

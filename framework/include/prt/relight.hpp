@@ -1,12 +1,14 @@
 // Relighting at memory speed (Sloan 2003 §6 on the CPU): the one compressed
 // form laid out once so that each frame streams its per-vertex data once.
 //
-// Vertices are visited in cluster order, so a cluster's constants
+// The mesh's vertices are split into one contiguous range per core; within a
+// range, vertices are visited in cluster order, so a cluster's constants
 // C_ki = M_ki l stay in registers while its vertices' weights stream past;
 // weights are stored compactly in that order (n'_k per vertex, no padding);
 // the constants are computed per cluster into one buffer per task (no
 // per-cluster allocation) right before that cluster's sums; the sums use
-// kernels of fixed n' for the common sizes. Glossy transfer is fused: each
+// kernels of fixed n' for the common sizes and are written straight to mesh
+// order. Glossy transfer is fused: each
 // vertex's exit-basis values toward the camera are dotted with its exit
 // vector without writing the v x 3 N_r exit coefficients.
 #pragma once
@@ -45,26 +47,32 @@ class RelightKernel {
   double streamed_bytes(bool with_exit_values) const;
 
  private:
-  // Per cluster: its constants, then sums(k, constants, vertices, size,
-  // weights, scratch) with `scratch_floats` floats of per-task scratch.
+  // Per part and cluster: its constants, then sums(k, constants, vertices,
+  // size, weights, scratch) with `scratch_floats` floats of per-task scratch.
   template <class Sums>
   void for_each_cluster(const Eigen::MatrixX3f& light, std::size_t scratch_floats,
                         const Sums& sums) const;
 
-  // Radiance in cluster order (RGB interleaved) back to mesh order.
-  void to_mesh_order(const float* sorted, Eigen::MatrixX3f& out) const;
+  // A contiguous range of mesh vertices, relit by one task: results are
+  // written straight to mesh order, each task to its own range (no second
+  // pass to reorder them, no cache line written by two cores but at the
+  // ranges' ends).
+  struct Part {
+    std::vector<std::int32_t> vertices;       // the range's vertices sorted by cluster (stable)
+    std::vector<std::int64_t> cluster_begin;  // clusters + 1 offsets into vertices
+    std::vector<std::int64_t> weight_begin;   // clusters + 1 offsets into weights
+    std::vector<float> weights;               // n'_k per vertex, component-major per cluster
+  };
 
   const CompressedTransfer* transfer_;
   int rows_;
-  std::vector<std::int32_t> vertex_order_;   // vertices sorted by cluster (stable)
-  std::vector<std::int32_t> rank_;           // inverse of vertex_order_
-  std::vector<std::int64_t> cluster_begin_;  // clusters + 1 offsets into vertex_order_
-  std::vector<std::int64_t> weight_begin_;   // per cluster offset into weights_
-  std::vector<float> weights_;               // n'_k per vertex, in vertex_order_
-  // The cluster-ordered radiance of the last frame, reused by the next.
+  std::vector<Part> parts_;
+  std::vector<std::int64_t> constant_begin_;  // clusters + 1 offsets of each cluster's constants
+  // The constants of the last frame's clusters, reused by the next (a fresh
+  // buffer per frame would cost page faults for glossy transfer).
   struct Scratch {
     std::mutex mutex;
-    std::vector<float> sorted;
+    std::vector<float> constants;
   };
   std::unique_ptr<Scratch> scratch_ = std::make_unique<Scratch>();
 };
