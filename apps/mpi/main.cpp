@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "mpi_communicator.hpp"
 #include "prt/bake_file.hpp"
@@ -54,7 +56,15 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
     if (args.restart) CheckpointStore::discard(output);
   }
   const BakePlan plan = plan_bake(scene, registry);
-  const std::string key = bake_key(scene, plan);
+  // Rank 0 alone hashes the mesh file for the checkpoint's key (every rank
+  // reading a multi-GB mesh once more only to agree on 64 hex digits).
+  std::vector<char> key_bytes;
+  if (root) {
+    const std::string own = bake_key(scene, plan);
+    key_bytes.assign(own.begin(), own.end());
+  }
+  comm.broadcast(key_bytes, 0);
+  const std::string key(key_bytes.begin(), key_bytes.end());
   // Rank 0 makes (or checks) the folder before the others open it.
   std::optional<CheckpointStore> checkpoint;
   if (root) {
@@ -72,8 +82,12 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
   if (!root) options.log = [](const std::string&) {};
   BakeData data = bake(scene, registry, options, times);
   const double peak = peak_memory_gb();
-  std::vector<double> peaks;
-  for (const auto& p : allgather(comm, {peak})) peaks.push_back(p[0]);
+  std::vector<double> peaks, received;  // per rank (received: before this exchange)
+  const double mine_received = comm.bytes_received();
+  for (const auto& p : allgather(comm, {peak, mine_received})) {
+    peaks.push_back(p[0]);
+    received.push_back(p[1]);
+  }
   if (root) {
     clock = Stopwatch();
     write_bake(output, data);
@@ -94,6 +108,9 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
       "\ncommunication (rank 0): %zu collectives, %.1f MB sent, %.1f MB received, %.2f s in MPI "
       "calls (waiting included)\n",
       comm.calls(), comm.bytes_sent() / 1e6, comm.bytes_received() / 1e6, comm.seconds());
+  std::printf("received per rank (MB):");
+  for (double r : received) std::printf(" %.1f", r / 1e6);
+  std::printf("\n");
   std::cout << "timings (rank 0):\n" << times.table();
   return 0;
 }

@@ -125,15 +125,21 @@ Value tree_sum(const Shard& shard, const Partial& partial, const Communicator& c
     known[{level, i >> level}] = compute<Value>(level, i >> level, segments, partial);
     i += Eigen::Index(1) << level;
   }
-  if (comm.size() > 1) {
-    std::vector<char> mine;
-    for (const auto& [node, value] : known) {
-      const std::int64_t header[2] = {node.first, node.second};
-      put(mine, header, sizeof header);
-      put(mine, value);
-    }
-    known.clear();
-    for (const auto& bytes : comm.allgather(mine)) {
+  if (comm.size() <= 1) return evaluate(top, 0, segments, known);
+  // Rank 0 gathers the ranks' subtree roots, adds them as compute() of the
+  // root would, and broadcasts the sum: each rank receives one root, not
+  // every rank's subtrees (an allgather's traffic grew with the rank count).
+  std::vector<char> mine;
+  for (const auto& [node, value] : known) {
+    const std::int64_t header[2] = {node.first, node.second};
+    put(mine, header, sizeof header);
+    put(mine, value);
+  }
+  known.clear();
+  const std::vector<std::vector<char>> parts = comm.gather(mine, 0);
+  std::vector<char> sum;
+  if (comm.rank() == 0) {
+    for (const auto& bytes : parts) {
       Reader reader{bytes};
       while (reader.at < bytes.size()) {
         const int level = static_cast<int>(reader.integer());
@@ -141,8 +147,14 @@ Value tree_sum(const Shard& shard, const Partial& partial, const Communicator& c
         reader.read(known[{level, index}]);
       }
     }
+    put(sum, evaluate(top, 0, segments, known));
   }
-  return evaluate(top, 0, segments, known);
+  comm.broadcast(sum, 0);
+  Reader reader{sum};
+  Value root;
+  reader.read(root);
+  if (reader.at != sum.size()) throw Error("segment_sum: the broadcast sum has trailing bytes");
+  return root;
 }
 
 }  // namespace
