@@ -145,7 +145,7 @@ class Eigentransport final : public Basis {
     const VisibilityBits& visibility = *data.visibility;
     const TransposedVisibility transposed(visibility);
     double transport_energy = 0;  // ||T W||_F^2
-    mean_ = column_sums(mesh, set, visibility, transport_energy) / double(v);
+    mean_ = column_sums(mesh, set, transposed, transport_energy) / double(v);
 
     std::mt19937_64 rng(seed_);
     std::normal_distribution<double> gaussian;
@@ -249,38 +249,24 @@ class Eigentransport final : public Basis {
  private:
   // The column sums of T W (W = diag(sqrt(w))) and, in `energy`, the sum of
   // its squares, over a fixed number of vertex chunks added in order.
+  // The column sums of T W (a row per direction: sum_v c_vk sqrt(w_k)) and
+  // ||T W||_F^2, by one product T^T [1, n] over the visible pairs: with
+  // c_vk = n_v . d_k / pi, sum_v c_vk^2 = d_k . (sum_v c_vk n_v) / pi. One
+  // packet per pair, where a pass of its own re-derived each cosine and
+  // added it to a per-direction sum (0.13 s for the bunny, 8% of the fit).
   Eigen::RowVectorXd column_sums(const Mesh& mesh, const DirectionSet& set,
-                                 const VisibilityBits& visibility, double& energy) const {
-    constexpr std::size_t kChunks = 16;
-    const auto s = static_cast<std::size_t>(set.size());
-    const std::size_t vertices = visibility.vertices(), words = VisibilityBits::words_for(s);
-    std::vector<Eigen::RowVectorXd> sums(kChunks, Eigen::RowVectorXd::Zero(set.size()));
-    std::vector<double> squares(kChunks, 0.0);
-    tbb::parallel_for(std::size_t(0), kChunks, [&](std::size_t chunk) {
-      double* sum = sums[chunk].data();
-      const double* xyz = set.directions.data();  // rows of x, y, z
-      double square = 0;  // a local: a store per pair would serialise the loop
-      for (std::size_t vertex = vertices * chunk / kChunks;
-           vertex < vertices * (chunk + 1) / kChunks; ++vertex) {
-        const Eigen::Vector3d n = mesh.normals[vertex].cast<double>() / M_PI;
-        const std::uint64_t* bits = visibility.words(vertex);
-        for (std::size_t w = 0; w < words; ++w)
-          for (std::uint64_t b = bits[w]; b; b &= b - 1) {
-            const std::size_t k = 64 * w + std::countr_zero(b);
-            const double t =
-                (n.x() * xyz[3 * k] + n.y() * xyz[3 * k + 1] + n.z() * xyz[3 * k + 2]) *
-                root_weights_[k];
-            sum[k] += t;
-            square += t * t;
-          }
-      }
-      squares[chunk] = square;
-    });
-    Eigen::RowVectorXd total = sums[0];
-    energy = squares[0];
-    for (std::size_t chunk = 1; chunk < kChunks; ++chunk)
-      total += sums[chunk], energy += squares[chunk];
-    return total;
+                                 const TransposedVisibility& transposed, double& energy) const {
+    const Eigen::Index v = static_cast<Eigen::Index>(mesh.vertex_count());
+    Eigen::MatrixXd ones_and_normals(v, 4);
+    for (Eigen::Index p = 0; p < v; ++p)
+      ones_and_normals.row(p) << 1.0, mesh.normals[std::size_t(p)].cast<double>().transpose();
+    const Eigen::MatrixXd sums =
+        visible_transpose_times(mesh, set, transposed, ones_and_normals);  // s x 4
+    const Eigen::VectorXd weights = root_weights_.cwiseAbs2();
+    const Eigen::VectorXd squares =
+        (sums.rightCols<3>().cwiseProduct(set.directions).rowwise().sum() / M_PI);
+    energy = weights.dot(squares);
+    return sums.col(0).cwiseProduct(root_weights_).transpose();
   }
 
   bool fitted() const { return eigen_.size() > 0; }
