@@ -56,15 +56,9 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
     if (args.restart) CheckpointStore::discard(output);
   }
   const BakePlan plan = plan_bake(scene, registry);
-  // Rank 0 alone hashes the mesh file for the checkpoint's key (every rank
-  // reading a multi-GB mesh once more only to agree on 64 hex digits).
-  std::vector<char> key_bytes;
-  if (root) {
-    const std::string own = bake_key(scene, plan);
-    key_bytes.assign(own.begin(), own.end());
-  }
-  comm.broadcast(key_bytes, 0);
-  const std::string key(key_bytes.begin(), key_bytes.end());
+  // Every rank hashes its own scene, plug-ins and mesh file: a rank whose
+  // inputs differ from rank 0's is refused when it opens the checkpoint.
+  const std::string key = bake_key(scene, plan);
   // Rank 0 makes (or checks) the folder before the others open it.
   std::optional<CheckpointStore> checkpoint;
   if (root) {

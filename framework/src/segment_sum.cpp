@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <map>
+#include <string>
 
 #include "prt/error.hpp"
 
@@ -63,7 +64,10 @@ struct Reader {
     return value;
   }
   void read(Vector& values) {
-    values.resize(static_cast<std::size_t>(integer()));
+    const std::int64_t count = integer();
+    if (count < 0 || std::uint64_t(count) > (bytes.size() - at) / sizeof(double))
+      throw Error("segment_sum: truncated message");
+    values.resize(static_cast<std::size_t>(count));
     get(values.data(), values.size() * sizeof(double));
   }
   void read(Blocks& blocks) {
@@ -137,20 +141,32 @@ Value tree_sum(const Shard& shard, const Partial& partial, const Communicator& c
   }
   known.clear();
   const std::vector<std::vector<char>> parts = comm.gather(mine, 0);
+  // A first byte says whether rank 0 could add them; if not, every rank
+  // throws its message (a failure on rank 0 alone would leave the others
+  // waiting for the sum).
   std::vector<char> sum;
   if (comm.rank() == 0) {
-    for (const auto& bytes : parts) {
-      Reader reader{bytes};
-      while (reader.at < bytes.size()) {
-        const int level = static_cast<int>(reader.integer());
-        const Eigen::Index index = reader.integer();
-        reader.read(known[{level, index}]);
+    try {
+      for (const auto& bytes : parts) {
+        Reader reader{bytes};
+        while (reader.at < bytes.size()) {
+          const int level = static_cast<int>(reader.integer());
+          const Eigen::Index index = reader.integer();
+          reader.read(known[{level, index}]);
+        }
       }
+      sum.push_back(1);
+      put(sum, evaluate(top, 0, segments, known));
+    } catch (const std::exception& e) {
+      const std::string message = e.what();
+      sum.assign(1, 0);
+      sum.insert(sum.end(), message.begin(), message.end());
     }
-    put(sum, evaluate(top, 0, segments, known));
   }
   comm.broadcast(sum, 0);
-  Reader reader{sum};
+  if (sum.empty()) throw Error("segment_sum: rank 0 sent no sum");
+  if (sum[0] != 1) throw Error(std::string(sum.begin() + 1, sum.end()));
+  Reader reader{sum, 1};
   Value root;
   reader.read(root);
   if (reader.at != sum.size()) throw Error("segment_sum: the broadcast sum has trailing bytes");

@@ -6,6 +6,7 @@
 #include <condition_variable>
 #include <mutex>
 #include <random>
+#include <string>
 #include <thread>
 
 #include "prt/clustering.hpp"
@@ -128,6 +129,27 @@ TEST_CASE("segment sums are the same bits on any number of ranks", "[distributed
   }
   // A shard that does not hold whole segments is refused.
   CHECK_THROWS(segment_sum({100, total, total}, partial_of(0), solo()));
+  // Shards that leave a segment to no rank: rank 0 finds it out when it adds
+  // the roots, and every rank gets its message (none waits for a sum).
+  {
+    const int ranks = 3;
+    ThreadGroup group(ranks);
+    std::vector<std::string> errors(static_cast<std::size_t>(ranks));
+    std::vector<std::thread> threads;
+    for (int r = 0; r < ranks; ++r)
+      threads.emplace_back([&, r] {
+        ThreadCommunicator comm(group, r);
+        Shard shard = shard_of(total, r, ranks);
+        if (r == 1) shard.last = shard.first;  // rank 1 drops its segments
+        try {
+          segment_sum(shard, partial_of(0), comm);
+        } catch (const std::exception& e) {
+          errors[std::size_t(r)] = e.what();
+        }
+      });
+    for (auto& t : threads) t.join();
+    for (const auto& error : errors) CHECK_THAT(error, Catch::Contains("no rank computed segment"));
+  }
 }
 
 TEST_CASE("distributed LBG and CPCA equal one process bit for bit", "[distributed]") {

@@ -119,9 +119,10 @@ TEST_CASE("the glossy relight kernel dots each exit vector with the exit values"
 
 TEST_CASE("the relight kernel's result does not depend on how many parts it is split in",
           "[relight]") {
-  // 9,000 vertices: one part in a one-thread arena, one per core (at least
-  // 4,096 vertices each) otherwise; 100 coefficients: six packets and a tail.
-  const int vertices = 9000;
+  // 13,000 vertices: one part in a one-thread arena, one per thread (at
+  // least 4,096 vertices each: up to 3) otherwise; 100 coefficients: six
+  // packets and a tail.
+  const int vertices = 13000;
   const CompressedTransfer c = mixed_clusters(100, vertices);
   const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(100, 3);
   const Eigen::MatrixX3f expected = (c.decode().cast<double>() * light).cast<float>();

@@ -4,11 +4,11 @@
 // The mesh's vertices are split into one contiguous range per core; within a
 // range, vertices are visited in cluster order, so a cluster's constants
 // C_ki = M_ki l stay in registers while its vertices' weights stream past;
-// weights are stored compactly in that order (n'_k per vertex, no padding);
-// the constants are computed per cluster into one buffer per task (no
-// per-cluster allocation) right before that cluster's sums; the sums use
-// kernels of fixed n' for the common sizes and are written straight to mesh
-// order. Glossy transfer is fused: each
+// weights are stored compactly in that order (n'_k per vertex); the
+// constants of every cluster are computed first, into one buffer kept by the
+// kernel (or, when there are very many clusters, per part into a buffer per
+// task); the sums use kernels of fixed n' for the common sizes and are
+// written straight to mesh order. Glossy transfer is fused: each
 // vertex's exit-basis values toward the camera are dotted with its exit
 // vector without writing the v x 3 N_r exit coefficients.
 #pragma once
@@ -57,17 +57,25 @@ class RelightKernel {
   // written straight to mesh order, each task to its own range (no second
   // pass to reorder them, no cache line written by two cores but at the
   // ranges' ends).
+  struct Run {  // the part's vertices of one cluster
+    std::int32_t cluster;
+    std::int64_t begin, size;  // into vertices
+    std::int64_t weights;      // into weights: n'_k x size, component-major
+  };
   struct Part {
-    std::vector<std::int32_t> vertices;       // the range's vertices sorted by cluster (stable)
-    std::vector<std::int64_t> cluster_begin;  // clusters + 1 offsets into vertices
-    std::vector<std::int64_t> weight_begin;   // clusters + 1 offsets into weights
-    std::vector<float> weights;               // n'_k per vertex, component-major per cluster
+    std::vector<std::int32_t> vertices;  // the range's vertices sorted by cluster (stable)
+    std::vector<Run> runs;
+    std::vector<float> weights;  // n'_k per vertex, compact, then 16 floats of padding
   };
 
   const CompressedTransfer* transfer_;
   int rows_;
   std::vector<Part> parts_;
-  std::vector<std::int64_t> constant_begin_;  // clusters + 1 offsets of each cluster's constants
+  // When every cluster's constants fit a small shared buffer: where each
+  // cluster's go (clusters + 1 offsets) and the clusters that have vertices.
+  // Empty otherwise (each part computes its own runs' constants).
+  std::vector<std::int64_t> constant_begin_;
+  std::vector<std::int32_t> shared_clusters_;
   // The constants of the last frame's clusters, reused by the next (a fresh
   // buffer per frame would cost page faults for glossy transfer).
   struct Scratch {
