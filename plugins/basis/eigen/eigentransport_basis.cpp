@@ -8,13 +8,10 @@
 // light are then both plain projections (the mean-compensated coefficients of
 // §4.3: T Bᵀ and L Bᵀ, no full-dimensional mean at run time), and shading is a
 // d-term dot product.
-#include <tbb/parallel_for.h>
-
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <random>
 
@@ -247,9 +244,7 @@ class Eigentransport final : public Basis {
   }
 
  private:
-  // The column sums of T W (W = diag(sqrt(w))) and, in `energy`, the sum of
-  // its squares, over a fixed number of vertex chunks added in order.
-  // The column sums of T W (a row per direction: sum_v c_vk sqrt(w_k)) and
+  // The column sums of T W (W = diag(sqrt(w)); a row per direction: sum_v c_vk sqrt(w_k)) and
   // ||T W||_F^2, by one product T^T [1, n] over the visible pairs: with
   // c_vk = n_v . d_k / pi, sum_v c_vk^2 = d_k . (sum_v c_vk n_v) / pi. One
   // packet per pair, where a pass of its own re-derived each cosine and

@@ -73,7 +73,7 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
   const int k = static_cast<int>(models.size());
   const Classifier c = classifier(models, components);
   // Per thread: the block's products and the per-cluster sums and errors,
-  // kept across blocks (a fresh 2 MB product per block cost page faults).
+  // kept across blocks (no 2 MB allocation per block of 256 rows).
   struct Scratch {
     MatrixXfRow products;
     std::vector<float> sum, error;
