@@ -10,6 +10,7 @@
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
+#include "prt/row_file.hpp"
 
 #ifndef PRT_SOURCE_DIR
 #define PRT_SOURCE_DIR "."
@@ -47,6 +48,7 @@ int bake(Context& context, const BakeArgs& args) {
   RunOptions options{context.quiet};
   options.checkpoint = &checkpoint;
   options.slab_vertices = args.slab_vertices;
+  options.memory_budget = double(args.memory);
   BakeData data;
   try {
     data = bake(scene, context.registry, options, times);
@@ -58,10 +60,14 @@ int bake(Context& context, const BakeArgs& args) {
   write_bake(output, data);
   checkpoint.remove();
   times.add("write bake file", clock.seconds());
-  std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << data.transfer.dimension()
+  const Eigen::Index columns =
+      data.streamed_transfer.rows > 0 ? data.streamed_transfer.cols : data.transfer.dimension();
+  std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << columns
             << " coefficients (" << data.basis.name << ", " << data.transport << ") -> "
             << output.string() << "\n"
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
+  std::printf("peak memory: %.3f GB (resident; budget %.3f GB)\n", peak_resident_bytes() / 1e9,
+              options.budget() / 1e9);
   print_times(times);
   return 0;
 }

@@ -19,6 +19,7 @@ struct BakeArgs {
   bool force = false;                 // replace an existing output of another kind
   bool restart = false;               // discard a checkpoint left by an earlier run
   std::size_t slab_vertices = 65536;  // vertices per checkpointed slab
+  std::uint64_t memory = 0;           // memory budget in bytes (0: the default share of RAM)
 };
 int bake(Context& context, const BakeArgs& args);
 

@@ -28,6 +28,12 @@ int main(int argc, char** argv) {
                    "vertices traced per checkpointed slab (a killed bake loses at most one)")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
+  bake_cmd
+      ->add_option("--memory", bake.memory,
+                   "memory budget, e.g. 8G or 512M (default: 3/4 of RAM); a larger transfer is "
+                   "kept on disk and compressed in passes")
+      ->transform(CLI::AsSizeValue(false))
+      ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
 
   prt::cli::RenderArgs render;
   auto* render_cmd = app.add_subcommand("render", "relight a bake and write an image");

@@ -16,6 +16,7 @@
 #include "prt/glossy.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
+#include "prt/row_file.hpp"
 #include "prt/transport.hpp"
 
 namespace prt {
@@ -119,7 +120,8 @@ Eigen::Index transfer_dimension(const BakePlan& plan) {
 // checkpoint: kept slabs are loaded, the others computed and kept.
 TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                                 const RunOptions& options, StageTimes& times,
-                                std::uint64_t& rays_cast, std::size_t first, std::size_t last) {
+                                std::uint64_t& rays_cast, std::size_t first, std::size_t last,
+                                bool on_disk) {
   const CheckpointStore& store = *options.checkpoint;
   const auto slabs = slabs_of(first, last, std::max<std::size_t>(1, options.slab_vertices));
   std::size_t kept = 0;
@@ -134,7 +136,13 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
       plan.glossy && kept < slabs.size() ? tangent_frames(mesh) : std::vector<Frame>();
   TransferSignal out;
   set_shape(plan, out);
-  out.coefficients.resize(static_cast<Eigen::Index>(last - first), transfer_dimension(plan));
+  const Eigen::Index rows_total = static_cast<Eigen::Index>(last - first),
+                     cols = transfer_dimension(plan);
+  std::shared_ptr<RowFile> file;
+  if (on_disk)
+    file = RowFile::create(store.folder(), rows_total, cols);
+  else
+    out.coefficients.resize(rows_total, cols);
   Progress progress("bake transfer", double(last - first), plan.shadowed ? "rays" : "",
                     options.quiet);
   rays_cast = 0;
@@ -142,7 +150,7 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
     MatrixXfRow rows;
     std::uint64_t rays = 0;
     if (slab_kept(store, slab)) {
-      rows = kept_rows(store, slab, out.coefficients.cols());
+      rows = kept_rows(store, slab, cols);
       rays = kept_rays(store, slab);
       progress.add(double(slab.last - slab.first), double(rays));
     } else {
@@ -151,8 +159,16 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
                  .coefficients;
       keep_slab(store, slab, rows, rays);
     }
-    out.coefficients.middleRows(static_cast<Eigen::Index>(slab.first - first), rows.rows()) = rows;
+    const Eigen::Index at = static_cast<Eigen::Index>(slab.first - first);
+    if (file)
+      file->write(at, rows);
+    else
+      out.coefficients.middleRows(at, rows.rows()) = rows;
     rays_cast += rays;
+  }
+  if (file) {
+    file->map();
+    out.file = std::move(file);
   }
   times.add(plan.glossy ? "trace + glossy matrices (slabs)" : "trace + project (slabs)",
             clock.seconds());
@@ -230,11 +246,15 @@ TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const Direc
 TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
                                      const DirectionSet& set, const RunOptions& options,
                                      StageTimes& times, std::map<std::string, double>& metrics,
-                                     TransferSignal* direct, std::uint64_t& rays_cast) {
+                                     TransferSignal* direct, std::uint64_t& rays_cast,
+                                     bool on_disk) {
+  if (on_disk && (!options.checkpoint || options.traced || !per_vertex_transfer(plan)))
+    throw Error("bake: only a per-vertex transfer with a checkpoint folder is kept on disk");
   if (!options.checkpoint || options.traced)
     return traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
   if (per_vertex_transfer(plan))
-    return slabbed_transfer(plan, mesh, set, options, times, rays_cast, 0, mesh.vertex_count());
+    return slabbed_transfer(plan, mesh, set, options, times, rays_cast, 0, mesh.vertex_count(),
+                            on_disk);
   return whole_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
 }
 

@@ -1,13 +1,12 @@
 #include "prt/compressor.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "prt/row_blocks.hpp"
 #include "prt/segment_sum.hpp"
 
 namespace prt {
@@ -81,13 +80,17 @@ void gather_rows(const Distribution& rows, CompressedTransfer& c) {
 std::vector<double> vertex_errors(const TransferSignal& signal,
                                   const CompressedTransfer& compressed) {
   std::vector<double> errors(std::size_t(signal.vertices()));
-  tbb::parallel_for(Eigen::Index(0), signal.vertices(), [&](Eigen::Index p) {
-    thread_local Eigen::RowVectorXf row;
-    row.resize(signal.dimension());
-    compressed.decode_row(p, row);
-    errors[std::size_t(p)] =
-        (signal.coefficients.row(p).cast<double>() - row.cast<double>()).squaredNorm();
-  });
+  const auto rows = signal.rows();
+  for_each_row_block(Eigen::Index(0), signal.vertices(), Eigen::Index(4096),
+                     [&](Eigen::Index begin, Eigen::Index end) {
+                       Eigen::RowVectorXf row(signal.dimension());
+                       for (Eigen::Index p = begin; p < end; ++p) {
+                         compressed.decode_row(p, row);
+                         errors[std::size_t(p)] =
+                             (rows.row(p).cast<double>() - row.cast<double>()).squaredNorm();
+                       }
+                       signal.release(begin, end);
+                     });
   return errors;
 }
 

@@ -18,6 +18,7 @@
 #include "prt/log.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
+#include "prt/row_file.hpp"
 #include "prt/subsurface.hpp"
 #include "prt/transport.hpp"
 
@@ -90,12 +91,25 @@ double available_memory() {
   return double(sysconf(_SC_AVPHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
 }
 
+double physical_memory() {
+  return double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+}
+
+std::string gigabytes(double bytes) {
+  char text[32];
+  if (bytes < 1e9)
+    std::snprintf(text, sizeof text, "%.0f MB", bytes / 1e6);
+  else
+    std::snprintf(text, sizeof text, "%.1f GB", bytes / 1e9);
+  return text;
+}
+
 // Refuses, before any ray, a bake whose largest arrays cannot fit: the
-// transfer (twice: exact and decoded), kept visibility bits and bounce hits,
-// and the basis evaluated at every direction (unless it projects by a fast
-// transform).
+// transfer (twice: exact and decoded; not at all when it is kept on disk),
+// kept visibility bits and bounce hits, and the basis evaluated at every
+// direction (unless it projects by a fast transform).
 void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& mesh,
-                    const DirectionSet& set, bool keep_visibility) {
+                    const DirectionSet& set, bool keep_visibility, bool on_disk) {
   const double v = double(mesh.vertex_count()), d = double(set.size()),
                n = double(plan.basis->size());
   const double rows = plan.glossy ? double(plan.exit->size()) : 1.0;
@@ -108,7 +122,7 @@ void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& me
   const double glossy_light = plan.glossy ? d * n * sizeof(double) : 0;
   // The transfer twice: exact, and its compressed (or exact) form; channel
   // transfers also hold their parts and direct parts while they are stacked.
-  const double copies = groups > 1 ? 4 : 2;
+  const double copies = on_disk ? 0 : groups > 1 ? 4 : 2;
   const double bytes = copies * v * dimension * sizeof(float) + projection + glossy_light +
                        // Channel transfers each work on a copy of the rays' results.
                        (groups > 1 ? 2 : 1) *
@@ -142,6 +156,10 @@ PluginRecord record_of(const PluginChoice& choice, PluginRegistry& registry, Plu
 }
 
 }  // namespace
+
+double RunOptions::budget() const {
+  return memory_budget > 0 ? memory_budget : kDefaultMemoryFraction * physical_memory();
+}
 
 void record(const CompressionReport& r, std::map<std::string, double>& metrics) {
   metrics["squared_error"] = r.squared_error;
@@ -426,6 +444,13 @@ CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& tr
       gather_rows(here, sparse);
       return sparse;
     }
+    if (transfer.on_disk() && !plan.compressor->reads_rows_from_file()) {
+      log_warning("compressor \"" + plan.compressor_record.name +
+                  "\" reads the transfer from memory only: its " +
+                  gigabytes(double(transfer.vertices()) * double(transfer.dimension()) * 4) +
+                  " are loaded, beyond the memory budget");
+      return plan.compressor->encode_shard(transfer.loaded(), &mesh, here);
+    }
     return plan.compressor->encode_shard(transfer, &mesh, here);
   } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
     throw Error(where, "out of memory while compressing the " +
@@ -436,6 +461,33 @@ CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& tr
 }
 
 namespace {
+
+// Whether the transfer's rows go to a file: when the mesh (with its BVH) and
+// the transfer together would exceed the memory budget. Only a per-vertex
+// transfer can; another is held in memory with a warning.
+bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, const RunOptions& options) {
+  const double v = double(mesh.vertex_count());
+  const double groups = std::max<double>(1, double(plan.channels.groups.size()));
+  const double transfer =
+      v * double(plan.glossy ? plan.exit->size() : 1) * double(plan.basis->size()) * groups * 4;
+  const double resident = kMeshBytesPerVertex * v, budget = options.budget();
+  if (resident + transfer <= budget) return false;
+  if (!per_vertex_transfer(plan) || !options.checkpoint || options.traced) {
+    options.warn("the transfer (" + gigabytes(transfer) + ") and mesh (~" + gigabytes(resident) +
+                 ") exceed the memory budget of " + gigabytes(budget) +
+                 "; this transfer couples vertices (or runs without a checkpoint) and is held in "
+                 "memory");
+    return false;
+  }
+  options.message("the transfer (" + gigabytes(transfer) + ") and mesh (~" + gigabytes(resident) +
+                  ") exceed the memory budget of " + gigabytes(budget) +
+                  ": the transfer's rows are kept in " + options.checkpoint->folder().string() +
+                  " and compressed in passes over them");
+  if (resident > budget)
+    options.warn("the mesh and its ray-tracing structure alone (~" + gigabytes(resident) +
+                 ") exceed the memory budget of " + gigabytes(budget) + "; they stay in memory");
+  return true;
+}
 
 // What a distributed bake cannot do yet, refused before any ray.
 void require_distributable(const SceneSpec& scene, const BakePlan& plan,
@@ -480,14 +532,15 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const Distribution shard = distributed
                                  ? Distribution{&comm, shard_of(vertices, comm.rank(), comm.size())}
                                  : Distribution::whole_signal(vertices);
+  const bool on_disk = !distributed && transfer_on_disk(plan, data.mesh, options);
   if (!distributed)
-    require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced);
+    require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
   std::uint64_t rays_cast = 0;
   TransferSignal transfer =
       distributed
           ? shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard, comm)
           : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
-                                  plan.bounces > 0 ? &data.direct : nullptr, rays_cast);
+                                  plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
 
   clock = Stopwatch();
   data.compressed = options.compress || plan.sparse_terms > 0
@@ -510,6 +563,18 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     data.streamed_transfer =
         kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(), options.slab_vertices,
                       std::make_shared<const TransferSignal>(std::move(transfer)));
+  } else if (transfer.on_disk()) {  // written from the file a block of rows at a time
+    data.transfer.kind = transfer.kind;
+    data.transfer.exit_rows = transfer.exit_rows;
+    data.transfer.channel_groups = transfer.channel_groups;
+    data.transfer.group_of_channel = transfer.group_of_channel;
+    data.streamed_transfer.rows = transfer.vertices();
+    data.streamed_transfer.cols = transfer.dimension();
+    data.streamed_transfer.read = [file = transfer.file](Eigen::Index first, Eigen::Index count,
+                                                         MatrixXfRow& out) {
+      out = file->matrix().middleRows(first, count);
+      file->release(first, first + count);
+    };
   } else {
     data.transfer = std::move(transfer);
   }

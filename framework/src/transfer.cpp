@@ -6,6 +6,8 @@
 #include <numeric>
 
 #include "prt/error.hpp"
+#include "prt/row_blocks.hpp"
+#include "prt/row_file.hpp"
 
 namespace prt {
 
@@ -57,6 +59,32 @@ void CompressedTransfer::validate(Eigen::Index vertex_count, bool finite) const 
   }
 }
 
+Eigen::Index TransferSignal::vertices() const {
+  return file ? file->rows() : coefficients.rows();
+}
+
+Eigen::Index TransferSignal::dimension() const {
+  return file ? file->cols() : coefficients.cols();
+}
+
+Eigen::Map<const MatrixXfRow> TransferSignal::rows() const {
+  if (file) return file->matrix();
+  return {coefficients.data(), coefficients.rows(), coefficients.cols()};
+}
+
+void TransferSignal::release(Eigen::Index first, Eigen::Index last) const {
+  if (file) file->release(first, last);
+}
+
+TransferSignal TransferSignal::loaded() const {
+  TransferSignal out = *this;
+  if (!file) return out;
+  out.file.reset();
+  out.coefficients = rows();
+  file->release_all();
+  return out;
+}
+
 CompressedTransfer exact_form(const TransferSignal& t) {
   // One cluster per vertex whose mean is that vertex's transfer and no
   // components: exact, v x n floats (no n x n identity, which glossy matrices
@@ -69,7 +97,8 @@ CompressedTransfer exact_form(const TransferSignal& t) {
   c.cluster_of_vertex.resize(static_cast<std::size_t>(v));
   std::iota(c.cluster_of_vertex.begin(), c.cluster_of_vertex.end(), 0);
   c.weights = MatrixXfRow(v, 0);
-  c.means = t.coefficients;
+  c.means = t.rows();
+  t.release(0, t.vertices());
   c.representatives.assign(static_cast<std::size_t>(v), MatrixXfRow(0, t.dimension()));
   return c;
 }
@@ -86,19 +115,23 @@ CompressedTransfer keep_largest(const TransferSignal& signal, int terms) {
   c.representatives.push_back(MatrixXfRow(0, n));
   c.weights.resize(v, k);
   c.weight_index.resize(static_cast<std::size_t>(v) * k);
-  tbb::parallel_for(Eigen::Index(0), v, [&](Eigen::Index p) {
+  const auto rows = signal.rows();
+  for_each_row_block(Eigen::Index(0), v, Eigen::Index(4096), [&](Eigen::Index b, Eigen::Index e) {
     std::vector<std::int32_t> order(n);
-    std::iota(order.begin(), order.end(), 0);
-    const auto row = signal.coefficients.row(p);
-    std::partial_sort(order.begin(), order.begin() + k, order.end(), [&](int a, int b) {
-      const float fa = std::abs(row[a]), fb = std::abs(row[b]);
-      return fa != fb ? fa > fb : a < b;  // ties by index: deterministic
-    });
-    std::sort(order.begin(), order.begin() + k);  // ascending index: friendlier gathers
-    for (int j = 0; j < k; ++j) {
-      c.weight_index[p * k + j] = order[j];
-      c.weights(p, j) = row[order[j]];
+    for (Eigen::Index p = b; p < e; ++p) {
+      std::iota(order.begin(), order.end(), 0);
+      const auto row = rows.row(p);
+      std::partial_sort(order.begin(), order.begin() + k, order.end(), [&](int a, int b) {
+        const float fa = std::abs(row[a]), fb = std::abs(row[b]);
+        return fa != fb ? fa > fb : a < b;  // ties by index: deterministic
+      });
+      std::sort(order.begin(), order.begin() + k);  // ascending index: friendlier gathers
+      for (int j = 0; j < k; ++j) {
+        c.weight_index[p * k + j] = order[j];
+        c.weights(p, j) = row[order[j]];
+      }
     }
+    signal.release(b, e);
   });
   return c;
 }

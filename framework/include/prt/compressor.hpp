@@ -34,6 +34,11 @@ class Compressor : public PluginObject {
     if (where.comm->size() == 1) return encode(local, mesh);
     throw Error("this compressor " + why_not_distributed());
   }
+  // Capability: encode reads the rows through signal.rows() and releases
+  // them as it goes, so it takes a signal whose rows are in a mapped file
+  // (TransferSignal::on_disk, a bake larger than its memory budget). Others
+  // are given the rows loaded into memory.
+  virtual bool reads_rows_from_file() const { return false; }
   // Capability: the encoding reproduces the signal exactly (no compression),
   // so it may be replaced by a basis's own sparse approximation and needs no
   // comparison against the exact transfer.

@@ -53,6 +53,12 @@ struct RunOptions {
   // rank traces and compresses its shard of vertices; rank 0's result is the
   // whole bake, the other ranks' results are empty.
   const Communicator* comm = nullptr;
+  // Bytes this bake aims to hold in memory (0: kDefaultMemoryFraction of
+  // the machine's). A per-vertex transfer that would not fit beside the
+  // mesh and its ray-tracing structure is kept in a file in the checkpoint
+  // folder, and compressors read it in passes (prt/row_file.hpp).
+  double memory_budget = 0;
+  double budget() const;
   void message(const std::string& text) const;
   void warn(const std::string& text) const;
 };
@@ -122,10 +128,18 @@ TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const Direc
 // Stages 1-2 through options.checkpoint: slab by slab when the transfer is
 // per-vertex, else whole (with the fitted basis); parts already kept are
 // loaded, not computed. Without a checkpoint: trace_stage + transfer_stage.
+// on_disk (a per-vertex transfer only): the rows go to a RowFile in the
+// checkpoint folder instead of memory.
 TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
                                      const DirectionSet& set, const RunOptions& options,
                                      StageTimes& times, std::map<std::string, double>& metrics,
-                                     TransferSignal* direct, std::uint64_t& rays_cast);
+                                     TransferSignal* direct, std::uint64_t& rays_cast,
+                                     bool on_disk = false);
+// The share of physical memory a bake's default budget takes.
+constexpr double kDefaultMemoryFraction = 0.75;
+// Bytes a bake holds per mesh vertex beside its transfer while it traces
+// (the mesh, its adjacency and Embree's BVH; measured: docs/scale.md).
+constexpr double kMeshBytesPerVertex = 400;
 // A distributed bake's stages 1-2: the ranks trace the slabs of a per-vertex
 // transfer as each comes free, into options.checkpoint (a folder every rank
 // sees); then each takes its shard's rows from the slabs. rays_cast: all ranks'.

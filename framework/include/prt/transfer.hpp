@@ -5,11 +5,13 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace prt {
 
+class RowFile;
 using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 // v x n transfer, one row per vertex. For diffuse transfer n is the basis size
@@ -26,10 +28,22 @@ struct TransferSignal {
   int exit_rows = 1;             // N_r: 1 for diffuse transfer
   int channel_groups = 1;
   std::array<int, 3> group_of_channel{0, 0, 0};
+  // Out of core (a transfer larger than the bake's memory budget): the rows
+  // are in this mapped file and `coefficients` is empty. Readers that accept
+  // it (Compressor::reads_rows_from_file) read rows() and release() what
+  // they are done with; load() brings the rows into memory for the others.
+  std::shared_ptr<const RowFile> file;
 
   bool glossy() const { return kind == "glossy"; }
-  Eigen::Index vertices() const { return coefficients.rows(); }
-  Eigen::Index dimension() const { return coefficients.cols(); }
+  bool on_disk() const { return file != nullptr; }
+  Eigen::Index vertices() const;
+  Eigen::Index dimension() const;
+  // The rows, wherever they are.
+  Eigen::Map<const MatrixXfRow> rows() const;
+  // Lets the pages of rows [first, last) go (no-op in memory).
+  void release(Eigen::Index first, Eigen::Index last) const;
+  // The same signal with its rows in memory (a copy of the file's rows).
+  TransferSignal loaded() const;
 };
 
 // One form for every compressor: per vertex a cluster index and n'_k weights;

@@ -45,7 +45,7 @@ Adjacency adjacency(const Mesh& mesh) {
 
 // Squared error of row p approximated in cluster k of the compressed form
 // (orthonormal representatives), in double.
-double error_in(const MatrixXfRow& x, Eigen::Index p, const CompressedTransfer& c, int k) {
+double error_in(RowsRef x, Eigen::Index p, const CompressedTransfer& c, int k) {
   const Eigen::RowVectorXd d = x.row(p).cast<double>() - c.means.row(k).cast<double>();
   double e = d.squaredNorm();
   if (c.components_of(k) > 0)
@@ -55,7 +55,7 @@ double error_in(const MatrixXfRow& x, Eigen::Index p, const CompressedTransfer& 
 
 }  // namespace
 
-std::size_t reclassify(const MatrixXfRow& x, const Mesh& mesh, double error_budget,
+std::size_t reclassify(RowsRef x, const Mesh& mesh, double error_budget,
                        CompressedTransfer& compressed) {
   if (static_cast<std::size_t>(x.rows()) != mesh.vertex_count())
     throw Error("reclassify: transfer rows do not match the mesh's vertices");

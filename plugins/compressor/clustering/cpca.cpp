@@ -69,7 +69,7 @@ Classifier classifier(const std::vector<ClusterModel>& models, int components) {
 // error and fills each row's error.
 double classify(const Rows& rows, const std::vector<ClusterModel>& models, int components,
                 std::vector<std::int32_t>& labels, std::vector<double>& errors) {
-  const MatrixXfRow& x = rows.x;
+  const auto& x = rows.x;
   const int k = static_cast<int>(models.size());
   const Classifier c = classifier(models, components);
   // Per thread: the block's products and the per-cluster sums and errors,
@@ -115,6 +115,7 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
             error[std::size_t(j)] = row_norm - 2.f * p[j] + c.mean_norms[j] - sum[std::size_t(j)];
           labels[std::size_t(begin + i)] = first_minimum(error.data(), k);
         }
+        rows.release(begin, end);
       });
   // Errors in double on every core; their sum through segments (the same
   // figure whatever the number of cores or ranks).
@@ -123,6 +124,7 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
     for (Eigen::Index p = r.begin(); p < r.end(); ++p)
       errors[std::size_t(p)] = approximation_error(
           x, p, models[std::size_t(labels[std::size_t(p)])], components, scratch);
+    rows.release(r.begin(), r.end());
   });
   return rows.sum(errors);
 }

@@ -27,8 +27,9 @@ constexpr Eigen::Index kRowBlock = 1024;
 // product's columns (contiguous), keeping each row's best so far, so it
 // vectorises over rows; a per-row argmin along the strided rows took as long
 // as the GEMM. Buffers are kept per thread.
-void nearest_means(const MatrixXfRow& x, const RowMatrixXd& means, std::vector<std::int32_t>& label,
+void nearest_means(const Rows& source, const RowMatrixXd& means, std::vector<std::int32_t>& label,
                    std::vector<double>& distance) {
+  const auto& x = source.x;
   const Eigen::MatrixXf mt = means.transpose().cast<float>();  // n x k
   const Eigen::RowVectorXf mean_norms = mt.colwise().squaredNorm();
   struct Scratch {
@@ -66,6 +67,7 @@ void nearest_means(const MatrixXfRow& x, const RowMatrixXd& means, std::vector<s
           distance[begin + i] =
               std::max(0.0, double(best[i]) + double(x.row(begin + i).squaredNorm()));
         }
+        source.release(begin, end);
       });
 }
 
@@ -73,9 +75,9 @@ void nearest_means(const MatrixXfRow& x, const RowMatrixXd& means, std::vector<s
 // positions scaled by the bounding-box diagonal so alpha does not depend on
 // the model's units. Candidates are visited in increasing signal distance and
 // pruned once the signal term alone exceeds the best E.
-void nearest_coherent(const MatrixXfRow& x, const RowMatrixXd& means, const Mesh& mesh,
-                      double alpha, std::vector<std::int32_t>& label,
-                      std::vector<double>& distance) {
+void nearest_coherent(const Rows& source, const RowMatrixXd& means, const Mesh& mesh, double alpha,
+                      std::vector<std::int32_t>& label, std::vector<double>& distance) {
+  const auto& x = source.x;
   const auto members = members_of(label, static_cast<int>(means.rows()));
   const float scale = 1.f / std::max(1e-30f, (mesh.bounds_max() - mesh.bounds_min()).norm());
   const Eigen::MatrixXf mt = means.transpose().cast<float>();
@@ -110,6 +112,7 @@ void nearest_coherent(const MatrixXfRow& x, const RowMatrixXd& means, const Mesh
           const double d = (x.row(p).cast<double>() - means.row(best_label)).squaredNorm();
           distance[p] = d;
         }
+        source.release(begin, end);
       });
 }
 
@@ -117,9 +120,11 @@ RowMatrixXd hyperbox_init(const Rows& rows, int k, std::mt19937_64& rng) {
   const Eigen::Index n = rows.cols();
   Eigen::RowVectorXd lo = Eigen::RowVectorXd::Constant(n, std::numeric_limits<double>::infinity());
   Eigen::RowVectorXd hi = -lo;
-  if (rows.local() > 0) {
-    lo = rows.x.colwise().minCoeff().cast<double>();
-    hi = rows.x.colwise().maxCoeff().cast<double>();
+  for (Eigen::Index begin = 0; begin < rows.local(); begin += kSegmentRows) {
+    const Eigen::Index height = std::min(kSegmentRows, rows.local() - begin);
+    lo = lo.cwiseMin(rows.x.middleRows(begin, height).colwise().minCoeff().cast<double>());
+    hi = hi.cwiseMax(rows.x.middleRows(begin, height).colwise().maxCoeff().cast<double>());
+    rows.release(begin, begin + height);
   }
   allreduce_min_max(rows.comm, lo, hi);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
@@ -137,7 +142,7 @@ RowMatrixXd kmeans_plus_plus_init(const Rows& rows, int k, std::mt19937_64& rng)
   const Eigen::Index n = rows.cols(), total = rows.total();
   const Eigen::Index segments = (total + kSegmentRows - 1) / kSegmentRows;
   const Eigen::Index first_segment = rows.shard.first / kSegmentRows;
-  const MatrixXfRow& x = rows.x;
+  const auto& x = rows.x;
   RowMatrixXd means(k, n);
   std::vector<double> d2(std::size_t(x.rows()), std::numeric_limits<double>::infinity());
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
@@ -148,6 +153,7 @@ RowMatrixXd kmeans_plus_plus_init(const Rows& rows, int k, std::mt19937_64& rng)
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 4096), [&](const auto& r) {
       for (Eigen::Index p = r.begin(); p < r.end(); ++p)
         d2[p] = std::min(d2[p], double((x.row(p) - c).squaredNorm()));
+      rows.release(r.begin(), r.end());
     });
     if (j + 1 == k) break;
     // Every segment's sum, in segment order, on every rank.
@@ -205,6 +211,7 @@ Eigen::Index farthest_member(const Rows& rows, const std::vector<std::int32_t>& 
     const double d = (rows.x.row(p).cast<double>() - point).squaredNorm();
     if (d > best_distance) best_distance = d, best = rows.shard.first + p;
   }
+  rows.release_all();
   return static_cast<Eigen::Index>(allreduce_argmax(rows.comm, best_distance, best).second);
 }
 
@@ -232,6 +239,7 @@ int update_means(const Rows& rows, std::vector<std::int32_t>& label, std::vector
       label[std::size_t(p)] = db < da ? j : largest;
       dist[std::size_t(p)] = std::min(da, db);
     }
+    rows.release_all();
     sums = cluster_sums(rows, label, k);
     if (sums.counts[std::size_t(j)] == 0) break;  // all points identical: nothing to split
     ++refilled;
@@ -273,9 +281,9 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
     Progress::check_interrupt();
     Stopwatch clock;
     if (options.alpha > 0 && iteration > 0)
-      nearest_coherent(rows.x, result.means, *options.mesh, options.alpha, result.labels, distance);
+      nearest_coherent(rows, result.means, *options.mesh, options.alpha, result.labels, distance);
     else
-      nearest_means(rows.x, result.means, result.labels, distance);
+      nearest_means(rows, result.means, result.labels, distance);
     const int refilled = update_means(rows, result.labels, distance, result.means);
     const double energy = rows.sum(distance);
     result.energy = energy;
@@ -285,10 +293,14 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
     previous = energy;
   }
   // Energy of the final means (the loop's figure is of the previous ones).
-  for (Eigen::Index p = 0; p < rows.local(); ++p)
-    distance[std::size_t(p)] =
-        (rows.x.row(p).cast<double>() - result.means.row(result.labels[std::size_t(p)]))
-            .squaredNorm();
+  for_each_row_block(
+      Eigen::Index(0), rows.local(), kRowBlock, [&](Eigen::Index begin, Eigen::Index end) {
+        for (Eigen::Index p = begin; p < end; ++p)
+          distance[std::size_t(p)] =
+              (rows.x.row(p).cast<double>() - result.means.row(result.labels[std::size_t(p)]))
+                  .squaredNorm();
+        rows.release(begin, end);
+      });
   result.energy = rows.sum(distance);
   return result;
 }

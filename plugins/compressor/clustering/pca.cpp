@@ -3,10 +3,11 @@
 
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
+#include "prt/row_blocks.hpp"
 
 namespace prt::clustering {
 
-double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+double approximation_error(RowsRef x, Eigen::Index p, const ClusterModel& model,
                            Eigen::Index components, ErrorScratch& scratch) {
   const Eigen::Index c =
       components < 0 ? model.basis.rows() : std::min(components, model.basis.rows());
@@ -19,14 +20,15 @@ double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterMo
   return std::max(error, 0.0);
 }
 
-double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+double approximation_error(RowsRef x, Eigen::Index p, const ClusterModel& model,
                            Eigen::Index components) {
   ErrorScratch scratch;
   return approximation_error(x, p, model, components, scratch);
 }
 
-CompressedTransfer assemble(const MatrixXfRow& x, const std::vector<std::int32_t>& labels,
+CompressedTransfer assemble(const Rows& rows, const std::vector<std::int32_t>& labels,
                             const std::vector<ClusterModel>& models, const std::string& name) {
+  const auto& x = rows.x;
   CompressedTransfer c;
   c.compressor = name;
   c.dimension = x.cols();
@@ -40,12 +42,16 @@ CompressedTransfer assemble(const MatrixXfRow& x, const std::vector<std::int32_t
     c.representatives.push_back(models[k].basis.cast<float>());
   }
   c.weights = MatrixXfRow::Zero(x.rows(), components);
-  tbb::parallel_for(Eigen::Index(0), x.rows(), [&](Eigen::Index p) {
-    const ClusterModel& model = models[labels[p]];
-    if (model.basis.rows() == 0) return;
-    const Eigen::RowVectorXd d = x.row(p).cast<double>() - model.mean;
-    c.weights.row(p).head(model.basis.rows()) = (d * model.basis.transpose()).cast<float>();
-  });
+  for_each_row_block(
+      Eigen::Index(0), x.rows(), Eigen::Index(1024), [&](Eigen::Index begin, Eigen::Index end) {
+        for (Eigen::Index p = begin; p < end; ++p) {
+          const ClusterModel& model = models[labels[p]];
+          if (model.basis.rows() == 0) continue;
+          const Eigen::RowVectorXd d = x.row(p).cast<double>() - model.mean;
+          c.weights.row(p).head(model.basis.rows()) = (d * model.basis.transpose()).cast<float>();
+        }
+        rows.release(begin, end);
+      });
   return c;
 }
 

@@ -15,12 +15,25 @@
 
 namespace prt::clustering {
 
-Rows::Rows(const MatrixXfRow& x) : x(x), shard(whole(x.rows())), comm(solo()) {}
+Rows::Rows(RowsRef x) : x(x.data(), x.rows(), x.cols()), shard(whole(x.rows())), comm(solo()) {
+  if (x.rows() > 1 && x.outerStride() != x.cols())
+    throw Error("clustering: rows with a stride (a block of a wider matrix) are not contiguous");
+}
+
+Rows::Rows(const TransferSignal& signal)
+    : x(signal.rows()), shard(whole(signal.vertices())), comm(solo()), signal(&signal) {}
 
 Rows::Rows(const MatrixXfRow& local, const Shard& shard, const Communicator& comm)
-    : x(local), shard(shard), comm(comm) {
+    : x(local.data(), local.rows(), local.cols()), shard(shard), comm(comm) {
   if (local.rows() != shard.rows())
     throw Error("clustering: " + std::to_string(local.rows()) + " local rows for a shard of " +
+                std::to_string(shard.rows()));
+}
+
+Rows::Rows(const TransferSignal& local, const Shard& shard, const Communicator& comm)
+    : x(local.rows()), shard(shard), comm(comm), signal(&local) {
+  if (local.vertices() != shard.rows())
+    throw Error("clustering: " + std::to_string(local.vertices()) + " local rows for a shard of " +
                 std::to_string(shard.rows()));
 }
 
@@ -70,6 +83,7 @@ ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labe
           for (Eigen::Index d = 0; d < n; ++d) sum[d] += double(row[d]);
           out[std::size_t(k) * n + l] += 1;
         }
+        rows.release(begin, end);
         return out;
       },
       rows.comm);
@@ -203,6 +217,7 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
             for (Eigen::Index c = 0; c < n; ++c)
               for (Eigen::Index r = c; r < n; ++r) block[at++] = sum(r, c);
           }
+          rows.release(begin, end);
           return out;
         },
         rows.comm);
@@ -246,7 +261,7 @@ void directions_from_scatter(const Eigen::MatrixXd& scatter, ClusterModel& model
 
 // Rows `members` of x less the mean, in double, into `centred` (its storage
 // reused from cluster to cluster: a fresh matrix per cluster cost page faults).
-void centred_rows(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
+void centred_rows(RowsRef x, const std::vector<std::uint32_t>& members,
                   const Eigen::RowVectorXd& mean, RowMatrixXd& centred) {
   centred.resize(static_cast<Eigen::Index>(members.size()), x.cols());
   for (std::size_t q = 0; q < members.size(); ++q)
@@ -326,6 +341,7 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
       centred_rows(rows.x, members[std::size_t(which[i])], model.mean, y);
     directions_from_gram(y, model);
   });
+  rows.release_all();  // the Gram clusters' members, read where they lie
   if (ranks > 1) {
     std::vector<double> mine;
     for (std::size_t i = std::size_t(rank); i < which.size(); i += std::size_t(ranks)) {
@@ -369,8 +385,7 @@ std::vector<char> changed_clusters(const Rows& rows, const std::vector<std::int3
   return changed;
 }
 
-ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
-                         int components) {
+ClusterModel fit_cluster(RowsRef x, const std::vector<std::uint32_t>& members, int components) {
   std::vector<std::int32_t> labels(static_cast<std::size_t>(x.rows()), -1);
   for (std::uint32_t p : members) labels[p] = 0;
   return fit_models(Rows(x), labels, 1, {components}).front();

@@ -86,7 +86,7 @@ inline CoherenceOptions coherence_options(const Params& p) {
 }
 
 // Reclassification, then superclustering, as the scene asks.
-inline void improve_coherence(const CoherenceOptions& o, const Params& p, const MatrixXfRow& x,
+inline void improve_coherence(const CoherenceOptions& o, const Params& p, clustering::RowsRef x,
                               const Mesh* mesh, CompressedTransfer& compressed) {
   if (!mesh) {
     if (o.reclassify || o.supercluster)
@@ -116,9 +116,10 @@ inline CompressedTransfer finish(const std::string& name, const CoherenceOptions
                                  const std::vector<std::int32_t>& labels,
                                  const std::vector<clustering::ClusterModel>& models,
                                  const Mesh* mesh) {
-  CompressedTransfer c = clustering::assemble(rows.x, labels, models, name);
+  CompressedTransfer c = clustering::assemble(rows, labels, models, name);
   if (!rows.distributed()) {
     improve_coherence(o, p, rows.x, mesh, c);
+    rows.release_all();  // reclassification reads boundary vertices where they lie
     return c;
   }
   if (o.reclassify) p.fail("reclassify", "needs every vertex in one process");
@@ -142,14 +143,18 @@ inline std::string why_not_distributed(const CoherenceOptions& o, const clusteri
 }
 
 inline clustering::Rows rows_of(const TransferSignal& signal, const Distribution& where) {
-  return clustering::Rows(signal.coefficients, where.shard, *where.comm);
+  return clustering::Rows(signal, where.shard, *where.comm);
 }
 
 // Refuses NaN/Inf transfer with the vertex that holds it.
 inline void require_finite(const TransferSignal& signal) {
-  for (Eigen::Index p = 0; p < signal.vertices(); ++p)
-    if (!signal.coefficients.row(p).allFinite())
+  const auto rows = signal.rows();
+  for (Eigen::Index p = 0; p < signal.vertices(); ++p) {
+    if (!rows.row(p).allFinite())
       throw Error("transfer of vertex " + std::to_string(p) + " holds NaN or Inf");
+    if (p % 4096 == 4095) signal.release(p - 4095, p + 1);
+  }
+  signal.release(0, signal.vertices());
 }
 
 template <std::size_t A, std::size_t B>

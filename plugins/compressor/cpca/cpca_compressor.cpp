@@ -40,6 +40,8 @@ class ClusteredPca final : public Compressor {
     return encode_shard(signal, mesh, Distribution::whole_signal(signal.vertices()));
   }
 
+  bool reads_rows_from_file() const override { return true; }
+
   std::string why_not_distributed() const override {
     return compressor_params::why_not_distributed(coherence_, options_.lbg);
   }

@@ -21,6 +21,8 @@ class PrincipalComponents final : public Compressor {
     return encode_shard(signal, mesh, Distribution::whole_signal(signal.vertices()));
   }
 
+  bool reads_rows_from_file() const override { return true; }
+
   std::string why_not_distributed() const override { return ""; }
 
   CompressedTransfer encode_shard(const TransferSignal& signal, const Mesh*,
@@ -29,8 +31,8 @@ class PrincipalComponents final : public Compressor {
     const clustering::Rows rows = compressor_params::rows_of(signal, where);
     const int c = static_cast<int>(std::min<Eigen::Index>(components_, signal.dimension()));
     const std::vector<std::int32_t> labels(std::size_t(signal.vertices()), 0);
-    CompressedTransfer compressed = clustering::assemble(
-        signal.coefficients, labels, clustering::fit_models(rows, labels, 1, {c}), "pca");
+    CompressedTransfer compressed =
+        clustering::assemble(rows, labels, clustering::fit_models(rows, labels, 1, {c}), "pca");
     clustering::gather_rows(rows, compressed);
     return compressed;
   }

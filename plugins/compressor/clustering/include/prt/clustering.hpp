@@ -19,18 +19,31 @@
 namespace prt::clustering {
 
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+// Float rows in memory or in a mapped file (TransferSignal::rows()).
+using RowsRef = Eigen::Ref<const MatrixXfRow>;
 
 // The rows of the signal this process holds and where they sit in the whole:
 // all of them in a single process, a shard of whole segments in a distributed
 // run. Every sum over rows goes through segment_sum, so a result depends on
 // neither the thread count nor the rank count. Labels, errors and weights
-// are per local row; means and models are the same on every rank.
+// are per local row; means and models are the same on every rank. A signal
+// whose rows are in a file (out of core) is read in passes: each pass
+// releases the rows it is done with.
 struct Rows {
-  explicit Rows(const MatrixXfRow& x);
+  explicit Rows(RowsRef x);  // contiguous rows in memory
+  explicit Rows(const TransferSignal& signal);
   Rows(const MatrixXfRow& local, const Shard& shard, const Communicator& comm);
-  const MatrixXfRow& x;
+  Rows(const TransferSignal& local, const Shard& shard, const Communicator& comm);
+  Eigen::Map<const MatrixXfRow> x;
   Shard shard;
   const Communicator& comm;
+  const TransferSignal* signal = nullptr;  // set when made from one: releases go to it
+
+  // Lets local rows [begin, end) go when they are in a file (no-op in memory).
+  void release(Eigen::Index begin, Eigen::Index end) const {
+    if (signal) signal->release(begin, end);
+  }
+  void release_all() const { release(0, local()); }
 
   bool distributed() const { return comm.size() > 1; }
   Eigen::Index local() const { return x.rows(); }
@@ -91,7 +104,7 @@ struct Clusters {
 // one (its point farthest from its mean seeds the empty cluster), so every
 // cluster ends non-empty when there are at least k distinct points.
 Clusters lbg(const Rows& rows, const LbgOptions& options);
-inline Clusters lbg(const MatrixXfRow& x, const LbgOptions& options) {
+inline Clusters lbg(RowsRef x, const LbgOptions& options) {
   return lbg(Rows(x), options);
 }
 
@@ -129,8 +142,7 @@ std::vector<char> changed_clusters(const Rows& rows, const std::vector<std::int3
                                    const std::vector<std::int32_t>& after, int clusters);
 
 // PCA of the rows `members` of x (one cluster of fit_models).
-ClusterModel fit_cluster(const MatrixXfRow& x, const std::vector<std::uint32_t>& members,
-                         int components);
+ClusterModel fit_cluster(RowsRef x, const std::vector<std::uint32_t>& members, int components);
 
 // Members of each cluster, in increasing vertex order.
 std::vector<std::vector<std::uint32_t>> members_of(const std::vector<std::int32_t>& labels,
@@ -138,8 +150,13 @@ std::vector<std::vector<std::uint32_t>> members_of(const std::vector<std::int32_
 
 // Builds the compressed form: per-vertex weights (x - mean) . basis^T (of
 // the local rows: a distributed run gathers them with gather_rows).
-CompressedTransfer assemble(const MatrixXfRow& x, const std::vector<std::int32_t>& labels,
+CompressedTransfer assemble(const Rows& rows, const std::vector<std::int32_t>& labels,
                             const std::vector<ClusterModel>& models, const std::string& name);
+inline CompressedTransfer assemble(RowsRef x, const std::vector<std::int32_t>& labels,
+                                   const std::vector<ClusterModel>& models,
+                                   const std::string& name) {
+  return assemble(Rows(x), labels, models, name);
+}
 // The ranks' compressed rows (weights, cluster ids, sparse indices) joined in
 // rank order on rank 0; other ranks keep theirs. Models are already shared.
 void gather_rows(const Rows& rows, CompressedTransfer& compressed);
@@ -161,20 +178,20 @@ struct CpcaResult {
 };
 
 CpcaResult cpca(const Rows& rows, const CpcaOptions& options);
-inline CpcaResult cpca(const MatrixXfRow& x, const CpcaOptions& options) {
+inline CpcaResult cpca(RowsRef x, const CpcaOptions& options) {
   return cpca(Rows(x), options);
 }
 
 // Squared approximation error of row p under a cluster model (its first
 // `components` directions; all of them when negative).
-double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+double approximation_error(RowsRef x, Eigen::Index p, const ClusterModel& model,
                            Eigen::Index components = -1);
 // The same with buffers reused from row to row (no allocation per row).
 struct ErrorScratch {
   Eigen::RowVectorXd centred;
   Eigen::VectorXd projections;
 };
-double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterModel& model,
+double approximation_error(RowsRef x, Eigen::Index p, const ClusterModel& model,
                            Eigen::Index components, ErrorScratch& scratch);
 
 // --- cluster coherence (Sloan 2003 §5, Chen 2005 ch. 4) ---
@@ -183,7 +200,7 @@ double approximation_error(const MatrixXfRow& x, Eigen::Index p, const ClusterMo
 // overdraw reduction per unit error increase, until the total squared error
 // has grown by `error_budget` (e.g. 0.05 = 5%). Re-projects moved vertices.
 // Returns the number of vertices moved.
-std::size_t reclassify(const MatrixXfRow& x, const Mesh& mesh, double error_budget,
+std::size_t reclassify(RowsRef x, const Mesh& mesh, double error_budget,
                        CompressedTransfer& compressed);
 
 enum class SuperclusterMethod { greedy_merge, chen_selection };

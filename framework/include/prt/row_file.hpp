@@ -1,0 +1,52 @@
+// A transfer too large for the memory budget (issue 15): its rows are written
+// to a file as they are computed and read back through a read-only mapping.
+// Compressors read it in passes; each pass hands back the rows it is done
+// with (release), so the pages it read leave the process (they stay in the
+// page cache, which the kernel may reclaim) and its resident memory holds
+// one block of rows per thread, not the signal.
+#pragma once
+#include <Eigen/Core>
+#include <filesystem>
+#include <memory>
+
+#include "prt/transfer.hpp"
+
+namespace prt {
+
+class RowFile {
+ public:
+  // An unnamed rows x cols float file in `folder` (removed from the folder
+  // at once: it lives as long as this object, and a killed process leaves
+  // nothing behind). Throws prt::Error when the folder cannot hold it.
+  static std::shared_ptr<RowFile> create(const std::filesystem::path& folder, Eigen::Index rows,
+                                         Eigen::Index cols);
+  ~RowFile();
+  RowFile(const RowFile&) = delete;
+  RowFile& operator=(const RowFile&) = delete;
+
+  // Writes `block` as rows [first, first + block.rows()). Before map().
+  void write(Eigen::Index first, const MatrixXfRow& block);
+  // Maps the written rows (read only); write() is refused after it.
+  void map();
+
+  Eigen::Index rows() const { return rows_; }
+  Eigen::Index cols() const { return cols_; }
+  Eigen::Map<const MatrixXfRow> matrix() const;
+  // Drops the resident pages that lie wholly inside rows [first, last).
+  void release(Eigen::Index first, Eigen::Index last) const;
+  // Drops every resident page (after a pass that read rows at random).
+  void release_all() const { release(0, rows_); }
+
+ private:
+  RowFile(int fd, Eigen::Index rows, Eigen::Index cols, std::filesystem::path where);
+  int fd_ = -1;
+  Eigen::Index rows_ = 0, cols_ = 0;
+  std::filesystem::path where_;  // for messages
+  void* mapping_ = nullptr;
+  std::size_t bytes_ = 0;
+};
+
+// Peak resident memory of this process so far (VmHWM), in bytes.
+double peak_resident_bytes();
+
+}  // namespace prt
