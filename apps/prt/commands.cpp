@@ -49,6 +49,7 @@ int bake(Context& context, const BakeArgs& args) {
   options.checkpoint = &checkpoint;
   options.slab_vertices = args.slab_vertices;
   options.memory_budget = double(args.memory);
+  options.checkpoint_seconds = args.checkpoint_seconds;
   BakeData data;
   try {
     data = bake(scene, context.registry, options, times);

@@ -20,6 +20,7 @@ struct BakeArgs {
   bool restart = false;               // discard a checkpoint left by an earlier run
   std::size_t slab_vertices = 65536;  // vertices per checkpointed slab
   std::uint64_t memory = 0;           // memory budget in bytes (0: the default share of RAM)
+  double checkpoint_seconds = 60;     // how often compression keeps its state
 };
 int bake(Context& context, const BakeArgs& args);
 

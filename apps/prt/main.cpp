@@ -35,6 +35,12 @@ int main(int argc, char** argv) {
       ->transform(CLI::AsSizeValue(false))
       ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
 
+  bake_cmd
+      ->add_option("--checkpoint-seconds", bake.checkpoint_seconds,
+                   "compression keeps its state in the checkpoint at most this often")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e9));
+
   prt::cli::RenderArgs render;
   auto* render_cmd = app.add_subcommand("render", "relight a bake and write an image");
   render_cmd->add_option("scene", render.scene, "scene description (.toml)")->required();

@@ -532,6 +532,11 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const Distribution shard = distributed
                                  ? Distribution{&comm, shard_of(vertices, comm.rank(), comm.size())}
                                  : Distribution::whole_signal(vertices);
+  Distribution encode_where = shard;
+  if (!distributed) {  // one process keeps its compressor's state in the checkpoint
+    encode_where.checkpoint = options.checkpoint;
+    encode_where.checkpoint_seconds = options.checkpoint_seconds;
+  }
   const bool on_disk = !distributed && transfer_on_disk(plan, data.mesh, options);
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
@@ -543,9 +548,10 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
                                   plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
 
   clock = Stopwatch();
-  data.compressed = options.compress || plan.sparse_terms > 0
-                        ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, shard)
-                        : exact_form(transfer);
+  data.compressed =
+      options.compress || plan.sparse_terms > 0
+          ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, encode_where)
+          : exact_form(transfer);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
   const CompressionReport report =

@@ -85,3 +85,38 @@ if [ -d "$work/.stale.h5.checkpoint" ]; then
   bake stale --restart >/dev/null
   echo "stale checkpoint refused, --restart discards it"
 fi
+
+# Killed while compressing: LBG keeps its means and labels (here after every
+# iteration), and the rerun continues from them to the same file.
+cat >"$work/lbg.toml" <<SCENE
+[mesh]
+file = "$work/bunny.ply"
+[transport]
+rays = 64
+[basis]
+plugin = "sh"
+order = 10
+[compressor]
+plugin = "vq"
+clusters = 256
+iterations = 40
+tolerance = 0.0
+[lighting]
+environment = "$src/data/hdri/courtyard.exr"
+SCENE
+"$prt" -q bake "$work/lbg.toml" -o "$work/lbg-reference.h5" >/dev/null
+"$prt" -q bake "$work/lbg.toml" -o "$work/lbg.h5" --checkpoint-seconds 0 >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 600); do  # until the first iteration is kept (at most a minute)
+  [ -e "$work/.lbg.h5.checkpoint/lbg.state" ] && break
+  sleep 0.1
+done
+kill -9 "$pid" 2>/dev/null || true
+wait "$pid" 2>/dev/null || true
+[ -e "$work/.lbg.h5.checkpoint/lbg.state" ] || { echo "FAIL: LBG kept no state"; exit 1; }
+[ ! -e "$work/lbg.h5" ] || { echo "FAIL: the killed bake finished first (LBG too short)"; exit 1; }
+out=$("$prt" bake "$work/lbg.toml" -o "$work/lbg.h5" 2>&1)
+grep -q 'resuming: LBG at iteration' <<<"$out" || { echo "FAIL: LBG did not resume: $out"; exit 1; }
+cmp "$work/lbg-reference.h5" "$work/lbg.h5" ||
+  { echo "FAIL: the bake resumed inside LBG differs from the uninterrupted one"; exit 1; }
+echo "killed inside LBG: $(grep -o 'resuming: LBG at iteration [0-9]*' <<<"$out"); the file is identical"

@@ -8,12 +8,19 @@
 
 namespace prt {
 
+class CheckpointStore;
+
 // Where a distributed compressor's rows sit (prt-mpi): the signal it is given
 // holds rows [shard.first, shard.last) of the whole; sums over rows go
 // through segment_sum on `comm`, so the result equals one process's.
 struct Distribution {
   const Communicator* comm = &solo();
   Shard shard;
+  // Where a long encode keeps its state, at most every checkpoint_seconds,
+  // and finds it again when the bake is rerun after a kill (prt bake's
+  // checkpoint folder; one process only). Null: nothing is kept.
+  const CheckpointStore* checkpoint = nullptr;
+  double checkpoint_seconds = 60;
   static Distribution whole_signal(Eigen::Index rows) { return {&solo(), whole(rows)}; }
 };
 

@@ -58,6 +58,8 @@ struct RunOptions {
   // mesh and its ray-tracing structure is kept in a file in the checkpoint
   // folder, and compressors read it in passes (prt/row_file.hpp).
   double memory_budget = 0;
+  // How often a compressor keeps its state in the checkpoint (seconds).
+  double checkpoint_seconds = 60;
   double budget() const;
   void message(const std::string& text) const;
   void warn(const std::string& text) const;

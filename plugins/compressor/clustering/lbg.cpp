@@ -8,10 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 
+#include "prt/checkpoint.hpp"
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
+#include "prt/log.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_blocks.hpp"
 #include "prt/segment_sum.hpp"
@@ -250,6 +253,57 @@ int update_means(const Rows& rows, std::vector<std::int32_t>& label, std::vector
   return refilled;
 }
 
+// The loop's state between two iterations, kept in a checkpoint: the means
+// and the meta figures in one part, written after the labels (in one of two
+// parts by iteration parity, each led by its iteration), so a kill between
+// the two writes leaves the previous state whole.
+struct LbgState {
+  int next_iteration = 0;
+  double previous = 0, energy = 0;
+  RowMatrixXd means;
+  std::vector<std::int32_t> labels;
+};
+
+std::string labels_part(int iteration) {
+  return "lbg.labels." + std::to_string(iteration % 2);
+}
+
+void keep_state(const CheckpointStore& store, const LbgState& s) {
+  std::vector<std::int32_t> labels;
+  labels.reserve(s.labels.size() + 1);
+  labels.push_back(s.next_iteration);
+  labels.insert(labels.end(), s.labels.begin(), s.labels.end());
+  store.save(labels_part(s.next_iteration), labels);
+  Eigen::MatrixXd state(s.means.rows() + 1, s.means.cols());
+  state.topRows(s.means.rows()) = s.means;
+  state.bottomRows(1).setZero();
+  state(s.means.rows(), 0) = s.next_iteration;
+  if (s.means.cols() > 2)
+    state(s.means.rows(), 1) = s.previous, state(s.means.rows(), 2) = s.energy;
+  store.save("lbg.state", state);
+}
+
+// The state a killed run kept, when it fits this run (else none).
+std::optional<LbgState> kept_state(const CheckpointStore& store, Eigen::Index rows, int k,
+                                   Eigen::Index n) {
+  if (!store.has("lbg.state") || n < 3) return std::nullopt;
+  const Eigen::MatrixXd state = store.load_doubles("lbg.state");
+  if (state.rows() != k + 1 || state.cols() != n) return std::nullopt;
+  LbgState s;
+  s.next_iteration = static_cast<int>(state(k, 0));
+  s.previous = state(k, 1);
+  s.energy = state(k, 2);
+  s.means = state.topRows(k);
+  const std::string part = labels_part(s.next_iteration);
+  if (!store.has(part)) return std::nullopt;
+  std::vector<std::int32_t> labels = store.load_ints(part);
+  if (Eigen::Index(labels.size()) != rows + 1 || labels[0] != s.next_iteration) return std::nullopt;
+  s.labels.assign(labels.begin() + 1, labels.end());
+  for (std::int32_t l : s.labels)
+    if (l < 0 || l >= k) return std::nullopt;
+  return s;
+}
+
 }  // namespace
 
 std::vector<std::vector<std::uint32_t>> members_of(const std::vector<std::int32_t>& labels,
@@ -268,16 +322,32 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
   if (options.alpha > 0 && rows.distributed())
     throw Error("LBG: geometry-coherent clustering (alpha > 0) needs every vertex in one process");
   const int k = static_cast<int>(std::min<Eigen::Index>(options.clusters, rows.total()));
+  if (options.keep && rows.distributed())
+    throw Error("LBG: a distributed run keeps no checkpoint of its iterations");
   std::mt19937_64 rng(options.seed);
   Clusters result;
-  Stopwatch init_clock;
-  result.means = options.init == Init::kmeans_plus_plus ? kmeans_plus_plus_init(rows, k, rng)
-                                                        : hyperbox_init(rows, k, rng);
-  result.log.push_back({init_clock.seconds(), 0, rows.total(), rows.cols(), k, "init"});
-  result.labels.assign(std::size_t(rows.local()), 0);
-  std::vector<double> distance(std::size_t(rows.local()), 0.0);
   double previous = std::numeric_limits<double>::infinity();
-  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+  int first_iteration = 0;
+  std::optional<LbgState> kept =
+      options.keep ? kept_state(*options.keep, rows.local(), k, rows.cols()) : std::nullopt;
+  if (kept) {
+    log_info("resuming: LBG at iteration " + std::to_string(kept->next_iteration + 1) +
+             ", kept in " + options.keep->folder().string());
+    result.means = std::move(kept->means);
+    result.labels = std::move(kept->labels);
+    previous = kept->previous;
+    result.energy = kept->energy;
+    result.iterations = first_iteration = kept->next_iteration;
+  } else {
+    Stopwatch init_clock;
+    result.means = options.init == Init::kmeans_plus_plus ? kmeans_plus_plus_init(rows, k, rng)
+                                                          : hyperbox_init(rows, k, rng);
+    result.log.push_back({init_clock.seconds(), 0, rows.total(), rows.cols(), k, "init"});
+    result.labels.assign(std::size_t(rows.local()), 0);
+  }
+  std::vector<double> distance(std::size_t(rows.local()), 0.0);
+  Stopwatch since_kept;
+  for (int iteration = first_iteration; iteration < options.max_iterations; ++iteration) {
     Progress::check_interrupt();
     Stopwatch clock;
     if (options.alpha > 0 && iteration > 0)
@@ -291,6 +361,10 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
     result.log.push_back({clock.seconds(), energy, rows.total(), rows.cols(), k, "lbg"});
     if (refilled == 0 && (energy == 0 || (previous - energy) / previous < options.tolerance)) break;
     previous = energy;
+    if (options.keep && since_kept.seconds() >= options.keep_seconds) {
+      keep_state(*options.keep, {iteration + 1, previous, energy, result.means, result.labels});
+      since_kept = Stopwatch();
+    }
   }
   // Energy of the final means (the loop's figure is of the previous ones).
   for_each_row_block(

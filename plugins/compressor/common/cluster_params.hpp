@@ -61,6 +61,16 @@ inline clustering::LbgOptions with_mesh(clustering::LbgOptions o, const Params& 
   return o;
 }
 
+// The options with where this encode keeps its state (a single process's
+// checkpoint; a distributed encode keeps none).
+inline clustering::LbgOptions kept_in(clustering::LbgOptions o, const Distribution& where) {
+  if (where.comm->size() == 1) {
+    o.keep = where.checkpoint;
+    o.keep_seconds = where.checkpoint_seconds;
+  }
+  return o;
+}
+
 // The coherence passes a scene asks for, read once in the constructor.
 struct CoherenceOptions {
   bool reclassify = false;

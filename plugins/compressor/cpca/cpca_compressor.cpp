@@ -50,7 +50,8 @@ class ClusteredPca final : public Compressor {
                                   const Distribution& where) const override {
     compressor_params::require_finite(signal);
     clustering::CpcaOptions options = options_;
-    options.lbg = compressor_params::with_mesh(options_.lbg, params_, mesh);
+    options.lbg = compressor_params::kept_in(
+        compressor_params::with_mesh(options_.lbg, params_, mesh), where);
     const clustering::Rows rows = compressor_params::rows_of(signal, where);
     const auto result = clustering::cpca(rows, options);
     return compressor_params::finish("cpca", coherence_, params_, rows, result.labels,

@@ -30,7 +30,8 @@ class VectorQuantizer final : public Compressor {
                                   const Distribution& where) const override {
     compressor_params::require_finite(signal);
     const clustering::Rows rows = compressor_params::rows_of(signal, where);
-    const auto clusters = clustering::lbg(rows, compressor_params::with_mesh(lbg_, params_, mesh));
+    const auto clusters = clustering::lbg(
+        rows, compressor_params::kept_in(compressor_params::with_mesh(lbg_, params_, mesh), where));
     std::vector<clustering::ClusterModel> models(clusters.means.rows());
     for (std::size_t k = 0; k < models.size(); ++k)
       models[k] = {clusters.means.row(k), clustering::RowMatrixXd(0, clusters.means.cols()), {}};

@@ -16,6 +16,10 @@
 #include "prt/mesh.hpp"
 #include "prt/transfer.hpp"
 
+namespace prt {
+class CheckpointStore;
+}
+
 namespace prt::clustering {
 
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -90,6 +94,11 @@ struct LbgOptions {
   // from the vertex to the nearest other point of the cluster). Needs a mesh.
   double alpha = 0;
   const Mesh* mesh = nullptr;
+  // Where the iterations keep their state (means, labels, energy), at most
+  // every keep_seconds; a rerun finds it and continues from there, with
+  // the result an uninterrupted run gives. One process only.
+  const CheckpointStore* keep = nullptr;
+  double keep_seconds = 60;
 };
 
 struct Clusters {
