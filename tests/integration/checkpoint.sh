@@ -86,9 +86,10 @@ if [ -d "$work/.stale.h5.checkpoint" ]; then
   echo "stale checkpoint refused, --restart discards it"
 fi
 
-# Killed while compressing: LBG keeps its means and labels (here after every
-# iteration), and the rerun continues from them to the same file.
-cat >"$work/lbg.toml" <<SCENE
+# Killed while compressing: LBG and the CPCA passes keep their state (here
+# before every pass), and the rerun continues from it to the same file.
+kill_inside() {  # kill_inside <name> <part to wait for> <message> <compressor lines>
+  cat >"$work/$1.toml" <<SCENE
 [mesh]
 file = "$work/bunny.ply"
 [transport]
@@ -97,26 +98,30 @@ rays = 64
 plugin = "sh"
 order = 10
 [compressor]
-plugin = "vq"
-clusters = 256
-iterations = 40
-tolerance = 0.0
+$4
 [lighting]
 environment = "$src/data/hdri/courtyard.exr"
 SCENE
-"$prt" -q bake "$work/lbg.toml" -o "$work/lbg-reference.h5" >/dev/null
-"$prt" -q bake "$work/lbg.toml" -o "$work/lbg.h5" --checkpoint-seconds 0 >/dev/null 2>&1 &
-pid=$!
-for _ in $(seq 600); do  # until the first iteration is kept (at most a minute)
-  [ -e "$work/.lbg.h5.checkpoint/lbg.state" ] && break
-  sleep 0.1
-done
-kill -9 "$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
-[ -e "$work/.lbg.h5.checkpoint/lbg.state" ] || { echo "FAIL: LBG kept no state"; exit 1; }
-[ ! -e "$work/lbg.h5" ] || { echo "FAIL: the killed bake finished first (LBG too short)"; exit 1; }
-out=$("$prt" bake "$work/lbg.toml" -o "$work/lbg.h5" 2>&1)
-grep -q 'resuming: LBG at iteration' <<<"$out" || { echo "FAIL: LBG did not resume: $out"; exit 1; }
-cmp "$work/lbg-reference.h5" "$work/lbg.h5" ||
-  { echo "FAIL: the bake resumed inside LBG differs from the uninterrupted one"; exit 1; }
-echo "killed inside LBG: $(grep -o 'resuming: LBG at iteration [0-9]*' <<<"$out"); the file is identical"
+  "$prt" -q bake "$work/$1.toml" -o "$work/$1-reference.h5" >/dev/null
+  "$prt" -q bake "$work/$1.toml" -o "$work/$1.h5" --checkpoint-seconds 0 >/dev/null 2>&1 &
+  pid=$!
+  for _ in $(seq 600); do  # until a state is kept (at most a minute)
+    [ -e "$work/.$1.h5.checkpoint/$2" ] && break
+    sleep 0.1
+  done
+  kill -9 "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  [ -e "$work/.$1.h5.checkpoint/$2" ] || { echo "FAIL ($1): no $2 kept"; exit 1; }
+  [ ! -e "$work/$1.h5" ] || { echo "FAIL ($1): the killed bake finished first"; exit 1; }
+  out=$("$prt" bake "$work/$1.toml" -o "$work/$1.h5" 2>&1)
+  grep -q "$3" <<<"$out" || { echo "FAIL ($1): did not resume: $out"; exit 1; }
+  cmp "$work/$1-reference.h5" "$work/$1.h5" ||
+    { echo "FAIL ($1): the bake resumed inside compression differs"; exit 1; }
+  echo "killed inside $1: $(grep -o "$3[^,]*" <<<"$out"); the file is identical"
+}
+kill_inside lbg lbg.state 'resuming: LBG at iteration' \
+  $'plugin = "vq"\nclusters = 256\niterations = 40\ntolerance = 0.0'
+kill_inside iterative cpca.state 'resuming: CPCA at component' \
+  $'plugin = "cpca"\nmethod = "iterative"\nclusters = 64\ncomponents = 4\ntolerance = 0.0'
+kill_inside adaptive cpca.state 'resuming: CPCA at adaptive pass' \
+  $'plugin = "cpca"\nmethod = "adaptive"\nclusters = 64\ncomponents = 1\niterations_per_component = 1\nadaptive_iterations = 12'

@@ -10,9 +10,11 @@
 #include <numeric>
 #include <optional>
 
+#include "cpca_state.hpp"
 #include "first_minimum.hpp"
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
+#include "prt/log.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_blocks.hpp"
 
@@ -237,6 +239,14 @@ class Refitter {
     return models_;
   }
 
+  // What a kept state needs, and its restoration.
+  const std::vector<ClusterModel>& models() const { return models_; }
+  const std::vector<std::int32_t>& labels() const { return labels_; }
+  void restore(std::vector<ClusterModel> models, std::vector<std::int32_t> labels) {
+    models_ = std::move(models);
+    labels_ = std::move(labels);
+  }
+
  private:
   const Rows& rows_;
   int k_;
@@ -249,13 +259,45 @@ class Refitter {
 CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
   if (options.components < 0) throw Error("CPCA: negative component count");
   CpcaResult result;
-  Clusters vq = lbg(rows, options.lbg);
-  result.log = vq.log;
-  result.labels = std::move(vq.labels);
-  const int k = static_cast<int>(vq.means.rows());
   const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, rows.cols()));
+  // A state kept by a killed run of the same encode replaces LBG and the passes it did.
+  const CheckpointStore* keep = options.method != Method::static_pca ? options.lbg.keep : nullptr;
+  const int clusters = static_cast<int>(std::min<Eigen::Index>(options.lbg.clusters, rows.total()));
+  std::optional<CpcaState> kept = keep && !rows.distributed()
+                                      ? kept_cpca_state(*keep, rows.local(), clusters, rows.cols())
+                                      : std::nullopt;
+  Refitter refitter(rows, clusters);
+  int first_component = 1, first_iteration = 0, sequence = 0;
+  const bool adaptive_kept = kept && kept->phase == 1;
+  if (kept) {
+    log_info("resuming: CPCA at " +
+             (adaptive_kept ? "adaptive pass " + std::to_string(kept->iteration + 1)
+                            : "component " + std::to_string(kept->component) + ", pass " +
+                                  std::to_string(kept->iteration + 1)) +
+             ", kept in " + keep->folder().string());
+    result.labels = std::move(kept->labels);
+    refitter.restore(std::move(kept->models), std::move(kept->fitted_labels));
+    first_component = kept->component;
+    first_iteration = kept->iteration;
+    sequence = kept->sequence + 1;
+  } else {
+    Clusters vq = lbg(rows, options.lbg);
+    result.log = vq.log;
+    result.labels = std::move(vq.labels);
+  }
+  const int k = clusters;
   std::vector<double> errors(std::size_t(rows.local()), 0.0);
-  Refitter refitter(rows, k);
+  // Keeps the state at the start of a pass (once a fit has been made), at
+  // most every keep_seconds.
+  Stopwatch since_kept;
+  const auto keep_before_pass = [&](int phase, int component, int iteration) {
+    if (!keep || rows.distributed() || refitter.models().empty() ||
+        since_kept.seconds() < options.lbg.keep_seconds)
+      return;
+    keep_cpca_state(*keep, {phase, component, iteration, sequence++, result.labels,
+                            refitter.labels(), refitter.models()});
+    since_kept = Stopwatch();
+  };
 
   std::optional<Progress> progress;
   if (options.method != Method::static_pca) {
@@ -263,10 +305,17 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
                        (options.method == Method::adaptive ? options.adaptive_iterations : 0);
     progress.emplace(options.method == Method::adaptive ? "adaptive CPCA" : "iterative CPCA",
                      passes, "passes");
+    if (kept)
+      progress->add(adaptive_kept ? n_prime * options.iterations_per_component + first_iteration
+                                  : (first_component - 1) * options.iterations_per_component +
+                                        first_iteration,
+                    0);
     // Components one at a time; classification by approximation error.
-    for (int c = 1; c <= n_prime; ++c) {
-      for (int iteration = 0; iteration < options.iterations_per_component; ++iteration) {
+    for (int c = adaptive_kept ? n_prime + 1 : first_component; c <= n_prime; ++c) {
+      for (int iteration = c == first_component ? first_iteration : 0;
+           iteration < options.iterations_per_component; ++iteration) {
         Progress::check_interrupt();
+        keep_before_pass(0, c, iteration);
         Stopwatch clock;
         const auto& models = refitter.fit(result.labels, c);
         const std::vector<std::int32_t> before = result.labels;
@@ -287,8 +336,10 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
     // Storage of fixed n' beyond the means: v n' weights + k n' n representatives.
     const double budget = double(rows.total()) * n_prime + double(k) * n_prime * rows.cols();
     std::vector<double> sizes;
-    for (int iteration = 0; iteration < options.adaptive_iterations; ++iteration) {
+    for (int iteration = adaptive_kept ? first_iteration : 0;
+         iteration < options.adaptive_iterations; ++iteration) {
       Progress::check_interrupt();
+      keep_before_pass(1, n_prime, iteration);
       Stopwatch clock;
       auto models = truncated(refitter.fit(result.labels, widest, &sizes),
                               std::vector<int>(std::size_t(k), widest));

@@ -1,0 +1,32 @@
+// Iterative and adaptive CPCA's state between two passes, kept in a bake's
+// checkpoint so that a killed compression resumes where it was and gives
+// the bits an uninterrupted run gives (issue 15). The labels go first, in
+// one of two parts by the sequence number's parity and led by it; the state
+// that names them last: a kill between the writes leaves the previous
+// state whole.
+#pragma once
+#include <optional>
+
+#include "prt/checkpoint.hpp"
+#include "prt/clustering.hpp"
+
+namespace prt::clustering {
+
+struct CpcaState {
+  int phase = 0;                     // 0: adding components one at a time; 1: adaptive passes
+  int component = 1;                 // phase 0: the component count of the next pass
+  int iteration = 0;                 // the next pass's index within its component (or phase 1)
+  int sequence = 0;                  // counts the states kept by one encode
+  std::vector<std::int32_t> labels;  // the labelling the next pass starts from
+  std::vector<std::int32_t> fitted_labels;  // the labelling `models` were fitted to
+  std::vector<ClusterModel> models;         // the refitter's models (kept when unchanged)
+};
+
+void keep_cpca_state(const CheckpointStore& store, const CpcaState& state);
+
+// The kept state when it fits a run of `rows` local rows, k clusters and n
+// columns (else none).
+std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, Eigen::Index rows, int k,
+                                         Eigen::Index n);
+
+}  // namespace prt::clustering
