@@ -120,8 +120,8 @@ SCENE
   echo "killed inside $1: $(grep -o "$3[^,]*" <<<"$out"); the file is identical"
 }
 kill_inside lbg lbg.state 'resuming: LBG at iteration' \
-  $'plugin = "vq"\nclusters = 256\niterations = 40\ntolerance = 0.0'
+  $'plugin = "vq"\nclusters = 128\niterations = 30\ntolerance = 0.0'
 kill_inside iterative cpca.state 'resuming: CPCA at component' \
-  $'plugin = "cpca"\nmethod = "iterative"\nclusters = 64\ncomponents = 4\ntolerance = 0.0'
+  $'plugin = "cpca"\nmethod = "iterative"\nclusters = 64\ncomponents = 2\ntolerance = 0.0'
 kill_inside adaptive cpca.state 'resuming: CPCA at adaptive pass' \
-  $'plugin = "cpca"\nmethod = "adaptive"\nclusters = 64\ncomponents = 1\niterations_per_component = 1\nadaptive_iterations = 12'
+  $'plugin = "cpca"\nmethod = "adaptive"\nclusters = 64\ncomponents = 1\niterations_per_component = 1\nadaptive_iterations = 6'
