@@ -32,6 +32,7 @@ struct Args {
   std::string scene, output;
   bool force = false, restart = false, quiet = false;
   std::size_t slab_vertices = 65536;
+  std::uint64_t memory = 0;  // per rank, bytes (0: the default share of RAM)
   int threads = 0;
 };
 
@@ -72,6 +73,7 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
   RunOptions options{!root || args.quiet};
   options.checkpoint = &*checkpoint;
   options.slab_vertices = args.slab_vertices;
+  options.memory_budget = double(args.memory);
   options.comm = &comm;
   if (!root) options.log = [](const std::string&) {};
   BakeData data = bake(scene, registry, options, times);
@@ -137,6 +139,12 @@ int main(int argc, char** argv) {
                    "vertices traced per checkpointed slab (a killed bake loses at most one)")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
+  bake_cmd
+      ->add_option("--memory", args.memory,
+                   "memory budget per rank, e.g. 8G (default: 3/4 of RAM); a larger shard of the "
+                   "transfer is kept on disk and compressed in passes")
+      ->transform(CLI::AsSizeValue(false))
+      ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
   bake_cmd->add_option("--threads", args.threads, "threads per rank (default: every core)")
       ->check(CLI::Range(1, 4096));
   try {

@@ -261,7 +261,7 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
 TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                               const RunOptions& options, StageTimes& times,
                               std::uint64_t& rays_cast, const Shard& shard,
-                              const Communicator& comm) {
+                              const Communicator& comm, bool on_disk) {
   if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
   const CheckpointStore& store = *options.checkpoint;
   const std::size_t v = mesh.vertex_count();
@@ -306,19 +306,32 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   comm.barrier();  // every slab is kept
   times.add("trace + project (" + std::to_string(traced_here) + " slabs on this rank)",
             clock.seconds());
-  // This rank's rows, and the rays of every slab.
+  // This rank's rows (in memory, or in a file of its own), and the rays of every slab.
   TransferSignal out;
   set_shape(plan, out);
-  out.coefficients.resize(shard.rows(), transfer_dimension(plan));
+  const Eigen::Index cols = transfer_dimension(plan);
+  std::shared_ptr<RowFile> file;
+  if (on_disk)
+    file = RowFile::create(store.folder(), shard.rows(), cols);
+  else
+    out.coefficients.resize(shard.rows(), cols);
   rays_cast = 0;
   for (const auto& slab : slabs) {
     rays_cast += kept_rays(store, slab);
     const std::size_t first = std::max(slab.first, std::size_t(shard.first)),
                       last = std::min(slab.last, std::size_t(shard.last));
     if (first >= last) continue;
-    const MatrixXfRow rows = kept_rows(store, slab, out.coefficients.cols());
-    out.coefficients.middleRows(Eigen::Index(first) - shard.first, Eigen::Index(last - first)) =
-        rows.middleRows(Eigen::Index(first - slab.first), Eigen::Index(last - first));
+    const MatrixXfRow rows = kept_rows(store, slab, cols);
+    const Eigen::Index at = Eigen::Index(first) - shard.first, count = Eigen::Index(last - first);
+    if (file)
+      file->write(at, rows.middleRows(Eigen::Index(first - slab.first), count));
+    else
+      out.coefficients.middleRows(at, count) =
+          rows.middleRows(Eigen::Index(first - slab.first), count);
+  }
+  if (file) {
+    file->map();
+    out.file = std::move(file);
   }
   return out;
 }
@@ -338,9 +351,10 @@ BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore
     out.resize(count, cols);
     for (Eigen::Index done = 0; done < count;) {
       const std::size_t p = std::size_t(first + done);
-      if (p < std::size_t(own->vertices())) {  // rank 0's rows, in memory
+      if (p < std::size_t(own->vertices())) {  // rank 0's rows, in memory or its file
         const Eigen::Index n = std::min(count - done, own->vertices() - Eigen::Index(p));
-        out.middleRows(done, n) = own->coefficients.middleRows(Eigen::Index(p), n);
+        out.middleRows(done, n) = own->rows().middleRows(Eigen::Index(p), n);
+        own->release(Eigen::Index(p), Eigen::Index(p) + n);
         done += n;
         continue;
       }

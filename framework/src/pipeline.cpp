@@ -465,11 +465,13 @@ namespace {
 // Whether the transfer's rows go to a file: when the mesh (with its BVH) and
 // the transfer together would exceed the memory budget. Only a per-vertex
 // transfer can; another is held in memory with a warning.
-bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, const RunOptions& options) {
+// rows: this process's (a rank's shard), beside the whole mesh.
+bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
+                      const RunOptions& options) {
   const double v = double(mesh.vertex_count());
   const double groups = std::max<double>(1, double(plan.channels.groups.size()));
-  const double transfer =
-      v * double(plan.glossy ? plan.exit->size() : 1) * double(plan.basis->size()) * groups * 4;
+  const double transfer = double(rows) * double(plan.glossy ? plan.exit->size() : 1) *
+                          double(plan.basis->size()) * groups * 4;
   const double resident = kMeshBytesPerVertex * v, budget = options.budget();
   if (resident + transfer <= budget) return false;
   if (!per_vertex_transfer(plan) || !options.checkpoint || options.traced) {
@@ -479,7 +481,9 @@ bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, const RunOptions& 
                  "memory");
     return false;
   }
-  options.message("the transfer (" + gigabytes(transfer) + ") and mesh (~" + gigabytes(resident) +
+  const std::string what =
+      double(rows) < v ? "this rank's rows of the transfer (" : "the transfer (";
+  options.message(what + gigabytes(transfer) + ") and the mesh (~" + gigabytes(resident) +
                   ") exceed the memory budget of " + gigabytes(budget) +
                   ": the transfer's rows are kept in " + options.checkpoint->folder().string() +
                   " and compressed in passes over them");
@@ -537,13 +541,14 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     encode_where.checkpoint = options.checkpoint;
     encode_where.checkpoint_seconds = options.checkpoint_seconds;
   }
-  const bool on_disk = !distributed && transfer_on_disk(plan, data.mesh, options);
+  const bool on_disk = transfer_on_disk(plan, data.mesh, shard.shard.rows(), options);
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
   std::uint64_t rays_cast = 0;
   TransferSignal transfer =
       distributed
-          ? shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard, comm)
+          ? shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard, comm,
+                           on_disk)
           : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
                                   plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
 

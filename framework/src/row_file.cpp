@@ -27,8 +27,15 @@ std::size_t page_size() {
 
 std::shared_ptr<RowFile> RowFile::create(const std::filesystem::path& folder, Eigen::Index rows,
                                          Eigen::Index cols) {
-  const std::filesystem::path name = folder / (".transfer-rows.tmp-" + std::to_string(::getpid()));
-  const int fd = ::open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  // A free name: ranks on other nodes may share this process's id.
+  std::filesystem::path name;
+  int fd = -1;
+  for (int attempt = 0; fd < 0 && attempt < 1000; ++attempt) {
+    name = folder /
+           (".transfer-rows.tmp-" + std::to_string(::getpid()) + "-" + std::to_string(attempt));
+    fd = ::open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0 && errno != EEXIST) break;
+  }
   if (fd < 0)
     throw Error(name.string() + ": cannot create the file for the transfer's rows: " + os_error());
   ::unlink(name.c_str());  // unnamed from here: gone with the process, however it ends
@@ -56,12 +63,14 @@ RowFile::~RowFile() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void RowFile::write(Eigen::Index first, const MatrixXfRow& block) {
+void RowFile::write(Eigen::Index first, Eigen::Ref<const MatrixXfRow> block) {
   if (mapping_) throw Error("RowFile::write after map()");
   if (block.cols() != cols_ || first < 0 || first + block.rows() > rows_)
     throw Error("RowFile::write: rows [" + std::to_string(first) + ", " +
                 std::to_string(first + block.rows()) + ") x " + std::to_string(block.cols()) +
                 " outside the " + std::to_string(rows_) + " x " + std::to_string(cols_) + " file");
+  if (block.rows() > 1 && block.outerStride() != block.cols())
+    return write(first, MatrixXfRow(block));  // rows with gaps: one contiguous copy
   const char* data = reinterpret_cast<const char*>(block.data());
   std::size_t left = static_cast<std::size_t>(block.size()) * sizeof(float);
   off_t at = static_cast<off_t>(first) * static_cast<off_t>(cols_) * off_t(sizeof(float));

@@ -85,6 +85,16 @@ cmp -s "$work/iterative.serial.h5" "$work/iterative.rounds.h5" ||
   { echo "FAIL: messages in rounds change the file"; exit 1; }
 echo "messages in 64 KB rounds: prt-mpi on 3 ranks = prt bake, byte for byte"
 
+# A budget below each rank's rows: every rank keeps its shard in a file of
+# its own and compresses in passes; rank 0 writes its rows from that file.
+out=$("${mpirun[@]}" -np 3 "$prt_mpi" bake "$work/iterative.toml" -o "$work/iterative.disk.h5" \
+        --slab-vertices 4096 --memory 1M 2>/dev/null)
+grep -q "this rank's rows of the transfer .* are kept in" <<<"$out" ||
+  { echo "FAIL: --memory 1M kept no rows on disk: $out"; exit 1; }
+cmp -s "$work/iterative.serial.h5" "$work/iterative.disk.h5" ||
+  { echo "FAIL: out-of-core shards change the file"; exit 1; }
+echo "shards kept on disk (--memory 1M): prt-mpi on 3 ranks = prt bake, byte for byte"
+
 # Refusals end every rank with one clear message and no output.
 scene coherent bunny00.off $'plugin = "sh"\norder = 4' \
   $'plugin = "cpca"\nclusters = 8\nreclassify = true'

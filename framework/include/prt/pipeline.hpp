@@ -148,7 +148,7 @@ constexpr double kMeshBytesPerVertex = 400;
 TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                               const RunOptions& options, StageTimes& times,
                               std::uint64_t& rays_cast, const Shard& shard,
-                              const Communicator& comm);
+                              const Communicator& comm, bool on_disk = false);
 // Every rank's rows as rank 0 writes the file: its own from memory, the
 // other ranks' read from the checkpoint's slabs a slab at a time (rank 0
 // never holds the whole transfer). `store` must outlive the result.

@@ -25,7 +25,7 @@ class RowFile {
   RowFile& operator=(const RowFile&) = delete;
 
   // Writes `block` as rows [first, first + block.rows()). Before map().
-  void write(Eigen::Index first, const MatrixXfRow& block);
+  void write(Eigen::Index first, Eigen::Ref<const MatrixXfRow> block);
   // Maps the written rows (read only); write() is refused after it.
   void map();
 
