@@ -202,15 +202,26 @@ int compress(Context& context, const CompressArgs& args) {
   if (!args.output.empty())  // without -o the bake is re-compressed in place, atomically
     check_output({output, FileKind::bake, "output bake file"}, {args.bake}, args.force);
   Stopwatch clock;
-  BakeData data = read_bake(args.bake);
+  RunOptions budget;
+  budget.memory_budget = double(args.memory);
+  ReadOptions reading{budget.budget(), output.has_parent_path() ? output.parent_path() : "."};
+  BakeData data = read_bake(args.bake, reading);
   StageTimes times;
   times.add("read bake file", clock.seconds());
+  if (data.transfer.on_disk() && !args.json)
+    std::cout << "the transfer ("
+              << describe_shape(data.transfer.vertices(), data.transfer.dimension())
+              << ") and mesh exceed the memory budget: its rows are kept in "
+              << reading.rows_folder.string() << " and compressed in passes over them\n";
   Params params(SourceLocation{"command line"});
   for (std::size_t i = 0; i < args.parameters.size(); ++i)
     parse_parameter(args.parameters[i], i, params);
   auto compressor = context.registry.create<Compressor>(args.compressor, params);
   clock = Stopwatch();
-  data.compressed = compressor->encode(data.transfer, &data.mesh);
+  std::optional<TransferSignal> loaded;
+  data.compressed = compressor->encode(
+      readable_signal(*compressor, args.compressor, data.transfer, loaded), &data.mesh);
+  loaded.reset();
   const double seconds = clock.seconds();
   times.add("compress (" + args.compressor + ")", seconds);
   const CompressionReport report = measure(data.transfer, data.compressed, &data.mesh, seconds);
@@ -225,6 +236,8 @@ int compress(Context& context, const CompressArgs& args) {
     return 0;
   }
   std::cout << args.compressor << " -> " << output.string() << "\n" << report.text();
+  std::printf("peak memory: %.3f GB (resident; budget %.3f GB)\n", peak_resident_bytes() / 1e9,
+              budget.budget() / 1e9);
   print_times(times);
   return 0;
 }

@@ -37,6 +37,7 @@ struct CompressArgs {
   std::string bake, output, compressor = "cpca";
   std::vector<std::string> parameters;  // key=value
   bool json = false, force = false;
+  std::uint64_t memory = 0;  // memory budget in bytes (0: the default share of RAM)
 };
 int compress(Context& context, const CompressArgs& args);
 

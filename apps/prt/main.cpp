@@ -71,6 +71,12 @@ int main(int argc, char** argv) {
   compress_cmd->add_option("-o,--output", compress.output, "output bake file (default: in place)");
   compress_cmd->add_flag("--json", compress.json, "print the metrics as JSON");
   compress_cmd->add_flag("--force", compress.force, kForceHelp);
+  compress_cmd
+      ->add_option("--memory", compress.memory,
+                   "memory budget, e.g. 8G (default: 3/4 of RAM); a larger transfer is read "
+                   "into a file beside the output and compressed in passes")
+      ->transform(CLI::AsSizeValue(false))
+      ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
 
   prt::cli::AnalyzeArgs analyze;
   auto* analyze_cmd = app.add_subcommand("analyze", "numerical analyses");

@@ -7,6 +7,8 @@
 #include "bake_userblock.hpp"
 #include "prt/error.hpp"
 #include "prt/output_file.hpp"
+#include "prt/pipeline.hpp"
+#include "prt/row_file.hpp"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -223,6 +225,62 @@ void write_streamed(H5::Group& group, const std::string& name, const BakeData::S
   }
 }
 
+// A transfer's rows read from its file, a block at a time, for write_streamed.
+BakeData::StreamedRows rows_of_file(const TransferSignal& signal) {
+  BakeData::StreamedRows rows;
+  rows.rows = signal.vertices();
+  rows.cols = signal.dimension();
+  rows.read = [&signal](Eigen::Index first, Eigen::Index count, MatrixXfRow& out) {
+    out = signal.rows().middleRows(first, count);
+    signal.release(first, first + count);
+  };
+  return rows;
+}
+
+// The float dataset `name` (rows x cols), read a block of rows at a time
+// into a RowFile in `folder`: never whole in memory. Values are checked as
+// read_array checks them.
+std::shared_ptr<RowFile> read_rows_to_file(const H5::Group& group, const std::string& name,
+                                           hsize_t rows, hsize_t cols, const fs::path& folder) {
+  H5::DataSet set = group.openDataSet(name);
+  auto file = RowFile::create(folder, Eigen::Index(rows), Eigen::Index(cols));
+  MatrixXfRow block;
+  const hsize_t step = 4096;
+  for (hsize_t first = 0; first < rows; first += step) {
+    const hsize_t count[2] = {std::min(step, rows - first), cols}, offset[2] = {first, 0};
+    block.resize(Eigen::Index(count[0]), Eigen::Index(cols));
+    H5::DataSpace file_space = set.getSpace();
+    file_space.selectHyperslab(H5S_SELECT_SET, count, offset);
+    set.read(block.data(), h5_type<float>(), H5::DataSpace(2, count), file_space);
+    for (Eigen::Index r = 0; r < block.rows(); ++r)
+      if (!block.row(r).allFinite())
+        throw Error("dataset \"" + name + "\" has a NaN or infinite value at row " +
+                    std::to_string(first + hsize_t(r)));
+    file->write(Eigen::Index(first), block);
+  }
+  file->map();
+  return file;
+}
+
+// The shape of a 2-D float dataset, checked as read_array checks it.
+void float_shape(const H5::Group& group, const std::string& name, hsize_t& rows, hsize_t& cols) {
+  if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
+  H5::DataSet set = group.openDataSet(name);
+  require_contiguous_in_file(set, name);
+  H5::DataSpace space = set.getSpace();
+  if (space.getSimpleExtentNdims() != 2) throw Error("dataset \"" + name + "\" is not 2-D");
+  hsize_t dims[2];
+  space.getSimpleExtentDims(dims);
+  rows = dims[0], cols = dims[1];
+  if (set.getTypeClass() != H5T_FLOAT)
+    throw Error("dataset \"" + name + "\" has the wrong element type");
+  const double bytes = double(rows) * double(cols) * double(set.getDataType().getSize());
+  if (bytes > static_cast<double>(file_bytes) ||
+      (bytes > 0 && static_cast<double>(set.getStorageSize()) < bytes))
+    throw Error("dataset \"" + name + "\" declares " + std::to_string(rows) + " x " +
+                std::to_string(cols) + " values that are not stored in the file");
+}
+
 MatrixXfRow read_matrix(const H5::Group& group, const std::string& name) {
   hsize_t rows, cols;
   auto values = read_array<float>(group, name, rows, cols);
@@ -326,6 +384,8 @@ void write_bake(const fs::path& file, const BakeData& data) {
                      data.transfer.group_of_channel[std::size_t(c)]);
       if (streamed)
         write_streamed(transfer, "coefficients", data.streamed_transfer);
+      else if (data.transfer.on_disk())
+        write_streamed(transfer, "coefficients", rows_of_file(data.transfer));
       else
         write_matrix(transfer, "coefficients", data.transfer.coefficients);
       if (data.direct.coefficients.size())
@@ -372,7 +432,7 @@ void write_bake(const fs::path& file, const BakeData& data) {
   });
 }
 
-BakeData read_bake(const fs::path& file) {
+BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   H5::Exception::dontPrint();
   // Length and checksum first: a damaged file never reaches libhdf5's parser.
   const int version = verify_bake_file(file);
@@ -433,18 +493,26 @@ BakeData read_bake(const fs::path& file) {
         data.transfer.group_of_channel[std::size_t(c)] = group;
       }
     }
-    data.transfer.coefficients = read_matrix(transfer, "coefficients");
-    if (data.transfer.coefficients.rows() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
-      throw Error("the transfer has " + std::to_string(data.transfer.coefficients.rows()) +
-                  " rows for " + std::to_string(data.mesh.vertex_count()) + " vertices");
+    hsize_t transfer_rows = 0, transfer_cols = 0;
+    float_shape(transfer, "coefficients", transfer_rows, transfer_cols);
+    const double transfer_bytes = double(transfer_rows) * double(transfer_cols) * 4,
+                 beside = kMeshBytesPerVertex * double(data.mesh.vertex_count());
+    if (options.memory_budget > 0 && transfer_bytes + beside > options.memory_budget)
+      data.transfer.file = read_rows_to_file(transfer, "coefficients", transfer_rows, transfer_cols,
+                                             options.rows_folder);
+    else
+      data.transfer.coefficients = read_matrix(transfer, "coefficients");
+    if (data.transfer.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
+      throw Error("the transfer has " + std::to_string(data.transfer.vertices()) + " rows for " +
+                  std::to_string(data.mesh.vertex_count()) + " vertices");
     if (data.bounces > 0 && transfer.nameExists("direct_coefficients")) {
       data.direct.kind = data.transfer.kind;
       data.direct.exit_rows = data.transfer.exit_rows;
       data.direct.channel_groups = data.transfer.channel_groups;
       data.direct.group_of_channel = data.transfer.group_of_channel;
       data.direct.coefficients = read_matrix(transfer, "direct_coefficients");
-      if (data.direct.coefficients.rows() != data.transfer.coefficients.rows() ||
-          data.direct.coefficients.cols() != data.transfer.coefficients.cols())
+      if (data.direct.coefficients.rows() != data.transfer.vertices() ||
+          data.direct.coefficients.cols() != data.transfer.dimension())
         throw Error("the direct transfer's shape differs from the transfer's");
     }
 
@@ -463,7 +531,7 @@ BakeData read_bake(const fs::path& file) {
     c.weight_index = read_array<std::int32_t>(compressed, "weight_index", rows, cols);
     Eigen::Index total = 0;
     for (auto n : counts) total += n;
-    const Eigen::Index columns = data.transfer.coefficients.cols();
+    const Eigen::Index columns = data.transfer.dimension();
     if (columns != c.dimension)
       throw Error("the transfer has " + std::to_string(columns) +
                   " columns but the compressed dimension is " + std::to_string(c.dimension));
@@ -473,7 +541,7 @@ BakeData read_bake(const fs::path& file) {
                   std::to_string(data.transfer.exit_rows) + ") x channel transfers (" +
                   std::to_string(data.transfer.channel_groups) + ")");
     if (static_cast<Eigen::Index>(counts.size()) != c.clusters() || total != stacked.rows() ||
-        stacked.cols() != c.dimension || data.transfer.coefficients.rows() != c.vertices())
+        stacked.cols() != c.dimension || data.transfer.vertices() != c.vertices())
       throw Error("compressed transfer has inconsistent sizes");
     for (Eigen::Index k = 0, row = 0; k < c.clusters(); row += counts[k++]) {
       if (counts[k] < 0 || counts[k] > c.components)

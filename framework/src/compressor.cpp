@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "prt/log.hpp"
 #include "prt/row_blocks.hpp"
 #include "prt/segment_sum.hpp"
 
@@ -75,6 +76,19 @@ void gather_rows(const Distribution& rows, CompressedTransfer& c) {
       std::memcpy(&c.weight_index[std::size_t(shard.first * width)], at,
                   count * std::size_t(width) * sizeof(std::int32_t));
   }
+}
+
+const TransferSignal& readable_signal(const Compressor& compressor, const std::string& name,
+                                      const TransferSignal& signal,
+                                      std::optional<TransferSignal>& loaded) {
+  if (!signal.on_disk() || compressor.reads_rows_from_file()) return signal;
+  char size[32];
+  std::snprintf(size, sizeof size, "%.1f GB",
+                double(signal.vertices()) * double(signal.dimension()) * 4 / 1e9);
+  log_warning("compressor \"" + name + "\" reads the transfer from memory only: its " + size +
+              " are loaded, beyond the memory budget");
+  loaded = signal.loaded();
+  return *loaded;
 }
 
 std::vector<double> vertex_errors(const TransferSignal& signal,

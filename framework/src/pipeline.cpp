@@ -444,14 +444,10 @@ CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& tr
       gather_rows(here, sparse);
       return sparse;
     }
-    if (transfer.on_disk() && !plan.compressor->reads_rows_from_file()) {
-      log_warning("compressor \"" + plan.compressor_record.name +
-                  "\" reads the transfer from memory only: its " +
-                  gigabytes(double(transfer.vertices()) * double(transfer.dimension()) * 4) +
-                  " are loaded, beyond the memory budget");
-      return plan.compressor->encode_shard(transfer.loaded(), &mesh, here);
-    }
-    return plan.compressor->encode_shard(transfer, &mesh, here);
+    std::optional<TransferSignal> loaded;
+    return plan.compressor->encode_shard(
+        readable_signal(*plan.compressor, plan.compressor_record.name, transfer, loaded), &mesh,
+        here);
   } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
     throw Error(where, "out of memory while compressing the " +
                            std::to_string(transfer.vertices()) + " x " +
@@ -574,19 +570,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     data.streamed_transfer =
         kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(), options.slab_vertices,
                       std::make_shared<const TransferSignal>(std::move(transfer)));
-  } else if (transfer.on_disk()) {  // written from the file a block of rows at a time
-    data.transfer.kind = transfer.kind;
-    data.transfer.exit_rows = transfer.exit_rows;
-    data.transfer.channel_groups = transfer.channel_groups;
-    data.transfer.group_of_channel = transfer.group_of_channel;
-    data.streamed_transfer.rows = transfer.vertices();
-    data.streamed_transfer.cols = transfer.dimension();
-    data.streamed_transfer.read = [file = transfer.file](Eigen::Index first, Eigen::Index count,
-                                                         MatrixXfRow& out) {
-      out = file->matrix().middleRows(first, count);
-      file->release(first, first + count);
-    };
-  } else {
+  } else {  // in memory, or in its file (write_bake reads it from there)
     data.transfer = std::move(transfer);
   }
 

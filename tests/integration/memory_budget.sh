@@ -51,6 +51,15 @@ for name in cpca vq pca; do
     { echo "FAIL ($name): out of core peaks at $b GB against $a GB in memory"; exit 1; }
 done
 
+# prt compress reads a bake's transfer into a file, block by block, when it
+# exceeds the budget: the re-compressed file is the same.
+"$prt" -q compress "$work/vq-memory.h5" -c cpca -p clusters=16 -o "$work/re-memory.h5" >/dev/null
+out=$("$prt" compress "$work/vq-memory.h5" -c cpca -p clusters=16 -o "$work/re-disk.h5" \
+        --memory 30M 2>&1)
+grep -q "compressed in passes" <<<"$out" || { echo "FAIL: prt compress kept it in memory: $out"; exit 1; }
+cmp "$work/re-memory.h5" "$work/re-disk.h5" || { echo "FAIL: prt compress differs on disk"; exit 1; }
+echo "prt compress --memory 30M: identical"
+
 # A compressor without the capability gets the rows in memory, and says so.
 out=$("$prt" bake "$work/none.toml" -o "$work/none-disk.h5" --memory 30M 2>&1)
 grep -q 'reads the transfer from memory only' <<<"$out" || { echo "FAIL: no warning: $out"; exit 1; }

@@ -52,7 +52,17 @@ struct BakeData {
   std::map<std::string, double> metrics;  // timings (s), squared error, ...
 };
 
+// A transfer whose rows are in a file (TransferSignal::on_disk) is written
+// from it a block of rows at a time.
 void write_bake(const std::filesystem::path& file, const BakeData& data);
-BakeData read_bake(const std::filesystem::path& file);
+
+// memory_budget > 0: a transfer that does not fit in it beside the mesh is
+// read a block of rows at a time into a RowFile in rows_folder (so the
+// compressors read it in passes) instead of memory.
+struct ReadOptions {
+  double memory_budget = 0;
+  std::filesystem::path rows_folder = ".";
+};
+BakeData read_bake(const std::filesystem::path& file, const ReadOptions& options = {});
 
 }  // namespace prt

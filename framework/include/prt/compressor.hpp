@@ -1,5 +1,7 @@
 // The compressor interface: TransferSignal -> CompressedTransfer.
 #pragma once
+#include <optional>
+
 #include "prt/communicator.hpp"
 #include "prt/error.hpp"
 #include "prt/mesh.hpp"
@@ -75,6 +77,13 @@ double average_overdraw(const Mesh& mesh, const std::vector<std::int32_t>& id_of
 
 // Cluster ids mapped through superclusters (identity when there are none).
 std::vector<std::int32_t> supercluster_of_vertex(const CompressedTransfer& compressed);
+
+// The signal as `compressor` reads it: `signal` itself, or, for a
+// compressor that reads rows from memory only, the rows of an on-disk
+// signal loaded into `loaded` (with a warning that names `name`).
+const TransferSignal& readable_signal(const Compressor& compressor, const std::string& name,
+                                      const TransferSignal& signal,
+                                      std::optional<TransferSignal>& loaded);
 
 // The report of an encode. Distributed: `signal` holds this rank's rows and
 // `compressed` is encode_shard's result; the squared error is on every rank,
