@@ -238,8 +238,8 @@ void bind_types(py::module_& m) {
            }),
            py::arg("coefficients"), py::arg("kind") = "diffuse", py::arg("exit_rows") = 1)
       .def_property_readonly("coefficients",
-                             [](py::object self) {
-                               const auto& c = self.cast<const TransferSignal&>().coefficients;
+                             [](py::object self) {  // read-only: a file's rows too
+                               const auto c = self.cast<const TransferSignal&>().rows();
                                return view(c.data(), c.rows(), c.cols(), self);
                              })
       .def_readonly("kind", &TransferSignal::kind)
