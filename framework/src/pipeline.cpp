@@ -91,8 +91,17 @@ double available_memory() {
   return double(sysconf(_SC_AVPHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
 }
 
+// The machine's memory, or the control group's limit when lower (a
+// container, a Slurm job): what this process may really hold.
 double physical_memory() {
-  return double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  double bytes = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  for (const char* limit : {"/sys/fs/cgroup/memory.max",  // cgroup v2
+                            "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {  // v1
+    std::ifstream in(limit);
+    double value = 0;
+    if (in >> value && value > 0) bytes = std::min(bytes, value);  // "max" reads as nothing
+  }
+  return bytes;
 }
 
 std::string gigabytes(double bytes) {

@@ -100,14 +100,14 @@ Eigen::Map<const MatrixXfRow> RowFile::matrix() const {
 
 void RowFile::release(Eigen::Index first, Eigen::Index last) const {
   if (!mapping_ || last <= first) return;
+  // Every page the rows touch, shared ones too: the mapping is read-only and
+  // backed by the file, so a dropped page costs a neighbour still reading it
+  // a minor fault from the page cache, never data.
   const std::size_t page = page_size(), row = static_cast<std::size_t>(cols_) * sizeof(float);
-  const std::size_t begin = (static_cast<std::size_t>(first) * row + page - 1) / page * page;
-  const std::size_t end = std::min(bytes_, static_cast<std::size_t>(last) * row) / page * page;
-  // The file's last partial page goes too when the range reaches the end.
-  const std::size_t stop = static_cast<std::size_t>(last) >= static_cast<std::size_t>(rows_)
-                               ? (bytes_ + page - 1) / page * page
-                               : end;
-  if (stop > begin) ::madvise(static_cast<char*>(mapping_) + begin, stop - begin, MADV_DONTNEED);
+  const std::size_t begin = static_cast<std::size_t>(first) * row / page * page;
+  const std::size_t end =
+      (std::min(bytes_, static_cast<std::size_t>(last) * row) + page - 1) / page * page;
+  if (end > begin) ::madvise(static_cast<char*>(mapping_) + begin, end - begin, MADV_DONTNEED);
 }
 
 double peak_resident_bytes() {

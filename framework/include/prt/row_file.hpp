@@ -32,7 +32,8 @@ class RowFile {
   Eigen::Index rows() const { return rows_; }
   Eigen::Index cols() const { return cols_; }
   Eigen::Map<const MatrixXfRow> matrix() const;
-  // Drops the resident pages that lie wholly inside rows [first, last).
+  // Drops the resident pages that hold any of rows [first, last) (a page
+  // shared with a neighbour is read again from the page cache if needed).
   void release(Eigen::Index first, Eigen::Index last) const;
   // Drops every resident page (after a pass that read rows at random).
   void release_all() const { release(0, rows_); }

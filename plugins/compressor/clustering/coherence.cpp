@@ -56,13 +56,21 @@ double error_in(RowsRef x, Eigen::Index p, const CompressedTransfer& c, int k) {
 }  // namespace
 
 std::size_t reclassify(RowsRef x, const Mesh& mesh, double error_budget,
-                       CompressedTransfer& compressed) {
+                       CompressedTransfer& compressed,
+                       const std::function<void(Eigen::Index, Eigen::Index)>& release) {
+  // Sweeps hand back each 4,096 rows they are done with.
+  const auto swept = [&](Eigen::Index p) {
+    if (release && (p + 1) % 4096 == 0) release(p + 1 - 4096, p + 1);
+  };
   if (static_cast<std::size_t>(x.rows()) != mesh.vertex_count())
     throw Error("reclassify: transfer rows do not match the mesh's vertices");
   auto& label = compressed.cluster_of_vertex;
   const Adjacency adj = adjacency(mesh);
   double total = 0;
-  for (Eigen::Index p = 0; p < x.rows(); ++p) total += error_in(x, p, compressed, label[p]);
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    total += error_in(x, p, compressed, label[p]);
+    swept(p);
+  }
   const double budget = error_budget * total;
 
   struct Move {
@@ -103,8 +111,11 @@ std::size_t reclassify(RowsRef x, const Mesh& mesh, double error_budget,
   };
 
   std::priority_queue<Move> heap;
-  for (std::uint32_t p = 0; p < mesh.vertex_count(); ++p)
+  for (std::uint32_t p = 0; p < mesh.vertex_count(); ++p) {
     if (auto m = best_move(p)) heap.push(*m);
+    swept(p);
+  }
+  if (release) release(0, x.rows());
   double spent = 0;
   std::vector<std::uint8_t> moved(mesh.vertex_count(), 0);
   std::size_t moves = 0;

@@ -261,11 +261,16 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
   CpcaResult result;
   const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, rows.cols()));
   // A state kept by a killed run of the same encode replaces LBG and the passes it did.
-  const CheckpointStore* keep = options.method != Method::static_pca ? options.lbg.keep : nullptr;
+  const CheckpointStore* keep =
+      options.method != Method::static_pca ? options.lbg.keep : nullptr;  // reset on a failed write
   const int clusters = static_cast<int>(std::min<Eigen::Index>(options.lbg.clusters, rows.total()));
-  std::optional<CpcaState> kept = keep && !rows.distributed()
-                                      ? kept_cpca_state(*keep, rows.local(), clusters, rows.cols())
-                                      : std::nullopt;
+  std::optional<CpcaState> kept;
+  try {
+    if (keep && !rows.distributed())
+      kept = kept_cpca_state(*keep, rows.local(), clusters, rows.cols());
+  } catch (const Error& e) {  // a damaged part: start afresh rather than fail every rerun
+    log_warning(std::string("CPCA: the kept state is unreadable, starting afresh: ") + e.what());
+  }
   Refitter refitter(rows, clusters);
   int first_component = 1, first_iteration = 0, sequence = 0;
   const bool adaptive_kept = kept && kept->phase == 1;
@@ -294,8 +299,13 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
     if (!keep || rows.distributed() || refitter.models().empty() ||
         since_kept.seconds() < options.lbg.keep_seconds)
       return;
-    keep_cpca_state(*keep, {phase, component, iteration, sequence++, result.labels,
-                            refitter.labels(), refitter.models()});
+    try {
+      keep_cpca_state(*keep, {phase, component, iteration, sequence++, result.labels,
+                              refitter.labels(), refitter.models()});
+    } catch (const Error& e) {  // a full disk ends the keeping, not the encode
+      log_warning(std::string("CPCA: keeping its state failed, going on without: ") + e.what());
+      keep = nullptr;
+    }
     since_kept = Stopwatch();
   };
 

@@ -254,50 +254,51 @@ int update_means(const Rows& rows, std::vector<std::int32_t>& label, std::vector
 }
 
 // The loop's state between two iterations, kept in a checkpoint: the means
-// and the meta figures in one part, written after the labels (in one of two
-// parts by iteration parity, each led by its iteration), so a kill between
-// the two writes leaves the previous state whole.
+// and the figures in one part, written after the labels (in one of two
+// parts by the parity of a count of saves, each led by its count), so a
+// kill between the two writes leaves the previous state whole.
 struct LbgState {
   int next_iteration = 0;
+  int sequence = 0;  // counts the states kept by one run
   double previous = 0, energy = 0;
   RowMatrixXd means;
   std::vector<std::int32_t> labels;
 };
 
-std::string labels_part(int iteration) {
-  return "lbg.labels." + std::to_string(iteration % 2);
+std::string labels_part(int sequence) {
+  return "lbg.labels." + std::to_string(sequence % 2);
 }
 
 void keep_state(const CheckpointStore& store, const LbgState& s) {
   std::vector<std::int32_t> labels;
   labels.reserve(s.labels.size() + 1);
-  labels.push_back(s.next_iteration);
+  labels.push_back(s.sequence);
   labels.insert(labels.end(), s.labels.begin(), s.labels.end());
-  store.save(labels_part(s.next_iteration), labels);
-  Eigen::MatrixXd state(s.means.rows() + 1, s.means.cols());
-  state.topRows(s.means.rows()) = s.means;
-  state.bottomRows(1).setZero();
-  state(s.means.rows(), 0) = s.next_iteration;
-  if (s.means.cols() > 2)
-    state(s.means.rows(), 1) = s.previous, state(s.means.rows(), 2) = s.energy;
+  store.save(labels_part(s.sequence), labels);
+  // k rows of means, then a row of figures (at least 4 columns wide).
+  const Eigen::Index k = s.means.rows(), n = s.means.cols();
+  Eigen::MatrixXd state = Eigen::MatrixXd::Zero(k + 1, std::max<Eigen::Index>(n, 4));
+  state.topLeftCorner(k, n) = s.means;
+  state.row(k).head<4>() << double(s.next_iteration), double(s.sequence), s.previous, s.energy;
   store.save("lbg.state", state);
 }
 
 // The state a killed run kept, when it fits this run (else none).
 std::optional<LbgState> kept_state(const CheckpointStore& store, Eigen::Index rows, int k,
                                    Eigen::Index n) {
-  if (!store.has("lbg.state") || n < 3) return std::nullopt;
+  if (!store.has("lbg.state")) return std::nullopt;
   const Eigen::MatrixXd state = store.load_doubles("lbg.state");
-  if (state.rows() != k + 1 || state.cols() != n) return std::nullopt;
+  if (state.rows() != k + 1 || state.cols() != std::max<Eigen::Index>(n, 4)) return std::nullopt;
   LbgState s;
   s.next_iteration = static_cast<int>(state(k, 0));
-  s.previous = state(k, 1);
-  s.energy = state(k, 2);
-  s.means = state.topRows(k);
-  const std::string part = labels_part(s.next_iteration);
+  s.sequence = static_cast<int>(state(k, 1));
+  s.previous = state(k, 2);
+  s.energy = state(k, 3);
+  s.means = state.topLeftCorner(k, n);
+  const std::string part = labels_part(s.sequence);
   if (!store.has(part)) return std::nullopt;
   std::vector<std::int32_t> labels = store.load_ints(part);
-  if (Eigen::Index(labels.size()) != rows + 1 || labels[0] != s.next_iteration) return std::nullopt;
+  if (Eigen::Index(labels.size()) != rows + 1 || labels[0] != s.sequence) return std::nullopt;
   s.labels.assign(labels.begin() + 1, labels.end());
   for (std::int32_t l : s.labels)
     if (l < 0 || l >= k) return std::nullopt;
@@ -328,8 +329,14 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
   Clusters result;
   double previous = std::numeric_limits<double>::infinity();
   int first_iteration = 0;
-  std::optional<LbgState> kept =
-      options.keep ? kept_state(*options.keep, rows.local(), k, rows.cols()) : std::nullopt;
+  std::optional<LbgState> kept;
+  try {
+    if (options.keep) kept = kept_state(*options.keep, rows.local(), k, rows.cols());
+  } catch (const Error& e) {  // a damaged part: start afresh rather than fail every rerun
+    log_warning(std::string("LBG: the kept state is unreadable, starting afresh: ") + e.what());
+  }
+  const CheckpointStore* keep = options.keep;
+  int sequence = kept ? kept->sequence + 1 : 0;
   if (kept) {
     log_info("resuming: LBG at iteration " + std::to_string(kept->next_iteration + 1) +
              ", kept in " + options.keep->folder().string());
@@ -361,8 +368,14 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
     result.log.push_back({clock.seconds(), energy, rows.total(), rows.cols(), k, "lbg"});
     if (refilled == 0 && (energy == 0 || (previous - energy) / previous < options.tolerance)) break;
     previous = energy;
-    if (options.keep && since_kept.seconds() >= options.keep_seconds) {
-      keep_state(*options.keep, {iteration + 1, previous, energy, result.means, result.labels});
+    if (keep && since_kept.seconds() >= options.keep_seconds) {
+      try {
+        keep_state(*keep,
+                   {iteration + 1, sequence++, previous, energy, result.means, result.labels});
+      } catch (const Error& e) {  // a full disk ends the keeping, not the encode
+        log_warning(std::string("LBG: keeping its state failed, going on without: ") + e.what());
+        keep = nullptr;
+      }
       since_kept = Stopwatch();
     }
   }

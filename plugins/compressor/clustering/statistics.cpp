@@ -337,8 +337,11 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     RowMatrixXd& y = centred.local();
     if (rows.distributed())
       y = gram_members.at(int(i)).cast<double>().rowwise() - model.mean;
-    else
+    else {
       centred_rows(rows.x, members[std::size_t(which[i])], model.mean, y);
+      // Its members' pages go at once (most clusters are small for wide rows).
+      for (std::uint32_t p : members[std::size_t(which[i])]) rows.release(p, p + 1);
+    }
     directions_from_gram(y, model);
   });
   rows.release_all();  // the Gram clusters' members, read where they lie

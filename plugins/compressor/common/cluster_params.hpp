@@ -96,8 +96,9 @@ inline CoherenceOptions coherence_options(const Params& p) {
 }
 
 // Reclassification, then superclustering, as the scene asks.
-inline void improve_coherence(const CoherenceOptions& o, const Params& p, clustering::RowsRef x,
-                              const Mesh* mesh, CompressedTransfer& compressed) {
+inline void improve_coherence(const CoherenceOptions& o, const Params& p,
+                              const clustering::Rows& rows, const Mesh* mesh,
+                              CompressedTransfer& compressed) {
   if (!mesh) {
     if (o.reclassify || o.supercluster)
       p.fail(o.reclassify ? "reclassify" : "supercluster", "cluster coherence needs the mesh");
@@ -107,8 +108,9 @@ inline void improve_coherence(const CoherenceOptions& o, const Params& p, cluste
     compressed.statistics["overdraw_before_coherence"] =
         average_overdraw(*mesh, compressed.cluster_of_vertex);
   if (o.reclassify)
-    compressed.statistics["reclassified_vertices"] =
-        static_cast<double>(clustering::reclassify(x, *mesh, o.error_budget, compressed));
+    compressed.statistics["reclassified_vertices"] = static_cast<double>(clustering::reclassify(
+        rows.x, *mesh, o.error_budget, compressed,
+        [&rows](Eigen::Index begin, Eigen::Index end) { rows.release(begin, end); }));
   if (o.supercluster) {
     const int per_cluster = compressed.components + 1;  // RGB registers: c_0 .. c_n'
     const int cap = std::max<int>(1, o.registers / per_cluster);
@@ -128,8 +130,8 @@ inline CompressedTransfer finish(const std::string& name, const CoherenceOptions
                                  const Mesh* mesh) {
   CompressedTransfer c = clustering::assemble(rows, labels, models, name);
   if (!rows.distributed()) {
-    improve_coherence(o, p, rows.x, mesh, c);
-    rows.release_all();  // reclassification reads boundary vertices where they lie
+    improve_coherence(o, p, rows, mesh, c);
+    rows.release_all();  // moved vertices were re-read where they lie
     return c;
   }
   if (o.reclassify) p.fail("reclassify", "needs every vertex in one process");
@@ -137,7 +139,7 @@ inline CompressedTransfer finish(const std::string& name, const CoherenceOptions
   if (rows.comm.rank() == 0) {
     CoherenceOptions without = o;
     without.reclassify = false;
-    improve_coherence(without, p, rows.x, mesh, c);
+    improve_coherence(without, p, rows, mesh, c);
   }
   return c;
 }

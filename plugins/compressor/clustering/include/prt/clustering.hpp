@@ -9,6 +9,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -209,8 +210,11 @@ double approximation_error(RowsRef x, Eigen::Index p, const ClusterModel& model,
 // overdraw reduction per unit error increase, until the total squared error
 // has grown by `error_budget` (e.g. 0.05 = 5%). Re-projects moved vertices.
 // Returns the number of vertices moved.
+// `release` (optional) is told the rows each of its two sweeps is done with
+// (Rows::release for a signal in a file).
 std::size_t reclassify(RowsRef x, const Mesh& mesh, double error_budget,
-                       CompressedTransfer& compressed);
+                       CompressedTransfer& compressed,
+                       const std::function<void(Eigen::Index, Eigen::Index)>& release = {});
 
 enum class SuperclusterMethod { greedy_merge, chen_selection };
 
