@@ -124,9 +124,11 @@ void require_contiguous_in_file(const H5::DataSet& set, const std::string& name)
     throw Error("dataset \"" + name + "\" is a virtual dataset (refused: a bake holds its data)");
 }
 
-template <class T>
-std::vector<T> read_array(const H5::Group& group, const std::string& name, hsize_t& rows,
-                          hsize_t& cols) {
+// Opens the 2-D dataset `name` of element class `expected`, refusing one
+// stored outside the file or declaring more values than it stores (checked
+// before anything is allocated for it); rows x cols is its shape.
+H5::DataSet checked_dataset(const H5::Group& group, const std::string& name, H5T_class_t expected,
+                            hsize_t& rows, hsize_t& cols) {
   if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
   H5::DataSet set = group.openDataSet(name);
   require_contiguous_in_file(set, name);
@@ -135,16 +137,23 @@ std::vector<T> read_array(const H5::Group& group, const std::string& name, hsize
   hsize_t dims[2];
   space.getSimpleExtentDims(dims);
   rows = dims[0], cols = dims[1];
-  const H5T_class_t expected = std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER;
   if (set.getTypeClass() != expected)
     throw Error("dataset \"" + name + "\" has the wrong element type");
-  // Stored uncompressed, so its bytes must be in the file: checked before allocating.
+  // Stored uncompressed, so its bytes must be in the file.
   const double bytes = static_cast<double>(rows) * static_cast<double>(cols) *
                        static_cast<double>(set.getDataType().getSize());
   if (bytes > static_cast<double>(file_bytes) ||
       (bytes > 0 && static_cast<double>(set.getStorageSize()) < bytes))
     throw Error("dataset \"" + name + "\" declares " + std::to_string(rows) + " x " +
                 std::to_string(cols) + " values that are not stored in the file");
+  return set;
+}
+
+template <class T>
+std::vector<T> read_array(const H5::Group& group, const std::string& name, hsize_t& rows,
+                          hsize_t& cols) {
+  H5::DataSet set = checked_dataset(
+      group, name, std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER, rows, cols);
   std::vector<T> values(rows * cols);
   if (!values.empty()) set.read(values.data(), h5_type<T>());
   if constexpr (std::is_floating_point_v<T>)
@@ -237,12 +246,11 @@ BakeData::StreamedRows rows_of_file(const TransferSignal& signal) {
   return rows;
 }
 
-// The float dataset `name` (rows x cols), read a block of rows at a time
+// The float dataset `set` (rows x cols, from checked_dataset), read a block of rows at a time
 // into a RowFile in `folder`: never whole in memory. Values are checked as
 // read_array checks them.
-std::shared_ptr<RowFile> read_rows_to_file(const H5::Group& group, const std::string& name,
+std::shared_ptr<RowFile> read_rows_to_file(const H5::DataSet& set, const std::string& name,
                                            hsize_t rows, hsize_t cols, const fs::path& folder) {
-  H5::DataSet set = group.openDataSet(name);
   auto file = RowFile::create(folder, Eigen::Index(rows), Eigen::Index(cols));
   MatrixXfRow block;
   const hsize_t step = 4096;
@@ -260,25 +268,6 @@ std::shared_ptr<RowFile> read_rows_to_file(const H5::Group& group, const std::st
   }
   file->map();
   return file;
-}
-
-// The shape of a 2-D float dataset, checked as read_array checks it.
-void float_shape(const H5::Group& group, const std::string& name, hsize_t& rows, hsize_t& cols) {
-  if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
-  H5::DataSet set = group.openDataSet(name);
-  require_contiguous_in_file(set, name);
-  H5::DataSpace space = set.getSpace();
-  if (space.getSimpleExtentNdims() != 2) throw Error("dataset \"" + name + "\" is not 2-D");
-  hsize_t dims[2];
-  space.getSimpleExtentDims(dims);
-  rows = dims[0], cols = dims[1];
-  if (set.getTypeClass() != H5T_FLOAT)
-    throw Error("dataset \"" + name + "\" has the wrong element type");
-  const double bytes = double(rows) * double(cols) * double(set.getDataType().getSize());
-  if (bytes > static_cast<double>(file_bytes) ||
-      (bytes > 0 && static_cast<double>(set.getStorageSize()) < bytes))
-    throw Error("dataset \"" + name + "\" declares " + std::to_string(rows) + " x " +
-                std::to_string(cols) + " values that are not stored in the file");
 }
 
 MatrixXfRow read_matrix(const H5::Group& group, const std::string& name) {
@@ -494,12 +483,13 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
       }
     }
     hsize_t transfer_rows = 0, transfer_cols = 0;
-    float_shape(transfer, "coefficients", transfer_rows, transfer_cols);
+    const H5::DataSet transfer_set =
+        checked_dataset(transfer, "coefficients", H5T_FLOAT, transfer_rows, transfer_cols);
     const double transfer_bytes = double(transfer_rows) * double(transfer_cols) * 4,
                  beside = kMeshBytesPerVertex * double(data.mesh.vertex_count());
     if (options.memory_budget > 0 && transfer_bytes + beside > options.memory_budget)
-      data.transfer.file = read_rows_to_file(transfer, "coefficients", transfer_rows, transfer_cols,
-                                             options.rows_folder);
+      data.transfer.file = read_rows_to_file(transfer_set, "coefficients", transfer_rows,
+                                             transfer_cols, options.rows_folder);
     else
       data.transfer.coefficients = read_matrix(transfer, "coefficients");
     if (data.transfer.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()))

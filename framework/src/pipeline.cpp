@@ -95,7 +95,7 @@ double available_memory() {
 // container, a Slurm job): what this process may really hold.
 double physical_memory() {
   double bytes = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
-  for (const char* limit : {"/sys/fs/cgroup/memory.max",  // cgroup v2
+  for (const char* limit : {"/sys/fs/cgroup/memory.max",                       // cgroup v2
                             "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {  // v1
     std::ifstream in(limit);
     double value = 0;
