@@ -216,7 +216,11 @@ TransferSignal whole_transfer(const BakePlan& plan, const SceneSpec& scene, cons
 }  // namespace
 
 bool per_vertex_transfer(const BakePlan& plan) {
-  return !plan.fit && plan.bounces == 0 && !plan.subsurface && plan.channels.groups.size() <= 1;
+  return !plan.fit && per_vertex_transfer_after_fit(plan);
+}
+
+bool per_vertex_transfer_after_fit(const BakePlan& plan) {
+  return plan.bounces == 0 && !plan.subsurface && plan.channels.groups.size() <= 1;
 }
 
 TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
@@ -336,11 +340,94 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   return out;
 }
 
-BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
-                                     std::size_t vertices, std::size_t slab,
-                                     std::shared_ptr<const TransferSignal> own) {
-  // Where each slab lies, in vertex order.
-  const std::vector<SlabRange> ranges = slabs_of(0, vertices, std::max<std::size_t>(1, slab));
+TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
+                                     const DirectionSet& set, const RunOptions& options,
+                                     StageTimes& times, std::uint64_t& rays_cast,
+                                     const Shard& shard, const Communicator& comm, bool on_disk) {
+  if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
+  if (!plan.fit || !per_vertex_transfer_after_fit(plan))
+    throw Error("bake: a distributed fit needs a diffuse transfer each vertex gets alone");
+  const CheckpointStore& store = *options.checkpoint;
+  const std::string prefix = "basis_state.", marker = "fitted-basis";
+  // Rank 0 says whether the basis was kept, for every rank: a rank that
+  // looked itself could see the marker rank 0 writes in this very run.
+  std::vector<char> basis_kept(1, 0);
+  if (comm.rank() == 0) basis_kept[0] = store.has(marker) ? 1 : 0;
+  comm.broadcast(basis_kept, 0);
+  const SlabRange own{std::size_t(shard.first), std::size_t(shard.last)};
+  const bool rows_kept = basis_kept[0] && (own.first == own.last || slab_kept(store, own));
+  if (basis_kept[0]) {
+    BasisState state;
+    for (const auto& part : store.parts())
+      if (part.rfind(prefix, 0) == 0)
+        state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
+    plan.basis->load(state);
+    options.message("resuming: the fitted basis kept in " + store.folder().string());
+  }
+  const Eigen::Index cols = transfer_dimension(plan);
+  MatrixXfRow rows;
+  std::uint64_t rays = 0;
+  if (rows_kept) {
+    if (own.first < own.last) {
+      rows = kept_rows(store, own, cols);
+      rays = kept_rays(store, own);
+    } else {
+      rows.resize(0, cols);
+    }
+  } else {
+    // Every rank traces its shard's visibility, then (unless the basis was
+    // kept) the ranks fit it together, each from its own bits.
+    Stopwatch clock;
+    TransportOptions transport;
+    transport.shadowed = plan.shadowed;
+    transport.keep_visibility = true;
+    transport.first_vertex = own.first;
+    transport.last_vertex = own.last;
+    Progress progress("trace (this rank's vertices)", double(shard.rows()),
+                      plan.shadowed ? "rays" : "", options.quiet);
+    TransportResult traced =
+        diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
+    progress.finish();
+    rays = traced.rays_cast;
+    times.add("trace (this rank's shard)", clock.seconds());
+    if (!basis_kept[0]) {
+      clock = Stopwatch();
+      plan.basis->fit({&mesh, &set, &traced.visibility, shard, &comm});
+      times.add("fit basis (" + plan.basis_record.name + ", distributed)", clock.seconds());
+      if (comm.rank() == 0) {
+        for (const auto& [name, matrix] : plan.basis->save().matrices)
+          store.save(prefix + name, matrix);
+        store.save_text(marker, plan.basis_record.name);  // last: marks the basis kept
+      }
+    }
+    clock = Stopwatch();
+    rows = project_visibility(mesh, set, traced.visibility, *plan.basis, own.first).coefficients;
+    if (own.first < own.last) keep_slab(store, own, rows, rays);
+    times.add("project", clock.seconds());
+  }
+  rays_cast = 0;
+  for (const auto& r : allgather(comm, {double(rays)})) rays_cast += std::uint64_t(r[0]);
+  comm.barrier();  // every rank's rows are kept (rank 0 writes the file from them)
+  TransferSignal out;
+  set_shape(plan, out);
+  if (on_disk) {
+    auto file = RowFile::create(store.folder(), shard.rows(), cols);
+    file->write(0, rows);
+    file->map();
+    out.file = std::move(file);
+  } else {
+    out.coefficients = std::move(rows);
+  }
+  return out;
+}
+
+namespace {
+
+// Rows [first, last) of the whole transfer: rank 0's from `own`, the others'
+// from the kept parts `ranges` (in vertex order), a part at a time.
+BakeData::StreamedRows kept_parts(const BakePlan& plan, const CheckpointStore& store,
+                                  std::size_t vertices, std::vector<SlabRange> ranges,
+                                  std::shared_ptr<const TransferSignal> own) {
   BakeData::StreamedRows rows;
   rows.rows = Eigen::Index(vertices);
   rows.cols = transfer_dimension(plan);
@@ -373,6 +460,26 @@ BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore
     }
   };
   return rows;
+}
+
+}  // namespace
+
+BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
+                                     std::size_t vertices, std::size_t slab,
+                                     std::shared_ptr<const TransferSignal> own) {
+  return kept_parts(plan, store, vertices, slabs_of(0, vertices, std::max<std::size_t>(1, slab)),
+                    std::move(own));
+}
+
+BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const CheckpointStore& store,
+                                           std::size_t vertices, int ranks,
+                                           std::shared_ptr<const TransferSignal> own) {
+  std::vector<SlabRange> ranges;
+  for (int r = 0; r < ranks; ++r) {
+    const Shard shard = shard_of(Eigen::Index(vertices), r, ranks);
+    ranges.push_back({std::size_t(shard.first), std::size_t(shard.last)});
+  }
+  return kept_parts(plan, store, vertices, std::move(ranges), std::move(own));
 }
 
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {

@@ -1,8 +1,14 @@
 #include "prt/basis.hpp"
 
 #include "prt/error.hpp"
+#include "prt/mesh.hpp"
 
 namespace prt {
+
+Shard FitData::rows() const {
+  if (shard.total != 0) return shard;
+  return whole(mesh ? static_cast<Eigen::Index>(mesh->vertex_count()) : 0);
+}
 
 Eigen::MatrixXd Basis::projection_matrix(const DirectionSet& set) const {
   return set.weights.asDiagonal() * evaluate(set.directions);

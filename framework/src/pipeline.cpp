@@ -479,7 +479,10 @@ bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
                           double(plan.basis->size()) * groups * 4;
   const double resident = kMeshBytesPerVertex * v, budget = options.budget();
   if (resident + transfer <= budget) return false;
-  if (!per_vertex_transfer(plan) || !options.checkpoint || options.traced) {
+  // A distributed fit projects each rank's rows after the fit: they too can go to a file.
+  const bool distributed_fit =
+      options.comm && options.comm->size() > 1 && plan.fit && per_vertex_transfer_after_fit(plan);
+  if (!(per_vertex_transfer(plan) || distributed_fit) || !options.checkpoint || options.traced) {
     options.warn("the transfer (" + gigabytes(transfer) + ") and mesh (~" + gigabytes(resident) +
                  ") exceed the memory budget of " + gigabytes(budget) +
                  "; this transfer couples vertices (or runs without a checkpoint) and is held in "
@@ -501,11 +504,20 @@ bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
 // What a distributed bake cannot do yet, refused before any ray.
 void require_distributable(const SceneSpec& scene, const BakePlan& plan,
                            const RunOptions& options) {
-  if (!per_vertex_transfer(plan))
+  if (plan.fit && !plan.basis->can_fit_distributed())
+    throw Error(scene.basis.where,
+                "basis \"" + plan.basis_record.name +
+                    "\" fits to the traced visibility but cannot fit from shards of it (it "
+                    "does not declare can_fit_distributed()): bake it with prt bake");
+  if (plan.fit && plan.glossy)
+    throw Error(scene.basis.where,
+                "a distributed bake fits a basis for diffuse transfer only; this scene is "
+                "glossy: bake it with prt bake");
+  if (!per_vertex_transfer_after_fit(plan))
     throw Error(scene.basis.where,
                 "a distributed bake needs a transfer each vertex gets alone; this scene's "
-                "couples vertices (a fitted basis, bounces, subsurface light or per-channel "
-                "transfers): bake it with prt bake");
+                "couples vertices (bounces, subsurface light or per-channel transfers): bake "
+                "it with prt bake");
   if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
   if (options.traced || !options.compress)
     throw Error("a distributed bake traces and compresses its own shards");
@@ -552,8 +564,10 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   std::uint64_t rays_cast = 0;
   TransferSignal transfer =
       distributed
-          ? shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard, comm,
-                           on_disk)
+          ? (plan.fit ? fitted_shard_transfer(plan, data.mesh, set, options, times, rays_cast,
+                                              shard.shard, comm, on_disk)
+                      : shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard,
+                                       comm, on_disk))
           : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
                                   plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
 
@@ -576,9 +590,12 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
     data.transfer.exit_rows = transfer.exit_rows;
     data.transfer.channel_groups = transfer.channel_groups;
     data.transfer.group_of_channel = transfer.group_of_channel;
+    auto own = std::make_shared<const TransferSignal>(std::move(transfer));
     data.streamed_transfer =
-        kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(), options.slab_vertices,
-                      std::make_shared<const TransferSignal>(std::move(transfer)));
+        plan.fit ? kept_shard_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
+                                       comm.size(), std::move(own))
+                 : kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
+                                 options.slab_vertices, std::move(own));
   } else {  // in memory, or in its file (write_bake reads it from there)
     data.transfer = std::move(transfer);
   }

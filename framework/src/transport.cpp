@@ -365,39 +365,43 @@ void transport_rows(const Mesh& mesh, const DirectionSet& set, const VisibilityB
 }
 
 TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
-                                  const VisibilityBits& visibility, const Basis& basis) {
-  if (visibility.vertices() != mesh.vertex_count() ||
+                                  const VisibilityBits& visibility, const Basis& basis,
+                                  std::size_t first_vertex) {
+  const std::size_t count = visibility.vertices(), last = first_vertex + count;
+  if (first_vertex > mesh.vertex_count() || count > mesh.vertex_count() - first_vertex ||
       visibility.directions() != static_cast<std::size_t>(set.size()))
-    throw Error("project_visibility: visibility of " + std::to_string(visibility.vertices()) +
-                " vertices x " + std::to_string(visibility.directions()) +
+    throw Error("project_visibility: visibility of " + std::to_string(count) + " vertices (from " +
+                std::to_string(first_vertex) + ") x " + std::to_string(visibility.directions()) +
                 " directions for a mesh of " + std::to_string(mesh.vertex_count()) + " and " +
                 std::to_string(set.size()) + " directions");
   TransferSignal out;
-  out.coefficients.resize(static_cast<Eigen::Index>(mesh.vertex_count()), basis.size());
+  out.coefficients.resize(static_cast<Eigen::Index>(count), basis.size());
+  // Blocks are counted from vertex 0 of the mesh, so a shard's rows are
+  // those of the whole mesh's projection.
   if (!basis.has_fast_projection(set)) {
     // T P over the visible pairs only, as the bake's own projection, a block
     // of rows at a time (double sums for a block, float for the whole mesh).
     const PaddedRows projection(basis.projection_matrix(set));
-    for_each_row_block(std::size_t(0), mesh.vertex_count(), std::size_t(1024),
-                       [&](std::size_t begin, std::size_t end) {
-                         std::vector<std::uint32_t> vertices(end - begin);
-                         std::iota(vertices.begin(), vertices.end(),
-                                   static_cast<std::uint32_t>(begin));
-                         PaddedRows sums;
-                         visible_times(mesh, set, vertices.data(), vertices.size(),
-                                       visibility.words(begin), projection, sums);
-                         out.coefficients.middleRows(begin, end - begin) =
-                             sums.block(0, Eigen::Index(end - begin)).cast<float>();
-                       });
+    for_each_row_block(
+        first_vertex, last, std::size_t(1024), [&](std::size_t begin, std::size_t end) {
+          std::vector<std::uint32_t> vertices(end - begin);
+          std::iota(vertices.begin(), vertices.end(), static_cast<std::uint32_t>(begin));
+          PaddedRows sums;
+          visible_times(mesh, set, vertices.data(), vertices.size(),
+                        visibility.words(begin - first_vertex), projection, sums);
+          out.coefficients.middleRows(begin - first_vertex, end - begin) =
+              sums.block(0, Eigen::Index(end - begin)).cast<float>();
+        });
     return out;
   }
   // Fixed blocks: a GEMM's rows depend on the block's shape (row_blocks.hpp).
-  for_each_row_block(
-      std::size_t(0), mesh.vertex_count(), kBlock, [&](std::size_t begin, std::size_t end) {
-        Eigen::MatrixXd rows;
-        transport_rows(mesh, set, visibility, begin, end, rows);
-        out.coefficients.middleRows(begin, end - begin) = basis.project(rows, set).cast<float>();
-      });
+  for_each_row_block(first_vertex, last, kBlock, [&](std::size_t begin, std::size_t end) {
+    const auto vertex_of = [begin](std::size_t slot) { return std::uint32_t(begin + slot); };
+    const Eigen::MatrixXd rows =
+        rows_from_bits(mesh, set, end - begin, vertex_of, visibility.words(begin - first_vertex));
+    out.coefficients.middleRows(begin - first_vertex, end - begin) =
+        basis.project(rows, set).cast<float>();
+  });
   return out;
 }
 

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "prt/error.hpp"
+#include "prt/segment_sum.hpp"
 #include "prt/transport.hpp"
 
 namespace prt {
@@ -145,14 +146,16 @@ void for_each_panel(std::integer_sequence<int, P...>, Eigen::Index packets, Args
   }
 }
 
-// out.row(i) (zeroed first) for output rows [first, last) of `m`.
+// out.row(i) (zeroed first) for output rows [first, last) of `m`, over the
+// gathered rows of words [first_word, last_word) (default: all).
 void masked_sums(const MaskedSums& m, std::size_t first, std::size_t last, PaddedRows& out,
-                 Eigen::Index first_out_row) {
+                 Eigen::Index first_out_row, std::size_t first_word = 0,
+                 std::size_t last_word = std::size_t(-1)) {
   const Eigen::Index packets = m.rows->stride() / 8;
   for (std::size_t r = first; r < last; ++r)
     std::fill_n(out.row(first_out_row + Eigen::Index(r - first)), out.stride(), 0.0);
   if (packets == 0) return;
-  for (std::size_t word = 0; word < m.words; ++word)
+  for (std::size_t word = first_word; word < std::min(last_word, m.words); ++word)
     for (std::size_t r = first; r < last; ++r)
       if (const std::uint64_t tile = m.bits[r * m.words + word])
         for_each_panel<TileKernel>(std::make_integer_sequence<int, kMaxPanel>(), packets, m,
@@ -174,6 +177,14 @@ void check_rows(Eigen::Index rows, std::size_t expected, const char* what, const
                 std::to_string(expected) + " " + of);
 }
 
+// The bits' vertices [first, first + count) must be the mesh's.
+void check_range(const Mesh& mesh, std::size_t first, std::size_t count, const char* what) {
+  if (first > mesh.vertex_count() || count > mesh.vertex_count() - first)
+    throw Error(std::string(what) + ": visibility of vertices [" + std::to_string(first) + ", " +
+                std::to_string(first + count) + ") for a mesh of " +
+                std::to_string(mesh.vertex_count()) + " vertices");
+}
+
 }  // namespace
 
 void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_t* vertices,
@@ -189,15 +200,14 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_
 }
 
 void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
-                   const PaddedRows& right, PaddedRows& out) {
+                   const PaddedRows& right, PaddedRows& out, std::size_t first_vertex) {
   const auto s = static_cast<std::size_t>(set.size());
   check_rows(right.rows(), s, "visible_times: the right-hand matrix", "directions");
-  check_rows(Eigen::Index(mesh.vertex_count()), visibility.vertices(), "visible_times: the mesh",
-             "vertices of visibility");
+  check_range(mesh, first_vertex, visibility.vertices(), "visible_times");
   check_rows(set.size(), visibility.directions(), "visible_times: the direction set",
              "directions of visibility");
-  const auto normal = [&](std::size_t i, int c) { return mesh.normals[i][c]; };
-  const std::vector<double> a = coordinates(normal, mesh.vertex_count(), 1 / M_PI);
+  const auto normal = [&](std::size_t i, int c) { return mesh.normals[first_vertex + i][c]; };
+  const std::vector<double> a = coordinates(normal, visibility.vertices(), 1 / M_PI);
   if (out.rows() != Eigen::Index(visibility.vertices()) || out.cols() != right.cols())
     out = PaddedRows(Eigen::Index(visibility.vertices()), right.cols());
   const MaskedSums m{visibility.words(0), VisibilityBits::words_for(s), a.data(),
@@ -253,6 +263,47 @@ Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& se
                                         const VisibilityBits& visibility,
                                         const Eigen::MatrixXd& left) {
   return visible_transpose_times(mesh, set, TransposedVisibility(visibility), left);
+}
+
+Eigen::MatrixXd visible_transpose_sum(const Mesh& mesh, const DirectionSet& set,
+                                      const TransposedVisibility& transposed,
+                                      const PaddedRows& left, const Shard& shard,
+                                      const Communicator& comm) {
+  const auto s = static_cast<std::size_t>(set.size());
+  check_rows(left.rows(), transposed.vertices(), "visible_transpose_sum: the left matrix",
+             "vertices");
+  check_rows(shard.rows(), transposed.vertices(), "visible_transpose_sum: the shard",
+             "vertices of visibility");
+  check_rows(set.size(), transposed.directions(), "visible_transpose_sum: the direction set",
+             "directions of visibility");
+  check_range(mesh, std::size_t(shard.first), transposed.vertices(), "visible_transpose_sum");
+  const auto normal = [&](std::size_t i, int c) {
+    return mesh.normals[std::size_t(shard.first) + i][c];
+  };
+  const std::vector<double> b = coordinates(normal, transposed.vertices(), 1 / M_PI);
+  const MaskedSums m{transposed.words(0), transposed.words_per_direction(), set.directions.data(),
+                     b.data(), &left};
+  const Eigen::Index cols = left.cols();
+  // A segment's words: shards start at whole segments, and segments are
+  // whole words (kSegmentRows is a multiple of 64).
+  static_assert(kSegmentRows % 64 == 0);
+  const auto partial = [&](Eigen::Index segment) {
+    const auto begin = std::size_t(segment_begin(segment) - shard.first),
+               end = std::size_t(segment_end(segment, shard.total) - shard.first);
+    PaddedRows sums(set.size(), cols);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s, 512), [&](const auto& range) {
+      masked_sums(m, range.begin(), range.end(), sums, Eigen::Index(range.begin()), begin / 64,
+                  (end + 63) / 64);
+    });
+    std::vector<double> values(s * std::size_t(cols));
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        values.data(), set.size(), cols) = sums.matrix_view();
+    return values;
+  };
+  const std::vector<double> sum = segment_sum(shard, partial, comm);
+  if (sum.empty()) return Eigen::MatrixXd::Zero(set.size(), cols);
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      sum.data(), set.size(), cols);
 }
 
 }  // namespace prt

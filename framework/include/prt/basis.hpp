@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "prt/communicator.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/plugin.hpp"
 
@@ -15,11 +16,21 @@ struct Mesh;
 class VisibilityBits;
 
 // What a data-driven basis is fitted to: the mesh, the direction set and the
-// traced visibility (1 bit per vertex and direction).
+// traced visibility (1 bit per vertex and direction). In a distributed bake
+// each rank holds the bits of its shard only: `visibility` has a row per
+// vertex [shard.first, shard.last) of the mesh, and sums over vertices go
+// through segment_sum (prt/segment_sum.hpp) over `comm`, so that every rank
+// fits the same basis, bit for bit the one a single process fits. The
+// defaults are one process holding every vertex.
 struct FitData {
   const Mesh* mesh = nullptr;
   const DirectionSet* directions = nullptr;
   const VisibilityBits* visibility = nullptr;
+  Shard shard;                         // total == 0: the whole mesh
+  const Communicator* comm = nullptr;  // null: solo()
+
+  Shard rows() const;  // the shard, or the whole mesh by default
+  const Communicator& communicator() const { return comm ? *comm : solo(); }
 };
 
 enum class Domain { sphere, hemisphere };
@@ -91,6 +102,10 @@ class Basis : public PluginObject {
   // Capability: fitting to data (data-driven bases such as eigentransport).
   virtual bool can_fit() const { return false; }
   virtual void fit(const FitData&) {}
+  // Capability: fit() works from a shard of the visibility per rank (FitData's
+  // shard and comm), so prt-mpi can bake with this basis. A basis without it
+  // is refused by prt-mpi before any ray.
+  virtual bool can_fit_distributed() const { return false; }
 
   // Fitted state, saved to and restored from the bake file.
   virtual BasisState save() const { return {}; }

@@ -123,6 +123,8 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
 //    subsurface light or per-channel transfers) in slabs of vertices:
 //    vertices [first, last) traced and projected (glossy: their matrices).
 bool per_vertex_transfer(const BakePlan& plan);
+// The same but for a fitted basis: once fitted, each vertex's row is its own.
+bool per_vertex_transfer_after_fit(const BakePlan& plan);
 TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                              const RayCaster* caster, const std::vector<Frame>& frames,
                              std::size_t first, std::size_t last, std::uint64_t& rays_cast,
@@ -149,12 +151,25 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
                               const RunOptions& options, StageTimes& times,
                               std::uint64_t& rays_cast, const Shard& shard,
                               const Communicator& comm, bool on_disk = false);
+// The same for a fitted basis (a diffuse transfer each vertex gets alone once
+// the basis is fitted): each rank traces its shard's visibility, the ranks fit
+// the basis together (Basis::can_fit_distributed), and each projects its
+// rows. The fitted basis and each shard's rows are kept in options.checkpoint.
+TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
+                                     const DirectionSet& set, const RunOptions& options,
+                                     StageTimes& times, std::uint64_t& rays_cast,
+                                     const Shard& shard, const Communicator& comm,
+                                     bool on_disk = false);
 // Every rank's rows as rank 0 writes the file: its own from memory, the
 // other ranks' read from the checkpoint's slabs a slab at a time (rank 0
 // never holds the whole transfer). `store` must outlive the result.
 BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
                                      std::size_t vertices, std::size_t slab_vertices,
                                      std::shared_ptr<const TransferSignal> own);
+// The same when each rank kept its shard's rows (fitted_shard_transfer).
+BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const CheckpointStore& store,
+                                           std::size_t vertices, int ranks,
+                                           std::shared_ptr<const TransferSignal> own);
 // What a scene's bake depends on (scene text, mesh bytes, plug-ins, format):
 // the key of its checkpoint.
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan);

@@ -137,9 +137,11 @@ void transport_rows(const Mesh& mesh, const DirectionSet& directions,
                     Eigen::MatrixXd& rows);
 
 // Diffuse transfer from stored visibility (no rays): used after fitting a
-// data-driven basis to the same visibility.
+// data-driven basis to the same visibility. The bits' rows are the mesh's
+// vertices from `first_vertex` on (a rank's shard; default all).
 TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& directions,
-                                  const VisibilityBits& visibility, const Basis& basis);
+                                  const VisibilityBits& visibility, const Basis& basis,
+                                  std::size_t first_vertex = 0);
 
 // Traces exactly the rays diffuse_transfer would, and nothing else: the
 // yardstick of the bake benchmark.

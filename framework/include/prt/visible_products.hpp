@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "prt/communicator.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/mesh.hpp"
 
@@ -83,9 +84,10 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_
                    PaddedRows& out);
 
 // T right for all of `visibility`'s vertices, on every core; `out` keeps its
-// storage when it has the shape already.
+// storage when it has the shape already. The bits' rows are the mesh's
+// vertices from `first_vertex` on (a rank's shard; default all).
 void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
-                   const PaddedRows& right, PaddedRows& out);
+                   const PaddedRows& right, PaddedRows& out, std::size_t first_vertex = 0);
 Eigen::MatrixXd visible_times(const Mesh& mesh, const DirectionSet& set,
                               const VisibilityBits& visibility, const Eigen::MatrixXd& right);
 
@@ -101,5 +103,16 @@ Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& se
 Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& set,
                                         const VisibilityBits& visibility,
                                         const Eigen::MatrixXd& left);
+
+// T^T left over the vertices of a shard (the bits' and left's rows are the
+// mesh's vertices [shard.first, shard.last)), summed over every rank's
+// shard by segment_sum: one partial per segment of vertices, added along a
+// fixed tree. The result is on every rank, the same bits for any number of
+// ranks and cores (not those of visible_transpose_times, which adds every
+// vertex in one running sum).
+Eigen::MatrixXd visible_transpose_sum(const Mesh& mesh, const DirectionSet& set,
+                                      const TransposedVisibility& transposed,
+                                      const PaddedRows& left, const Shard& shard,
+                                      const Communicator& comm);
 
 }  // namespace prt

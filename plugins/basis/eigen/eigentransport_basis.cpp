@@ -19,6 +19,7 @@
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/row_blocks.hpp"
+#include "prt/segment_sum.hpp"
 #include "prt/transport.hpp"
 #include "prt/visible_products.hpp"
 
@@ -26,18 +27,24 @@ namespace prt {
 
 namespace {
 
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
 void householder_columns(Eigen::MatrixXd& m) {
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(m);
   m = qr.householderQ() * Eigen::MatrixXd::Identity(m.rows(), m.cols());
 }
 
-// m's columns made orthonormal, in place. Tall matrices (a row per vertex) go
-// by Cholesky QR twice: two Gram products and triangular solves in fixed row
-// blocks on every core, where Householder QR ran on one core (0.17 s of the
-// bunny's 2 s fit). Two passes are accurate while cond(m) < ~1e8; a
-// worse-conditioned or rank-deficient m, and small ones, go by Householder.
+constexpr Eigen::Index kBlock = 1024;  // fixed: the same bits on any number of cores
+
+// m's columns made orthonormal, in place, for a matrix every rank holds
+// whole (a row per direction). Tall matrices go by Cholesky QR twice: two
+// Gram products and triangular solves in fixed row blocks on every core,
+// where Householder QR ran on one core (0.17 s of the bunny's 2 s fit). Two
+// passes are accurate while cond(m) < ~1e8; a worse-conditioned or
+// rank-deficient m, and small ones, go by Householder.
+bool cholesky_qr_pass(Eigen::MatrixXd& m, const Eigen::MatrixXd& gram, Eigen::Index first_row);
+
 void orthonormalize(Eigen::MatrixXd& m) {
-  constexpr Eigen::Index kBlock = 1024;  // fixed: the same bits on any number of cores
   if (m.rows() < 4 * kBlock) return householder_columns(m);
   for (int pass = 0; pass < 2; ++pass) {
     const Eigen::Index blocks = (m.rows() + kBlock - 1) / kBlock;
@@ -49,20 +56,87 @@ void orthonormalize(Eigen::MatrixXd& m) {
                        });
     Eigen::MatrixXd gram = parts[0];
     for (std::size_t b = 1; b < parts.size(); ++b) gram += parts[b];
-    const Eigen::LLT<Eigen::MatrixXd> llt(gram);
-    const Eigen::VectorXd diagonal = llt.matrixL().toDenseMatrix().diagonal();
-    // The diagonal's spread bounds cond(m) from below only (by up to ~100x at
-    // tens of columns): 1e-5 keeps cond well under ~1e8. m is untouched when
-    // this fails, and the second pass's m spans the first's columns.
-    if (llt.info() != Eigen::Success || !diagonal.allFinite() ||
-        diagonal.minCoeff() <= 1e-5 * diagonal.maxCoeff())
-      return householder_columns(m);
-    for_each_row_block(Eigen::Index(0), m.rows(), kBlock,
-                       [&](Eigen::Index begin, Eigen::Index end) {
-                         auto rows = m.middleRows(begin, end - begin);
-                         llt.matrixU().solveInPlace<Eigen::OnTheRight>(rows);
-                       });
+    if (!cholesky_qr_pass(m, gram, 0)) return householder_columns(m);
   }
+}
+
+// One pass of Cholesky QR with m's Gram matrix: m <- m U^-1, in fixed row
+// blocks (rows counted from first_row of the whole matrix). False, m
+// untouched, when the Gram is too ill-conditioned: the diagonal's spread
+// bounds cond(m) from below only (by up to ~100x at tens of columns), and
+// 1e-5 keeps cond well under ~1e8.
+bool cholesky_qr_pass(Eigen::MatrixXd& m, const Eigen::MatrixXd& gram, Eigen::Index first_row) {
+  const Eigen::LLT<Eigen::MatrixXd> llt(gram);
+  const Eigen::VectorXd diagonal = llt.matrixL().toDenseMatrix().diagonal();
+  if (llt.info() != Eigen::Success || !diagonal.allFinite() ||
+      diagonal.minCoeff() <= 1e-5 * diagonal.maxCoeff())
+    return false;
+  // Each block is solved in a matrix of its own: Eigen's kernels may add in
+  // an order that depends on where the rows lie in memory (a rank's shard
+  // starts elsewhere than the whole matrix).
+  for_each_row_block(first_row, first_row + m.rows(), kBlock,
+                     [&](Eigen::Index begin, Eigen::Index end) {
+                       Eigen::MatrixXd rows = m.middleRows(begin - first_row, end - begin);
+                       llt.matrixU().solveInPlace<Eigen::OnTheRight>(rows);
+                       m.middleRows(begin - first_row, end - begin) = rows;
+                     });
+  return true;
+}
+
+// The same for a matrix with a row per vertex, each rank holding its
+// shard's rows: the Gram matrices are sums over segments (segment_sum), and
+// a small or ill-conditioned matrix is gathered whole to every rank for
+// Householder QR, so that every rank, and a single process, get the same
+// bits.
+void orthonormalize_rows(Eigen::MatrixXd& m, const Shard& shard, const Communicator& comm) {
+  const Eigen::Index cols = m.cols();
+  auto householder_gathered = [&] {
+    if (comm.size() <= 1) return householder_columns(m);
+    std::vector<double> mine(std::size_t(m.rows() * cols));
+    Eigen::Map<RowMajor>(mine.data(), m.rows(), cols) = m;
+    Eigen::MatrixXd whole_matrix(shard.total, cols);
+    Eigen::Index at = 0;
+    for (const auto& part : allgather(comm, mine)) {
+      const Eigen::Index rows = Eigen::Index(part.size()) / std::max<Eigen::Index>(1, cols);
+      whole_matrix.middleRows(at, rows) = Eigen::Map<const RowMajor>(part.data(), rows, cols);
+      at += rows;
+    }
+    householder_columns(whole_matrix);
+    m = whole_matrix.middleRows(shard.first, shard.rows());
+  };
+  if (shard.total < 4 * kBlock) return householder_gathered();
+  for (int pass = 0; pass < 2; ++pass) {
+    const auto partial = [&](Eigen::Index segment) {
+      const Eigen::Index begin = segment_begin(segment) - shard.first,
+                         end = segment_end(segment, shard.total) - shard.first;
+      Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(cols, cols);
+      for (Eigen::Index b = begin; b < end; b += kBlock) {  // blocks in order, each copied
+        const Eigen::MatrixXd rows = m.middleRows(b, std::min(kBlock, end - b));
+        gram.noalias() += rows.transpose() * rows;
+      }
+      return std::vector<double>(gram.data(), gram.data() + gram.size());
+    };
+    const std::vector<double> sum = segment_sum(shard, partial, comm);
+    const Eigen::MatrixXd gram = Eigen::Map<const Eigen::MatrixXd>(sum.data(), cols, cols);
+    if (!cholesky_qr_pass(m, gram, shard.first)) return householder_gathered();
+  }
+}
+
+// The column sums of a matrix with a row per vertex, over every rank's shard.
+Eigen::RowVectorXd column_sums_of_rows(const Eigen::MatrixXd& m, const Shard& shard,
+                                       const Communicator& comm) {
+  const auto partial = [&](Eigen::Index segment) {
+    const Eigen::Index begin = segment_begin(segment) - shard.first,
+                       end = segment_end(segment, shard.total) - shard.first;
+    // Row by row: a vectorized column sum's order depends on the column's
+    // alignment, which differs between a shard and the whole matrix.
+    Eigen::RowVectorXd sums = Eigen::RowVectorXd::Zero(m.cols());
+    for (Eigen::Index r = begin; r < end; ++r) sums += m.row(r);
+    return std::vector<double>(sums.data(), sums.data() + sums.size());
+  };
+  const std::vector<double> sum = segment_sum(shard, partial, comm);
+  if (sum.empty()) return Eigen::RowVectorXd::Zero(m.cols());
+  return Eigen::Map<const Eigen::RowVectorXd>(sum.data(), m.cols());
 }
 
 }  // namespace
@@ -122,6 +196,8 @@ class Eigentransport final : public Basis {
           set.kind);
   }
 
+  bool can_fit_distributed() const override { return true; }
+
   void fit(const FitData& data) override {
     const DirectionSet& set = *data.directions;
     const Mesh& mesh = *data.mesh;
@@ -130,50 +206,59 @@ class Eigentransport final : public Basis {
     const int r = static_cast<int>(std::lround(std::sqrt(s / 6.0)));
     resolution_ = r;
     root_weights_ = set.weights.cwiseSqrt();
-    const Eigen::Index v = static_cast<Eigen::Index>(mesh.vertex_count());
+    // This process's vertices (a rank's shard, or all), and every sum over
+    // vertices by segment_sum over the ranks: a seed gives the same basis,
+    // bit for bit, whatever the number of cores or ranks.
+    const Shard shard = data.rows();
+    const Communicator& comm = data.communicator();
+    const VisibilityBits& visibility = *data.visibility;
+    if (Eigen::Index(visibility.vertices()) != shard.rows() ||
+        Eigen::Index(mesh.vertex_count()) != shard.total)
+      throw Error("basis \"eigen\": visibility of " + std::to_string(visibility.vertices()) +
+                  " vertices for a shard of " + std::to_string(shard.rows()) + " of a mesh of " +
+                  std::to_string(mesh.vertex_count()));
+    const Eigen::Index v = shard.total;
     const Eigen::Index columns = std::min<Eigen::Index>({max_d_ + oversampling_, s, v});
+    const auto first = std::size_t(shard.first);
 
     // Passes over the visibility bits with C = T W - 1 mean (W = diag(sqrt(w))),
     // never built: C X = T (W X) - 1 (mean X) and C^T Y = W T^T Y -
     // mean^T (1^T Y), where the products with T visit only the visible
-    // (vertex, direction) pairs. Every sum over vertices runs in an order
-    // fixed by the data, not by the threads: a seed gives the same basis
-    // whatever the number of cores.
-    const VisibilityBits& visibility = *data.visibility;
+    // (vertex, direction) pairs.
     const TransposedVisibility transposed(visibility);
     double transport_energy = 0;  // ||T W||_F^2
-    mean_ = column_sums(mesh, set, transposed, transport_energy) / double(v);
+    mean_ = column_sums(mesh, set, transposed, shard, comm, transport_energy) / double(v);
 
     std::mt19937_64 rng(seed_);
     std::normal_distribution<double> gaussian;
     Eigen::MatrixXd omega(s, columns);
     for (auto& x : omega.reshaped()) x = gaussian(rng);
     // Y = C Omega; Q = orth(Y); then power iterations Q <- orth(C orth(C^T Q)).
-    // The v x columns buffers are kept across passes (fresh pages are slow).
+    // The vertices x columns buffers are kept across passes (fresh pages are slow).
     PaddedRows padded_right, padded_left, padded_out;
-    Eigen::MatrixXd q(v, columns);
-    auto times_c = [&](const Eigen::MatrixXd& right) {  // q = C * right: v x columns
+    Eigen::MatrixXd q(shard.rows(), columns);
+    auto times_c = [&](const Eigen::MatrixXd& right) {  // q = C * right: this shard's rows
       padded_right.assign(root_weights_.asDiagonal() * right);
-      visible_times(mesh, set, visibility, padded_right, padded_out);
+      visible_times(mesh, set, visibility, padded_right, padded_out, first);
       const Eigen::RowVectorXd shift = mean_ * right;
       q = padded_out.matrix_view();
       q.rowwise() -= shift;
     };
-    PaddedRows padded_product;
     auto c_transpose_times = [&](const Eigen::MatrixXd& left) {  // C^T left: s x columns
       padded_left.assign(left);
-      visible_transpose_times(mesh, set, transposed, padded_left, padded_product);
-      Eigen::MatrixXd product = root_weights_.asDiagonal() * padded_product.matrix_view();
-      product.noalias() -= mean_.transpose() * left.colwise().sum();
+      Eigen::MatrixXd product =
+          root_weights_.asDiagonal() *
+          visible_transpose_sum(mesh, set, transposed, padded_left, shard, comm);
+      product.noalias() -= mean_.transpose() * column_sums_of_rows(left, shard, comm);
       return product;
     };
     times_c(omega);
-    orthonormalize(q);
+    orthonormalize_rows(q, shard, comm);
     for (int i = 0; i < power_iterations_; ++i) {
       Eigen::MatrixXd z = c_transpose_times(q);
       orthonormalize(z);
       times_c(z);
-      orthonormalize(q);
+      orthonormalize_rows(q, shard, comm);
     }
     // ||C||_F^2 = ||T W||_F^2 - v ||mean||^2 (C's rows are centred). It loses
     // digits when the mean holds nearly all the energy (the error is ~eps
@@ -250,13 +335,14 @@ class Eigentransport final : public Basis {
   // packet per pair, where a pass of its own re-derived each cosine and
   // added it to a per-direction sum (0.13 s for the bunny, 8% of the fit).
   Eigen::RowVectorXd column_sums(const Mesh& mesh, const DirectionSet& set,
-                                 const TransposedVisibility& transposed, double& energy) const {
-    const Eigen::Index v = static_cast<Eigen::Index>(mesh.vertex_count());
-    Eigen::MatrixXd ones_and_normals(v, 4);
-    for (Eigen::Index p = 0; p < v; ++p)
-      ones_and_normals.row(p) << 1.0, mesh.normals[std::size_t(p)].cast<double>().transpose();
-    const Eigen::MatrixXd sums =
-        visible_transpose_times(mesh, set, transposed, ones_and_normals);  // s x 4
+                                 const TransposedVisibility& transposed, const Shard& shard,
+                                 const Communicator& comm, double& energy) const {
+    Eigen::MatrixXd ones_and_normals(shard.rows(), 4);
+    for (Eigen::Index p = 0; p < shard.rows(); ++p)
+      ones_and_normals.row(p) << 1.0,
+          mesh.normals[std::size_t(shard.first + p)].cast<double>().transpose();
+    const Eigen::MatrixXd sums = visible_transpose_sum(
+        mesh, set, transposed, PaddedRows(ones_and_normals), shard, comm);  // s x 4
     const Eigen::VectorXd weights = root_weights_.cwiseAbs2();
     const Eigen::VectorXd squares =
         (sums.rightCols<3>().cwiseProduct(set.directions).rowwise().sum() / M_PI);
