@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # prt-mpi on a real CGAL mesh equals prt bake byte for byte, for 1 to 4
 # ranks (more ranks than cores: --oversubscribe): iterative CPCA with
-# superclusters, static CPCA from a hyper-box start, PCA, glossy VQ and a
-# sparse Haar approximation with a rank that holds no vertex. A
+# superclusters and an eigentransport basis fitted by the ranks together
+# (also killed after the fit and resumed on other ranks); on 3 ranks static
+# CPCA from a hyper-box start, PCA, glossy VQ and a sparse Haar
+# approximation with a rank that holds no vertex. A
 # compressor that cannot run distributed is refused on every rank with one
 # message, and a bad scene ends every rank (no hang).
 #   mpi.sh <prt> <prt-mpi> <source dir>
@@ -60,10 +62,29 @@ k = 24
 environment = "$src/data/hdri/courtyard.exr"
 SCENE
 
-for name in iterative static pca glossy_vq haar_sparse; do
+# Eigentransport fitted by the ranks together (a distributed randomized
+# SVD over their shards of the visibility): the same basis, bit for bit.
+cat >"$work/eigen.toml" <<SCENE
+[mesh]
+file = "$src/data/meshes/bunny00.off"
+[transport]
+directions = "cubemap"
+rays = 384
+[basis]
+plugin = "eigen"
+d = 16
+[compressor]
+plugin = "cpca"
+clusters = 32
+components = 4
+[lighting]
+environment = "$src/data/hdri/courtyard.exr"
+SCENE
+
+for name in iterative eigen static pca glossy_vq haar_sparse; do
   "$prt" -q bake "$work/$name.toml" -o "$work/$name.serial.h5" >/dev/null
   ranks="1 2 3 4"
-  [ "$name" = iterative ] || ranks="3"
+  [ "$name" = iterative ] || [ "$name" = eigen ] || ranks="3"
   for np in $ranks; do
     "${mpirun[@]}" -np "$np" "$prt_mpi" -q bake "$work/$name.toml" -o "$work/$name.$np.h5" \
       --slab-vertices 4096 >/dev/null  # many slabs: the ranks share them out
@@ -93,7 +114,38 @@ grep -q "this rank's rows of the transfer .* are kept in" <<<"$out" ||
   { echo "FAIL: --memory 1M kept no rows on disk: $out"; exit 1; }
 cmp -s "$work/iterative.serial.h5" "$work/iterative.disk.h5" ||
   { echo "FAIL: out-of-core shards change the file"; exit 1; }
-echo "shards kept on disk (--memory 1M): prt-mpi on 3 ranks = prt bake, byte for byte"
+out=$("${mpirun[@]}" -np 3 "$prt_mpi" bake "$work/eigen.toml" -o "$work/eigen.disk.h5" \
+        --memory 1M 2>/dev/null)
+grep -q "this rank's rows of the transfer .* are kept in" <<<"$out" ||
+  { echo "FAIL: --memory 1M kept no fitted rows on disk: $out"; exit 1; }
+cmp -s "$work/eigen.serial.h5" "$work/eigen.disk.h5" ||
+  { echo "FAIL: out-of-core fitted shards change the file"; exit 1; }
+echo "shards kept on disk (--memory 1M): prt-mpi on 3 ranks (CPCA, eigen) = prt bake, byte for byte"
+
+# Killed (every rank) after the fit, while compressing, and rerun on another
+# number of ranks: the kept basis is loaded, not fitted again (the fit is
+# the same bits on any number of ranks), and the file is the same.
+sed -e 's/plugin = "cpca"/plugin = "vq"/' -e 's/^components = 4$/iterations = 400\ntolerance = 0.0/' \
+  "$work/eigen.toml" >"$work/eigen_kill.toml"
+"$prt" -q bake "$work/eigen_kill.toml" -o "$work/eigen_kill.serial.h5" >/dev/null
+setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/eigen_kill.toml" -o "$work/eigen_kill.h5" \
+  >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 600); do  # until the fitted basis is kept (at most a minute)
+  [ -e "$work/.eigen_kill.h5.checkpoint/fitted-basis" ] && break
+  sleep 0.1
+done
+kill -9 -- "-$pid" 2>/dev/null || true
+wait "$pid" 2>/dev/null || true
+pkill -9 -f "$work/eigen_kill.toml" 2>/dev/null || true
+[ -e "$work/.eigen_kill.h5.checkpoint/fitted-basis" ] || { echo "FAIL: no fitted basis kept"; exit 1; }
+[ ! -e "$work/eigen_kill.h5" ] || { echo "FAIL: the killed bake finished first"; exit 1; }
+out=$("${mpirun[@]}" -np 2 "$prt_mpi" bake "$work/eigen_kill.toml" -o "$work/eigen_kill.h5" 2>&1)
+grep -q "resuming: the fitted basis kept" <<<"$out" || { echo "FAIL: did not resume: $out"; exit 1; }
+grep -q "fit basis" <<<"$out" && { echo "FAIL: fitted again after resuming: $out"; exit 1; }
+cmp -s "$work/eigen_kill.serial.h5" "$work/eigen_kill.h5" ||
+  { echo "FAIL: the resumed distributed fit changes the file"; exit 1; }
+echo "killed after the distributed fit on 3 ranks, resumed on 2: the file is identical"
 
 # Refusals end every rank with one clear message and no output.
 scene coherent bunny00.off $'plugin = "sh"\norder = 4' \
@@ -104,6 +156,14 @@ if out=$(timeout 120 "${mpirun[@]}" -np 2 "$prt_mpi" -q bake "$work/coherent.tom
 fi
 grep -q 'cannot run distributed: it reclassifies' <<<"$out" || { echo "FAIL: $out"; exit 1; }
 [ ! -e "$work/coherent.h5" ] || { echo "FAIL: output written"; exit 1; }
+sed -e 's/^\[compressor\]/[material]\nbrdf = "phong"\nspecular = 0.5\n[exit]\nplugin = "hsh"\norder = 3\n[compressor]/' \
+  "$work/eigen.toml" >"$work/eigen_glossy.toml"
+if out=$(timeout 120 "${mpirun[@]}" -np 2 "$prt_mpi" -q bake "$work/eigen_glossy.toml" \
+           -o "$work/eigen_glossy.h5" 2>&1); then
+  echo "FAIL: a glossy fitted bake accepted under prt-mpi"; exit 1
+fi
+grep -q 'fits a basis for diffuse transfer only' <<<"$out" || { echo "FAIL: $out"; exit 1; }
+[ ! -e "$work/eigen_glossy.h5" ] || { echo "FAIL: output written"; exit 1; }
 printf '[mesh]\nfile = "missing.off"\n' >"$work/bad.toml"
 if out=$(timeout 120 "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/bad.toml" -o "$work/bad.h5" 2>&1); then
   echo "FAIL: a missing mesh accepted"; exit 1

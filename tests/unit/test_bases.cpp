@@ -7,6 +7,7 @@
 #include <random>
 
 #include "../common/scenes.hpp"
+#include "../common/thread_communicator.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/hemisphere.hpp"
@@ -157,6 +158,44 @@ TEST_CASE("eigentransport: the randomized SVD finds the exact principal subspace
   restored->load(eigen->save());
   CHECK(restored->evaluate(lattice.directions) == eigen->evaluate(lattice.directions));
   CHECK_THROWS_WITH(make("eigen", {})->evaluate(lattice.directions), Catch::Contains("not fitted"));
+}
+
+TEST_CASE("eigentransport: ranks fitting from shards of the bits get the one-process basis",
+          "[eigen][distributed]") {
+  // 306 vertices (Q gathered for Householder QR) and ~20,000 (three segments,
+  // Cholesky QR over segment sums; a row count whose columns are not aligned).
+  const bool large = GENERATE(false, true);
+  const Mesh scene = large ? test::sphere_over_plane(5, 100) : eigen_test_scene(false);
+  CAPTURE(scene.vertex_count());
+  const DirectionSet lattice = DirectionSet::cubemap(4);
+  const TransportResult r = test::trace_visibility_only(scene, lattice);
+  const auto fitted = [](const Basis& basis) {
+    return Eigen::MatrixXd(basis.save().matrices.at("eigentransports"));
+  };
+  auto one = make("eigen", {{"d", std::int64_t(6)}});
+  REQUIRE(one->can_fit_distributed());
+  one->fit({&scene, &lattice, &r.visibility});
+  const std::size_t words = VisibilityBits::words_for(std::size_t(lattice.size()));
+  for (int ranks : {2, 3, 4}) {
+    CAPTURE(ranks);
+    std::vector<Eigen::MatrixXd> bases(static_cast<std::size_t>(ranks));
+    test::run_on_ranks(ranks, [&](const Communicator& comm) {
+      const Shard shard = shard_of(Eigen::Index(scene.vertex_count()), comm.rank(), ranks);
+      VisibilityBits bits(std::size_t(shard.rows()), std::size_t(lattice.size()));
+      for (Eigen::Index v = 0; v < shard.rows(); ++v)
+        std::copy_n(r.visibility.words(std::size_t(shard.first + v)), words,
+                    bits.words(std::size_t(v)));
+      auto mine = make("eigen", {{"d", std::int64_t(6)}});
+      mine->fit({&scene, &lattice, &bits, shard, &comm});
+      bases[std::size_t(comm.rank())] = fitted(*mine);
+    });
+    for (const auto& basis : bases) CHECK(basis == fitted(*one));  // bit for bit
+  }
+  // Bits that are not the shard's are refused.
+  CHECK_THROWS_WITH(make("eigen", {})
+                        ->fit({&scene, &lattice, &r.visibility,
+                               shard_of(Eigen::Index(scene.vertex_count()), 0, 2), &solo()}),
+                    Catch::Contains("visibility of"));
 }
 
 TEST_CASE("eigentransport: identical transport rows (rank 0) give a finite orthonormal basis",

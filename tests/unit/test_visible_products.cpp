@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include "../common/scenes.hpp"
+#include "../common/thread_communicator.hpp"
 #include "prt/transport.hpp"
 #include "prt/visible_products.hpp"
 
@@ -54,6 +55,57 @@ TEST_CASE("visible products give the same bits on one core and on all", "[visibl
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   CHECK(visible_transpose_times(scene, set, traced.visibility, left) == all_t);
   CHECK(visible_times(scene, set, traced.visibility, right) == all);
+}
+
+namespace {
+// The bits of vertices [first, last) of `all`.
+VisibilityBits shard_bits(const VisibilityBits& all, std::size_t first, std::size_t last) {
+  VisibilityBits part(last - first, all.directions());
+  const std::size_t words = VisibilityBits::words_for(all.directions());
+  for (std::size_t v = first; v < last; ++v)
+    std::copy_n(all.words(v), words, part.words(v - first));
+  return part;
+}
+}  // namespace
+
+TEST_CASE("visible products over shards: rows of the whole, sums the same bits on any ranks",
+          "[visible][distributed]") {
+  // Three segments of vertices, the last short, and 6 x 4 x 4 directions.
+  const Mesh scene = test::sphere_over_plane(5, 100);
+  REQUIRE(scene.vertex_count() > 2 * std::size_t(kSegmentRows));
+  const DirectionSet set = DirectionSet::cubemap(4);
+  const TransportResult traced = test::trace_visibility_only(scene, set);
+  const Eigen::MatrixXd left = Eigen::MatrixXd::Random(scene.vertex_count(), 11);
+  const Eigen::MatrixXd right = Eigen::MatrixXd::Random(set.size(), 11);
+  const Eigen::MatrixXd whole_product = visible_times(scene, set, traced.visibility, right);
+  const Shard all = whole(Eigen::Index(scene.vertex_count()));
+  const Eigen::MatrixXd one = visible_transpose_sum(
+      scene, set, TransposedVisibility(traced.visibility), PaddedRows(left), all, solo());
+  CHECK(relative_error(one, visible_transpose_times(scene, set, traced.visibility, left)) < 1e-13);
+  for (int ranks : {2, 3, 4}) {  // 4: a rank holds no segment
+    CAPTURE(ranks);
+    std::vector<Eigen::MatrixXd> sums(static_cast<std::size_t>(ranks));
+    std::vector<Eigen::MatrixXd> products(static_cast<std::size_t>(ranks));
+    test::run_on_ranks(ranks, [&](const Communicator& comm) {
+      const Shard shard = shard_of(all.total, comm.rank(), ranks);
+      const VisibilityBits bits =
+          shard_bits(traced.visibility, std::size_t(shard.first), std::size_t(shard.last));
+      const PaddedRows rows(Eigen::MatrixXd(left.middleRows(shard.first, shard.rows())));
+      sums[std::size_t(comm.rank())] =
+          visible_transpose_sum(scene, set, TransposedVisibility(bits), rows, shard, comm);
+      PaddedRows out;
+      visible_times(scene, set, bits, PaddedRows(right), out, std::size_t(shard.first));
+      products[std::size_t(comm.rank())] = out.matrix();
+    });
+    Eigen::Index at = 0;
+    for (int r = 0; r < ranks; ++r) {
+      CHECK(sums[std::size_t(r)] == one);  // bit for bit
+      const Eigen::Index rows = products[std::size_t(r)].rows();
+      CHECK(products[std::size_t(r)] == whole_product.middleRows(at, rows));
+      at += rows;
+    }
+    CHECK(at == all.total);
+  }
 }
 
 TEST_CASE("visible products of no vertices are empty", "[visible]") {
