@@ -3,7 +3,8 @@
 // kit_catches_variants.sh): PRT_BUG_NORMALISATION (one function scaled),
 // PRT_BUG_WEIGHTS (native weights doubled and functions scaled to match, so
 // the basis looks orthonormal on its own rule), PRT_BUG_SIZE (size() ignores
-// the boolean), PRT_BUG_REFLECTION (the "rotation" also mirrors z).
+// the boolean), PRT_BUG_REFLECTION (the "rotation" also mirrors z),
+// PRT_BUG_LOCAL_FIT (fits distributed, but sums only its own rank's shard).
 #include <array>
 #include <cmath>
 
@@ -11,6 +12,7 @@
 #include "prt/plugin.hpp"
 #include "prt/quadrature.hpp"
 #include "prt/sh.hpp"
+#include "prt/transport.hpp"
 
 namespace {
 
@@ -58,6 +60,32 @@ class VariantBasis final : public prt::Basis {
   bool can_rotate() const override {
     return true;
   }
+#ifdef PRT_BUG_LOCAL_FIT
+  // "Fitted" state that leaves the functions alone: the fraction of visible
+  // (vertex, direction) pairs, counted over this rank's shard only.
+  bool can_fit() const override {
+    return true;
+  }
+  bool can_fit_distributed() const override {
+    return true;
+  }
+  void fit(const prt::FitData& data) override {
+    double visible = 0;
+    for (std::size_t v = 0; v < data.visibility->vertices(); ++v)
+      visible += double(data.visibility->count_visible(v));
+    visible_fraction_ = visible / double(data.visibility->vertices() *
+                                         std::max<std::size_t>(1, data.visibility->directions()));
+  }
+  prt::BasisState save() const override {
+    prt::BasisState state;
+    state.matrices["visible_fraction"] = Eigen::MatrixXd::Constant(1, 1, visible_fraction_);
+    return state;
+  }
+  void load(const prt::BasisState& state) override {
+    visible_fraction_ = state.matrices.at("visible_fraction")(0, 0);
+  }
+  double visible_fraction_ = 0;
+#endif
   Eigen::MatrixXd rotation_matrix(const Eigen::Matrix3d& r) const override {
     Eigen::MatrixXd m = prt::sh::rotation(3, r);
 #ifdef PRT_BUG_REFLECTION

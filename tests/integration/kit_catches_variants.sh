@@ -27,5 +27,6 @@ check normalisation "an orthonormal basis has an identity Gram matrix" "identity
 check weights "native quadrature weights integrate 1 to the domain's measure" "weights sum to 25.13"
 check size "every boolean and choice parameter value gives a consistent basis" "drop_constant=true"
 check reflection "rotation is consistent with re-projection and composes" "ra * rb"
+check local_fit "a distributed fit equals the one-process fit bit for bit" "visible_fraction"
 echo "$failures failure(s)"
 [ "$failures" -eq 0 ]
