@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -223,6 +224,10 @@ bool per_vertex_transfer_after_fit(const BakePlan& plan) {
   return plan.bounces == 0 && !plan.subsurface && plan.channels.groups.size() <= 1;
 }
 
+bool fitted_per_vertex_transfer(const BakePlan& plan) {
+  return plan.fit && !plan.glossy && per_vertex_transfer_after_fit(plan);
+}
+
 TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                              const RayCaster* caster, const std::vector<Frame>& frames,
                              std::size_t first, std::size_t last, std::uint64_t& rays_cast,
@@ -252,13 +257,17 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
                                      StageTimes& times, std::map<std::string, double>& metrics,
                                      TransferSignal* direct, std::uint64_t& rays_cast,
                                      bool on_disk) {
-  if (on_disk && (!options.checkpoint || options.traced || !per_vertex_transfer(plan)))
+  const bool by_rows = per_vertex_transfer(plan) || fitted_per_vertex_transfer(plan);
+  if (on_disk && (!options.checkpoint || options.traced || !by_rows))
     throw Error("bake: only a per-vertex transfer with a checkpoint folder is kept on disk");
   if (!options.checkpoint || options.traced)
     return traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
   if (per_vertex_transfer(plan))
     return slabbed_transfer(plan, mesh, set, options, times, rays_cast, 0, mesh.vertex_count(),
                             on_disk);
+  if (fitted_per_vertex_transfer(plan))  // the bits in slabs, the fit, then the rows
+    return fitted_shard_transfer(plan, mesh, set, options, times, rays_cast,
+                                 whole(Eigen::Index(mesh.vertex_count())), solo(), on_disk);
   return whole_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
 }
 
@@ -340,13 +349,84 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   return out;
 }
 
+namespace {
+
+// The visibility bits of vertices [range.first, range.last), traced slab by
+// slab through the checkpoint: a kept slab's bits are loaded, the others
+// traced and kept (a rerun of a killed bake traces only the rest).
+// rays: those cast for all of them, now or before.
+VisibilityBits kept_visibility(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                               const RunOptions& options, const SlabRange& range,
+                               std::uint64_t& rays) {
+  const CheckpointStore& store = *options.checkpoint;
+  const auto s = static_cast<std::size_t>(set.size());
+  const std::size_t words = VisibilityBits::words_for(s);
+  VisibilityBits bits(range.last - range.first, s);
+  const auto slabs =
+      slabs_of(range.first, range.last, std::max<std::size_t>(1, options.slab_vertices));
+  auto kept = [&](const SlabRange& slab) {
+    return store.has(rows_name("bits", slab.first, slab.last)) &&
+           store.has(rows_name("bitrays", slab.first, slab.last));
+  };
+  std::size_t kept_count = 0;
+  for (const auto& slab : slabs) kept_count += kept(slab);
+  if (kept_count > 0)
+    options.message("resuming: " + std::to_string(kept_count) + " of " +
+                    std::to_string(slabs.size()) + " slabs of visibility bits kept in " +
+                    store.folder().string());
+  std::optional<RayCaster> caster;
+  Progress progress("trace visibility", double(range.last - range.first),
+                    plan.shadowed ? "rays" : "", options.quiet);
+  rays = 0;
+  for (const auto& slab : slabs) {
+    const std::size_t count = slab.last - slab.first;
+    std::uint64_t* target = bits.words(slab.first - range.first);
+    std::uint64_t cast = 0;
+    if (kept(slab)) {
+      const std::vector<std::int32_t> saved =
+          store.load_ints(rows_name("bits", slab.first, slab.last));
+      if (saved.size() != 2 * count * words)
+        throw Error(store.folder().string() + "/" + rows_name("bits", slab.first, slab.last) +
+                    ": holds " + std::to_string(saved.size()) + " values where the slab needs " +
+                    std::to_string(2 * count * words) +
+                    "; delete the folder or rerun with --restart");
+      std::memcpy(target, saved.data(), saved.size() * sizeof(std::int32_t));
+      cast = static_cast<std::uint64_t>(
+          store.load_doubles(rows_name("bitrays", slab.first, slab.last))(0, 0));
+      progress.add(double(count), double(cast));
+    } else {
+      if (plan.shadowed && !caster) caster.emplace(mesh);
+      TransportOptions transport;
+      transport.shadowed = plan.shadowed;
+      transport.keep_visibility = true;
+      transport.first_vertex = slab.first;
+      transport.last_vertex = slab.last;
+      transport.caster = caster ? &*caster : nullptr;
+      TransportResult traced =
+          diffuse_transfer(mesh, set, Eigen::MatrixXd(s, 0), transport, &progress);
+      cast = traced.rays_cast;
+      std::memcpy(target, traced.visibility.words(0), count * words * sizeof(std::uint64_t));
+      std::vector<std::int32_t> saved(2 * count * words);
+      std::memcpy(saved.data(), target, saved.size() * sizeof(std::int32_t));
+      store.save(rows_name("bitrays", slab.first, slab.last),
+                 Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(cast))));
+      store.save(rows_name("bits", slab.first, slab.last), saved);  // last: marks it kept
+    }
+    rays += cast;
+  }
+  progress.finish();
+  return bits;
+}
+
+}  // namespace
+
 TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
                                      const DirectionSet& set, const RunOptions& options,
                                      StageTimes& times, std::uint64_t& rays_cast,
                                      const Shard& shard, const Communicator& comm, bool on_disk) {
-  if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
-  if (!plan.fit || !per_vertex_transfer_after_fit(plan))
-    throw Error("bake: a distributed fit needs a diffuse transfer each vertex gets alone");
+  if (!options.checkpoint) throw Error("bake: a fit through slabs needs a checkpoint folder");
+  if (!fitted_per_vertex_transfer(plan))
+    throw Error("bake: a fit through slabs needs a diffuse transfer each vertex gets alone");
   const CheckpointStore& store = *options.checkpoint;
   const std::string prefix = "basis_state.", marker = "fitted-basis";
   // Rank 0 says whether the basis was kept, for every rank: a rank that
@@ -378,22 +458,14 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
     // Every rank traces its shard's visibility, then (unless the basis was
     // kept) the ranks fit it together, each from its own bits.
     Stopwatch clock;
-    TransportOptions transport;
-    transport.shadowed = plan.shadowed;
-    transport.keep_visibility = true;
-    transport.first_vertex = own.first;
-    transport.last_vertex = own.last;
-    Progress progress("trace (this rank's vertices)", double(shard.rows()),
-                      plan.shadowed ? "rays" : "", options.quiet);
-    TransportResult traced =
-        diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
-    progress.finish();
-    rays = traced.rays_cast;
-    times.add("trace (this rank's shard)", clock.seconds());
+    const VisibilityBits bits = kept_visibility(plan, mesh, set, options, own, rays);
+    times.add("trace visibility (slabs)", clock.seconds());
     if (!basis_kept[0]) {
       clock = Stopwatch();
-      plan.basis->fit({&mesh, &set, &traced.visibility, shard, &comm});
-      times.add("fit basis (" + plan.basis_record.name + ", distributed)", clock.seconds());
+      FitData fit{&mesh, &set, &bits, shard, &comm};
+      fit.checkpoint = &store;
+      plan.basis->fit(fit);
+      times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
       if (comm.rank() == 0) {
         for (const auto& [name, matrix] : plan.basis->save().matrices)
           store.save(prefix + name, matrix);
@@ -401,7 +473,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
       }
     }
     clock = Stopwatch();
-    rows = project_visibility(mesh, set, traced.visibility, *plan.basis, own.first).coefficients;
+    rows = project_visibility(mesh, set, bits, *plan.basis, own.first).coefficients;
     if (own.first < own.last) keep_slab(store, own, rows, rays);
     times.add("project", clock.seconds());
   }

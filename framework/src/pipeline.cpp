@@ -479,10 +479,9 @@ bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
                           double(plan.basis->size()) * groups * 4;
   const double resident = kMeshBytesPerVertex * v, budget = options.budget();
   if (resident + transfer <= budget) return false;
-  // A distributed fit projects each rank's rows after the fit: they too can go to a file.
-  const bool distributed_fit =
-      options.comm && options.comm->size() > 1 && plan.fit && per_vertex_transfer_after_fit(plan);
-  if (!(per_vertex_transfer(plan) || distributed_fit) || !options.checkpoint || options.traced) {
+  // A fitted diffuse transfer projects its rows after the fit: they too can go to a file.
+  if (!(per_vertex_transfer(plan) || fitted_per_vertex_transfer(plan)) || !options.checkpoint ||
+      options.traced) {
     options.warn("the transfer (" + gigabytes(transfer) + ") and mesh (~" + gigabytes(resident) +
                  ") exceed the memory budget of " + gigabytes(budget) +
                  "; this transfer couples vertices (or runs without a checkpoint) and is held in "

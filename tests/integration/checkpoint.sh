@@ -125,3 +125,46 @@ kill_inside iterative cpca.state 'resuming: CPCA at component' \
   $'plugin = "cpca"\nmethod = "iterative"\nclusters = 64\ncomponents = 2\ntolerance = 0.0'
 kill_inside adaptive cpca.state 'resuming: CPCA at adaptive pass' \
   $'plugin = "cpca"\nmethod = "adaptive"\nclusters = 64\ncomponents = 1\niterations_per_component = 1\nadaptive_iterations = 6'
+
+# A fitted basis (eigentransport): its visibility bits are traced in slabs
+# and kept, and the fit keeps its state after each power iteration. Killed
+# while tracing, then inside the fit, the rerun loads both and writes the
+# file of an uninterrupted bake.
+cat >"$work/eigen.toml" <<SCENE
+[mesh]
+file = "$work/bunny.ply"
+[transport]
+directions = "cubemap"
+rays = 1536
+[basis]
+plugin = "eigen"
+d = 24
+power_iterations = 8
+[compressor]
+plugin = "pca"
+components = 4
+[lighting]
+environment = "$src/data/hdri/courtyard.exr"
+SCENE
+"$prt" -q bake "$work/eigen.toml" -o "$work/eigen-reference.h5" >/dev/null
+kill_at() {  # kill_at <part name pattern>: a bake killed once a part matching it is kept
+  "$prt" -q bake "$work/eigen.toml" -o "$work/eigen.h5" --slab-vertices 16384 >/dev/null 2>&1 &
+  pid=$!
+  for _ in $(seq 600); do
+    ls "$work/.eigen.h5.checkpoint" 2>/dev/null | grep -q "$1" && break
+    sleep 0.1
+  done
+  kill -9 "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  ls "$work/.eigen.h5.checkpoint" 2>/dev/null | grep -q "$1" || { echo "FAIL (eigen): no $1 kept"; exit 1; }
+  [ ! -e "$work/eigen.h5" ] || { echo "FAIL (eigen): the killed bake finished first"; exit 1; }
+}
+kill_at '^bits\.rows'
+kill_at '^eigen\.iteration$'
+out=$("$prt" bake "$work/eigen.toml" -o "$work/eigen.h5" --slab-vertices 16384 2>&1)
+for said in 'slabs of visibility bits kept' 'resuming: the eigentransport fit after power iteration'; do
+  grep -q "$said" <<<"$out" || { echo "FAIL (eigen): did not resume ($said): $out"; exit 1; }
+done
+cmp "$work/eigen-reference.h5" "$work/eigen.h5" ||
+  { echo "FAIL (eigen): the bake resumed inside the trace and the fit differs"; exit 1; }
+echo "killed while tracing and inside the eigentransport fit: $(grep -o 'resuming: the eigentransport fit after power iteration [0-9]* of [0-9]*' <<<"$out"); the file is identical"

@@ -14,6 +14,7 @@ namespace prt {
 
 struct Mesh;
 class VisibilityBits;
+class CheckpointStore;
 
 // What a data-driven basis is fitted to: the mesh, the direction set and the
 // traced visibility (1 bit per vertex and direction). In a distributed bake
@@ -28,6 +29,9 @@ struct FitData {
   const VisibilityBits* visibility = nullptr;
   Shard shard;                         // total == 0: the whole mesh
   const Communicator* comm = nullptr;  // null: solo()
+  // Where a long fit may keep its state (rank 0 writes, every rank reads),
+  // so that a killed bake resumes inside it; null: nowhere.
+  const CheckpointStore* checkpoint = nullptr;
 
   Shard rows() const;  // the shard, or the whole mesh by default
   const Communicator& communicator() const { return comm ? *comm : solo(); }

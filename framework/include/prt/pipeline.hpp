@@ -125,6 +125,10 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
 bool per_vertex_transfer(const BakePlan& plan);
 // The same but for a fitted basis: once fitted, each vertex's row is its own.
 bool per_vertex_transfer_after_fit(const BakePlan& plan);
+// A diffuse transfer with a fitted basis and nothing that couples vertices:
+// its visibility is traced in slabs and kept, the basis fitted (with its own
+// checkpoints), and the rows projected (fitted_shard_transfer).
+bool fitted_per_vertex_transfer(const BakePlan& plan);
 TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                              const RayCaster* caster, const std::vector<Frame>& frames,
                              std::size_t first, std::size_t last, std::uint64_t& rays_cast,
@@ -151,10 +155,11 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
                               const RunOptions& options, StageTimes& times,
                               std::uint64_t& rays_cast, const Shard& shard,
                               const Communicator& comm, bool on_disk = false);
-// The same for a fitted basis (a diffuse transfer each vertex gets alone once
-// the basis is fitted): each rank traces its shard's visibility, the ranks fit
-// the basis together (Basis::can_fit_distributed), and each projects its
-// rows. The fitted basis and each shard's rows are kept in options.checkpoint.
+// The same for a fitted basis (fitted_per_vertex_transfer): each rank traces
+// its shard's visibility in slabs, the ranks fit the basis together
+// (Basis::can_fit_distributed; one process: shard = whole, comm = solo()),
+// and each projects its rows. The bits' slabs, the fit's own state, the
+// fitted basis and each shard's rows are kept in options.checkpoint.
 TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
                                      const DirectionSet& set, const RunOptions& options,
                                      StageTimes& times, std::uint64_t& rays_cast,

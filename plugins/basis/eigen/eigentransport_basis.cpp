@@ -13,9 +13,12 @@
 #include <Eigen/SVD>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "prt/basis.hpp"
+#include "prt/checkpoint.hpp"
+#include "prt/log.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/row_blocks.hpp"
@@ -252,11 +255,30 @@ class Eigentransport final : public Basis {
       product.noalias() -= mean_.transpose() * column_sums_of_rows(left, shard, comm);
       return product;
     };
-    times_c(omega);
+    // A killed bake resumes after the last power iteration it kept: Q is
+    // orth(C Z) of that iteration's Z (s x columns, small; the same on every
+    // rank, so rank 0 keeps it), and the same bits follow.
+    const int resume_after = kept_iteration(data.checkpoint, comm, s, columns);
+    const CheckpointStore* keep = data.checkpoint && comm.rank() == 0 ? data.checkpoint : nullptr;
+    if (resume_after >= 0) {
+      log_info("resuming: the eigentransport fit after power iteration " +
+               std::to_string(resume_after + 1) + " of " + std::to_string(power_iterations_) +
+               ", kept in " + data.checkpoint->folder().string());
+      times_c(data.checkpoint->load_doubles(kept_z_name(resume_after)));
+    } else {
+      times_c(omega);
+    }
     orthonormalize_rows(q, shard, comm);
-    for (int i = 0; i < power_iterations_; ++i) {
+    for (int i = resume_after + 1; i < power_iterations_; ++i) {
       Eigen::MatrixXd z = c_transpose_times(q);
       orthonormalize(z);
+      if (keep) try {
+          keep->save(kept_z_name(i), z);
+          keep->save("eigen.iteration", Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, i)));
+        } catch (const Error& e) {  // the fit goes on; only a rerun would miss the state
+          log_warning(std::string("eigentransport: cannot keep the fit's state: ") + e.what());
+          keep = nullptr;
+        }
       times_c(z);
       orthonormalize_rows(q, shard, comm);
     }
@@ -348,6 +370,34 @@ class Eigentransport final : public Basis {
         (sums.rightCols<3>().cwiseProduct(set.directions).rowwise().sum() / M_PI);
     energy = weights.dot(squares);
     return sums.col(0).cwiseProduct(root_weights_).transpose();
+  }
+
+  static std::string kept_z_name(int iteration) { return "eigen.z." + std::to_string(iteration); }
+
+  // The last power iteration a killed fit kept (rank 0 reads, and tells
+  // every rank), or -1: none, or none that fits this fit's shape.
+  int kept_iteration(const CheckpointStore* store, const Communicator& comm, Eigen::Index s,
+                     Eigen::Index columns) const {
+    if (!store) return -1;
+    std::vector<char> bytes(sizeof(std::int32_t), 0);
+    std::int32_t iteration = -1;
+    if (comm.rank() == 0 && store->has("eigen.iteration")) try {
+        const Eigen::MatrixXd kept = store->load_doubles("eigen.iteration");
+        const int i = kept.size() == 1 ? static_cast<int>(kept(0, 0)) : -1;
+        const Eigen::MatrixXd z = i >= 0 ? store->load_doubles(kept_z_name(i)) : Eigen::MatrixXd();
+        if (i >= 0 && i < power_iterations_ && z.rows() == s && z.cols() == columns)
+          iteration = i;
+        else
+          log_warning("eigentransport: the kept fit state does not fit this fit; starting afresh");
+      } catch (const Error& e) {
+        log_warning(std::string("eigentransport: the kept fit state is unreadable, starting "
+                                "afresh: ") +
+                    e.what());
+      }
+    std::memcpy(bytes.data(), &iteration, sizeof iteration);
+    comm.broadcast(bytes, 0);
+    std::memcpy(&iteration, bytes.data(), sizeof iteration);
+    return iteration;
   }
 
   bool fitted() const { return eigen_.size() > 0; }
