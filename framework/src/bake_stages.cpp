@@ -216,6 +216,24 @@ TransferSignal whole_transfer(const BakePlan& plan, const SceneSpec& scene, cons
 
 }  // namespace
 
+namespace {
+
+// An id of this run, the same on every rank: claims of a killed run carry
+// another, so they do not hold a slab back.
+std::string run_id(const Communicator& comm) {
+  std::vector<char> id;
+  if (comm.rank() == 0) {
+    const std::string text =
+        std::to_string(::getpid()) + "-" +
+        std::to_string(std::chrono::steady_clock::now().time_since_epoch().count());
+    id.assign(text.begin(), text.end());
+  }
+  comm.broadcast(id, 0);
+  return Digest().add(std::string(id.begin(), id.end())).hex();
+}
+
+}  // namespace
+
 bool per_vertex_transfer(const BakePlan& plan) {
   return !plan.fit && per_vertex_transfer_after_fit(plan);
 }
@@ -282,15 +300,7 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   // Ranks take slabs as they come free (a slab's cost depends on its part
   // of the mesh), by creating its claim file. Claims carry this run's id, so
   // those of a killed run do not hold a slab back.
-  std::vector<char> id;
-  if (comm.rank() == 0) {
-    const std::string text =
-        std::to_string(::getpid()) + "-" +
-        std::to_string(std::chrono::steady_clock::now().time_since_epoch().count());
-    id.assign(text.begin(), text.end());
-  }
-  comm.broadcast(id, 0);
-  const std::string run = Digest().add(std::string(id.begin(), id.end())).hex();
+  const std::string run = run_id(comm);
   std::size_t kept = 0;
   for (const auto& slab : slabs) kept += slab_kept(store, slab);
   if (kept > 0)
@@ -351,70 +361,110 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
 
 namespace {
 
-// The visibility bits of vertices [range.first, range.last), traced slab by
-// slab through the checkpoint: a kept slab's bits are loaded, the others
-// traced and kept (a rerun of a killed bake traces only the rest).
-// rays: those cast for all of them, now or before.
+// The rays traced for the whole mesh's visibility, kept once every slab is.
+constexpr const char* kVisibilityRays = "visibility-rays";
+std::uint64_t kept_visibility_rays(const CheckpointStore& store) {
+  return static_cast<std::uint64_t>(store.load_doubles(kVisibilityRays)(0, 0));
+}
+
+bool bits_kept(const CheckpointStore& store, const SlabRange& slab) {
+  return store.has(rows_name("bits", slab.first, slab.last)) &&
+         store.has(rows_name("bitrays", slab.first, slab.last));
+}
+
+// Traces a slab's visibility bits and keeps them (the bits last: they mark
+// the slab kept).
+void trace_bits(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                const CheckpointStore& store, std::optional<RayCaster>& caster,
+                const SlabRange& slab, Progress& progress) {
+  if (plan.shadowed && !caster) caster.emplace(mesh);
+  TransportOptions transport;
+  transport.shadowed = plan.shadowed;
+  transport.keep_visibility = true;
+  transport.first_vertex = slab.first;
+  transport.last_vertex = slab.last;
+  transport.caster = caster ? &*caster : nullptr;
+  TransportResult traced =
+      diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
+  const std::size_t words = VisibilityBits::words_for(std::size_t(set.size()));
+  std::vector<std::int32_t> saved(2 * (slab.last - slab.first) * words);
+  std::memcpy(saved.data(), traced.visibility.words(0), saved.size() * sizeof(std::int32_t));
+  store.save(rows_name("bitrays", slab.first, slab.last),
+             Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(traced.rays_cast))));
+  store.save(rows_name("bits", slab.first, slab.last), saved);
+}
+
+// A kept slab's rows [range.first, range.last) copied into `bits` (whose
+// row 0 is vertex range.first).
+void copy_kept_bits(const CheckpointStore& store, const SlabRange& slab, const SlabRange& range,
+                    std::size_t words, VisibilityBits& bits) {
+  const std::string name = rows_name("bits", slab.first, slab.last);
+  const std::vector<std::int32_t> saved = store.load_ints(name);
+  if (saved.size() != 2 * (slab.last - slab.first) * words)
+    throw Error(store.folder().string() + "/" + name + ": holds " + std::to_string(saved.size()) +
+                " values where the slab needs " +
+                std::to_string(2 * (slab.last - slab.first) * words) +
+                "; delete the folder or rerun with --restart");
+  const std::size_t first = std::max(slab.first, range.first),
+                    last = std::min(slab.last, range.last);
+  if (first < last)
+    std::memcpy(bits.words(first - range.first), &saved[2 * (first - slab.first) * words],
+                (last - first) * words * sizeof(std::uint64_t));
+}
+
+// The visibility bits of vertices [range.first, range.last) (this rank's
+// shard), through slabs of the whole mesh kept in the checkpoint. With
+// trace_all, the ranks first trace every slab not kept, each taking slabs as
+// they come free (claim files), so that no rank waits for a slow part of the
+// mesh; then each reads its range from the slabs. rays: those cast for the
+// whole mesh, now or before.
 VisibilityBits kept_visibility(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                                const RunOptions& options, const SlabRange& range,
+                               const Communicator& comm, const std::string& run, bool trace_all,
                                std::uint64_t& rays) {
   const CheckpointStore& store = *options.checkpoint;
   const auto s = static_cast<std::size_t>(set.size());
   const std::size_t words = VisibilityBits::words_for(s);
-  VisibilityBits bits(range.last - range.first, s);
   const auto slabs =
-      slabs_of(range.first, range.last, std::max<std::size_t>(1, options.slab_vertices));
-  auto kept = [&](const SlabRange& slab) {
-    return store.has(rows_name("bits", slab.first, slab.last)) &&
-           store.has(rows_name("bitrays", slab.first, slab.last));
-  };
-  std::size_t kept_count = 0;
-  for (const auto& slab : slabs) kept_count += kept(slab);
-  if (kept_count > 0)
-    options.message("resuming: " + std::to_string(kept_count) + " of " +
-                    std::to_string(slabs.size()) + " slabs of visibility bits kept in " +
-                    store.folder().string());
+      slabs_of(0, mesh.vertex_count(), std::max<std::size_t>(1, options.slab_vertices));
   std::optional<RayCaster> caster;
-  Progress progress("trace visibility", double(range.last - range.first),
-                    plan.shadowed ? "rays" : "", options.quiet);
-  rays = 0;
-  for (const auto& slab : slabs) {
-    const std::size_t count = slab.last - slab.first;
-    std::uint64_t* target = bits.words(slab.first - range.first);
-    std::uint64_t cast = 0;
-    if (kept(slab)) {
-      const std::vector<std::int32_t> saved =
-          store.load_ints(rows_name("bits", slab.first, slab.last));
-      if (saved.size() != 2 * count * words)
-        throw Error(store.folder().string() + "/" + rows_name("bits", slab.first, slab.last) +
-                    ": holds " + std::to_string(saved.size()) + " values where the slab needs " +
-                    std::to_string(2 * count * words) +
-                    "; delete the folder or rerun with --restart");
-      std::memcpy(target, saved.data(), saved.size() * sizeof(std::int32_t));
-      cast = static_cast<std::uint64_t>(
-          store.load_doubles(rows_name("bitrays", slab.first, slab.last))(0, 0));
-      progress.add(double(count), double(cast));
-    } else {
-      if (plan.shadowed && !caster) caster.emplace(mesh);
-      TransportOptions transport;
-      transport.shadowed = plan.shadowed;
-      transport.keep_visibility = true;
-      transport.first_vertex = slab.first;
-      transport.last_vertex = slab.last;
-      transport.caster = caster ? &*caster : nullptr;
-      TransportResult traced =
-          diffuse_transfer(mesh, set, Eigen::MatrixXd(s, 0), transport, &progress);
-      cast = traced.rays_cast;
-      std::memcpy(target, traced.visibility.words(0), count * words * sizeof(std::uint64_t));
-      std::vector<std::int32_t> saved(2 * count * words);
-      std::memcpy(saved.data(), target, saved.size() * sizeof(std::int32_t));
-      store.save(rows_name("bitrays", slab.first, slab.last),
-                 Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(cast))));
-      store.save(rows_name("bits", slab.first, slab.last), saved);  // last: marks it kept
+  if (trace_all) {
+    std::size_t kept = 0;
+    for (const auto& slab : slabs) kept += bits_kept(store, slab);
+    if (kept > 0)
+      options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
+                      " slabs of visibility bits kept in " + store.folder().string());
+    Progress progress(
+        comm.size() > 1 ? "trace visibility (slabs done or taken)" : "trace visibility",
+        double(mesh.vertex_count()), plan.shadowed ? "rays" : "", options.quiet);
+    for (const auto& slab : slabs) {
+      if (bits_kept(store, slab) ||
+          (comm.size() > 1 &&
+           !store.claim("claim-" + run + "." + rows_name("bits", slab.first, slab.last)))) {
+        progress.add(double(slab.last - slab.first));
+        continue;
+      }
+      trace_bits(plan, mesh, set, store, caster, slab, progress);
     }
-    rays += cast;
+    progress.finish();
+    comm.barrier();  // every slab is kept
+    rays = 0;
+    for (const auto& slab : slabs)
+      rays += static_cast<std::uint64_t>(
+          store.load_doubles(rows_name("bitrays", slab.first, slab.last))(0, 0));
+    if (comm.rank() == 0)
+      store.save(kVisibilityRays, Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
+  } else {
+    rays = kept_visibility_rays(store);
   }
-  progress.finish();
+  VisibilityBits bits(range.last - range.first, s);
+  Progress ignored("", 0, "", true);
+  for (const auto& slab : slabs) {
+    if (slab.last <= range.first || slab.first >= range.last) continue;
+    // A slab missing (a rerun with another --slab-vertices) is traced here.
+    if (!bits_kept(store, slab)) trace_bits(plan, mesh, set, store, caster, slab, ignored);
+    copy_kept_bits(store, slab, range, words, bits);
+  }
   return bits;
 }
 
@@ -445,20 +495,19 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
     options.message("resuming: the fitted basis kept in " + store.folder().string());
   }
   const Eigen::Index cols = transfer_dimension(plan);
+  const std::string run = comm.size() > 1 ? run_id(comm) : std::string("solo");
   MatrixXfRow rows;
-  std::uint64_t rays = 0;
+  std::uint64_t rays = 0;  // the whole mesh's
   if (rows_kept) {
-    if (own.first < own.last) {
-      rows = kept_rows(store, own, cols);
-      rays = kept_rays(store, own);
-    } else {
-      rows.resize(0, cols);
-    }
+    rows = own.first < own.last ? kept_rows(store, own, cols) : MatrixXfRow(0, cols);
+    rays = kept_visibility_rays(store);
   } else {
-    // Every rank traces its shard's visibility, then (unless the basis was
-    // kept) the ranks fit it together, each from its own bits.
+    // The ranks trace the visibility (unless the basis was kept, when every
+    // slab was kept before it), then fit the basis together, each from its
+    // own shard's bits.
     Stopwatch clock;
-    const VisibilityBits bits = kept_visibility(plan, mesh, set, options, own, rays);
+    const VisibilityBits bits =
+        kept_visibility(plan, mesh, set, options, own, comm, run, !basis_kept[0], rays);
     times.add("trace visibility (slabs)", clock.seconds());
     if (!basis_kept[0]) {
       clock = Stopwatch();
@@ -477,8 +526,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
     if (own.first < own.last) keep_slab(store, own, rows, rays);
     times.add("project", clock.seconds());
   }
-  rays_cast = 0;
-  for (const auto& r : allgather(comm, {double(rays)})) rays_cast += std::uint64_t(r[0]);
+  rays_cast = rays;
   comm.barrier();  // every rank's rows are kept (rank 0 writes the file from them)
   TransferSignal out;
   set_shape(plan, out);

@@ -1,6 +1,7 @@
 // Checkpoints: parts are kept whole or not at all, damage and a changed run
 // are refused, and a bake through a checkpoint (in slabs, resumed after parts
 // were lost) equals the bake without one, bit for bit.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -136,7 +137,8 @@ TEST_CASE("a bake in slabs through a checkpoint equals the bake without one", "[
   }
 }
 
-TEST_CASE("a fitted basis is kept whole in the checkpoint and loaded on resume", "[checkpoint]") {
+TEST_CASE("a fitted basis keeps its bits, state and rows in the checkpoint and resumes from them",
+          "[checkpoint]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
   Progress::set_enabled(false);
   std::string text = R"(
@@ -161,13 +163,28 @@ constant = [1, 1, 1]
   const fs::path output = fresh_folder("fitted") / "bake.h5";
   const BakePlan plan = plan_bake(s, registry);
   REQUIRE_FALSE(per_vertex_transfer(plan));
+  REQUIRE(fitted_per_vertex_transfer(plan));
   const CheckpointStore store(output, bake_key(s, plan), "test");
   RunOptions options{true};
   options.checkpoint = &store;
+  options.slab_vertices = 100;  // several slabs of bits
   const BakeData first = bake(s, registry, options, times);
-  REQUIRE(store.has("transfer"));
+  const auto parts = store.parts();
+  const auto count = [&](const std::string& prefix) {
+    return std::count_if(parts.begin(), parts.end(),
+                         [&](const std::string& p) { return p.rfind(prefix, 0) == 0; });
+  };
+  CHECK(count("bits.rows-") > 1);
+  CHECK(count("eigen.z.") > 0);  // a state per power iteration
+  REQUIRE(store.has("fitted-basis"));
+  REQUIRE(count("transfer.rows-") == 1);
   const BakeData resumed = bake(s, registry, options, times);  // loads, traces nothing
-  for (const BakeData* data : {&first, &resumed}) {
+  // Killed after the fit, before the rows were kept: the basis is loaded,
+  // the rows projected from the kept bits.
+  for (const auto& part : parts)
+    if (part.rfind("transfer.rows-", 0) == 0) fs::remove(store.folder() / part);
+  const BakeData reprojected = bake(s, registry, options, times);
+  for (const BakeData* data : {&first, &resumed, &reprojected}) {
     CHECK(data->transfer.coefficients == reference.transfer.coefficients);
     CHECK(data->basis_state.matrices == reference.basis_state.matrices);
     CHECK(data->metrics == reference.metrics);
