@@ -381,7 +381,6 @@ static void basis_check_11(Kit& kit) {
   one->fit({&scene, &lattice, &r.visibility});
   const BasisState want = one->save();
   const auto total = static_cast<Eigen::Index>(scene.vertex_count());
-  const std::size_t words = VisibilityBits::words_for(std::size_t(lattice.size()));
   for (int ranks : {2, 3}) {
     std::vector<std::shared_ptr<Basis>> bases;  // made here: the registry is not shared
     for (int rank = 0; rank < ranks; ++rank)
@@ -389,10 +388,8 @@ static void basis_check_11(Kit& kit) {
     std::vector<std::string> errors(static_cast<std::size_t>(ranks));
     test::run_on_ranks(ranks, [&](const Communicator& comm) {
       const Shard shard = shard_of(total, comm.rank(), ranks);
-      VisibilityBits bits(std::size_t(shard.rows()), std::size_t(lattice.size()));
-      for (Eigen::Index v = 0; v < shard.rows(); ++v)
-        std::copy_n(r.visibility.words(std::size_t(shard.first + v)), words,
-                    bits.words(std::size_t(v)));
+      const VisibilityBits bits =
+          test::shard_bits(r.visibility, std::size_t(shard.first), std::size_t(shard.last));
       try {
         bases[std::size_t(comm.rank())]->fit({&scene, &lattice, &bits, shard, &comm});
       } catch (const std::exception& e) {

@@ -51,6 +51,21 @@ void read_metrics(const std::string& text, std::map<std::string, double>& metric
   while (in >> name >> value) metrics[name] = value;
 }
 
+// A fitted basis's state, kept as one part per matrix under "basis_state.".
+constexpr const char* kBasisStatePrefix = "basis_state.";
+void keep_basis_state(const CheckpointStore& store, const Basis& basis) {
+  for (const auto& [name, matrix] : basis.save().matrices)
+    store.save(kBasisStatePrefix + name, matrix);
+}
+void load_kept_basis_state(const CheckpointStore& store, Basis& basis) {
+  const std::string prefix = kBasisStatePrefix;
+  BasisState state;
+  for (const auto& part : store.parts())
+    if (part.rfind(prefix, 0) == 0)
+      state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
+  basis.load(state);
+}
+
 // Stages 1-2 as they run without a checkpoint.
 TransferSignal traced_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
                                const DirectionSet& set, const RunOptions& options,
@@ -181,7 +196,6 @@ TransferSignal whole_transfer(const BakePlan& plan, const SceneSpec& scene, cons
                               std::map<std::string, double>& metrics, TransferSignal* direct,
                               std::uint64_t& rays_cast) {
   const CheckpointStore& store = *options.checkpoint;
-  const std::string prefix = "basis_state.";
   if (store.has("transfer")) {
     options.message("resuming: the transfer kept in " + store.folder().string());
     TransferSignal out;
@@ -191,22 +205,14 @@ TransferSignal whole_transfer(const BakePlan& plan, const SceneSpec& scene, cons
       *direct = out;
       direct->coefficients = store.load_floats("direct");
     }
-    if (plan.fit) {
-      BasisState state;
-      for (const auto& part : store.parts())
-        if (part.rfind(prefix, 0) == 0)
-          state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
-      plan.basis->load(state);
-    }
+    if (plan.fit) load_kept_basis_state(store, *plan.basis);
     read_metrics(store.load_text("metrics"), metrics);
     rays_cast = static_cast<std::uint64_t>(store.load_doubles("rays")(0, 0));
     return out;
   }
   TransferSignal out =
       traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
-  if (plan.fit)
-    for (const auto& [name, matrix] : plan.basis->save().matrices)
-      store.save(prefix + name, matrix);
+  if (plan.fit) keep_basis_state(store, *plan.basis);
   if (direct) store.save("direct", direct->coefficients);
   store.save_text("metrics", metrics_text(metrics));
   store.save("rays", Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays_cast))));
@@ -246,6 +252,10 @@ bool fitted_per_vertex_transfer(const BakePlan& plan) {
   return plan.fit && !plan.glossy && per_vertex_transfer_after_fit(plan);
 }
 
+bool transfer_by_rows(const BakePlan& plan) {
+  return per_vertex_transfer(plan) || fitted_per_vertex_transfer(plan);
+}
+
 TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                              const RayCaster* caster, const std::vector<Frame>& frames,
                              std::size_t first, std::size_t last, std::uint64_t& rays_cast,
@@ -275,8 +285,7 @@ TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scen
                                      StageTimes& times, std::map<std::string, double>& metrics,
                                      TransferSignal* direct, std::uint64_t& rays_cast,
                                      bool on_disk) {
-  const bool by_rows = per_vertex_transfer(plan) || fitted_per_vertex_transfer(plan);
-  if (on_disk && (!options.checkpoint || options.traced || !by_rows))
+  if (on_disk && (!options.checkpoint || options.traced || !transfer_by_rows(plan)))
     throw Error("bake: only a per-vertex transfer with a checkpoint folder is kept on disk");
   if (!options.checkpoint || options.traced)
     return traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
@@ -478,7 +487,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
   if (!fitted_per_vertex_transfer(plan))
     throw Error("bake: a fit through slabs needs a diffuse transfer each vertex gets alone");
   const CheckpointStore& store = *options.checkpoint;
-  const std::string prefix = "basis_state.", marker = "fitted-basis";
+  const std::string marker = "fitted-basis";
   // Rank 0 says whether the basis was kept, for every rank: a rank that
   // looked itself could see the marker rank 0 writes in this very run.
   std::vector<char> basis_kept(1, 0);
@@ -487,11 +496,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
   const SlabRange own{std::size_t(shard.first), std::size_t(shard.last)};
   const bool rows_kept = basis_kept[0] && (own.first == own.last || slab_kept(store, own));
   if (basis_kept[0]) {
-    BasisState state;
-    for (const auto& part : store.parts())
-      if (part.rfind(prefix, 0) == 0)
-        state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
-    plan.basis->load(state);
+    load_kept_basis_state(store, *plan.basis);
     options.message("resuming: the fitted basis kept in " + store.folder().string());
   }
   const Eigen::Index cols = transfer_dimension(plan);
@@ -516,8 +521,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
       plan.basis->fit(fit);
       times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
       if (comm.rank() == 0) {
-        for (const auto& [name, matrix] : plan.basis->save().matrices)
-          store.save(prefix + name, matrix);
+        keep_basis_state(store, *plan.basis);
         store.save_text(marker, plan.basis_record.name);  // last: marks the basis kept
       }
     }

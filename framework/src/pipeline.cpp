@@ -480,8 +480,7 @@ bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
   const double resident = kMeshBytesPerVertex * v, budget = options.budget();
   if (resident + transfer <= budget) return false;
   // A fitted diffuse transfer projects its rows after the fit: they too can go to a file.
-  if (!(per_vertex_transfer(plan) || fitted_per_vertex_transfer(plan)) || !options.checkpoint ||
-      options.traced) {
+  if (!transfer_by_rows(plan) || !options.checkpoint || options.traced) {
     options.warn("the transfer (" + gigabytes(transfer) + ") and mesh (~" + gigabytes(resident) +
                  ") exceed the memory budget of " + gigabytes(budget) +
                  "; this transfer couples vertices (or runs without a checkpoint) and is held in "

@@ -1,6 +1,7 @@
 // Small generated scenes shared by the unit tests and the conformance kit.
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 
 #include "prt/mesh.hpp"
 #include "prt/transport.hpp"
@@ -27,6 +28,15 @@ inline TransportResult trace_visibility_only(const Mesh& mesh, const DirectionSe
   TransportOptions options;
   options.keep_visibility = true;
   return diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), options, nullptr);
+}
+
+// The bits of vertices [first, last) of `all` (a rank's shard of them).
+inline VisibilityBits shard_bits(const VisibilityBits& all, std::size_t first, std::size_t last) {
+  VisibilityBits part(last - first, all.directions());
+  const std::size_t words = VisibilityBits::words_for(all.directions());
+  for (std::size_t v = first; v < last; ++v)
+    std::copy_n(all.words(v), words, part.words(v - first));
+  return part;
 }
 
 }  // namespace prt::test

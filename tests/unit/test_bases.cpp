@@ -175,16 +175,13 @@ TEST_CASE("eigentransport: ranks fitting from shards of the bits get the one-pro
   auto one = make("eigen", {{"d", std::int64_t(6)}});
   REQUIRE(one->can_fit_distributed());
   one->fit({&scene, &lattice, &r.visibility});
-  const std::size_t words = VisibilityBits::words_for(std::size_t(lattice.size()));
   for (int ranks : {2, 3, 4}) {
     CAPTURE(ranks);
     std::vector<Eigen::MatrixXd> bases(static_cast<std::size_t>(ranks));
     test::run_on_ranks(ranks, [&](const Communicator& comm) {
       const Shard shard = shard_of(Eigen::Index(scene.vertex_count()), comm.rank(), ranks);
-      VisibilityBits bits(std::size_t(shard.rows()), std::size_t(lattice.size()));
-      for (Eigen::Index v = 0; v < shard.rows(); ++v)
-        std::copy_n(r.visibility.words(std::size_t(shard.first + v)), words,
-                    bits.words(std::size_t(v)));
+      const VisibilityBits bits =
+          test::shard_bits(r.visibility, std::size_t(shard.first), std::size_t(shard.last));
       auto mine = make("eigen", {{"d", std::int64_t(6)}});
       mine->fit({&scene, &lattice, &bits, shard, &comm});
       bases[std::size_t(comm.rank())] = fitted(*mine);

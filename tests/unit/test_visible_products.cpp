@@ -57,17 +57,6 @@ TEST_CASE("visible products give the same bits on one core and on all", "[visibl
   CHECK(visible_times(scene, set, traced.visibility, right) == all);
 }
 
-namespace {
-// The bits of vertices [first, last) of `all`.
-VisibilityBits shard_bits(const VisibilityBits& all, std::size_t first, std::size_t last) {
-  VisibilityBits part(last - first, all.directions());
-  const std::size_t words = VisibilityBits::words_for(all.directions());
-  for (std::size_t v = first; v < last; ++v)
-    std::copy_n(all.words(v), words, part.words(v - first));
-  return part;
-}
-}  // namespace
-
 TEST_CASE("visible products over shards: rows of the whole, sums the same bits on any ranks",
           "[visible][distributed]") {
   // Three segments of vertices, the last short, and 6 x 4 x 4 directions.
@@ -89,7 +78,7 @@ TEST_CASE("visible products over shards: rows of the whole, sums the same bits o
     test::run_on_ranks(ranks, [&](const Communicator& comm) {
       const Shard shard = shard_of(all.total, comm.rank(), ranks);
       const VisibilityBits bits =
-          shard_bits(traced.visibility, std::size_t(shard.first), std::size_t(shard.last));
+          test::shard_bits(traced.visibility, std::size_t(shard.first), std::size_t(shard.last));
       const PaddedRows rows(Eigen::MatrixXd(left.middleRows(shard.first, shard.rows())));
       sums[std::size_t(comm.rank())] =
           visible_transpose_sum(scene, set, TransposedVisibility(bits), rows, shard, comm);

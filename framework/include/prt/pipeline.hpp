@@ -129,6 +129,8 @@ bool per_vertex_transfer_after_fit(const BakePlan& plan);
 // its visibility is traced in slabs and kept, the basis fitted (with its own
 // checkpoints), and the rows projected (fitted_shard_transfer).
 bool fitted_per_vertex_transfer(const BakePlan& plan);
+// Either: a transfer whose rows are computed (and can be kept) apart.
+bool transfer_by_rows(const BakePlan& plan);
 TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                              const RayCaster* caster, const std::vector<Frame>& frames,
                              std::size_t first, std::size_t last, std::uint64_t& rays_cast,
