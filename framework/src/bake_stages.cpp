@@ -7,11 +7,11 @@
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <optional>
-#include <sstream>
 
+#include "coupled_slabs.hpp"
+#include "kept_state.hpp"
 #include "prt/error.hpp"
 #include "prt/frame.hpp"
 #include "prt/glossy.hpp"
@@ -19,6 +19,7 @@
 #include "prt/progress.hpp"
 #include "prt/row_file.hpp"
 #include "prt/transport.hpp"
+#include "slab_parts.hpp"
 
 namespace prt {
 
@@ -34,44 +35,12 @@ void set_shape(const BakePlan& plan, TransferSignal& signal) {
   }
 }
 
-std::string metrics_text(const std::map<std::string, double>& metrics) {
-  std::string text;
-  char line[256];
-  for (const auto& [name, value] : metrics) {
-    std::snprintf(line, sizeof line, "%s %.17g\n", name.c_str(), value);
-    text += line;
-  }
-  return text;
-}
-
-void read_metrics(const std::string& text, std::map<std::string, double>& metrics) {
-  std::istringstream in(text);
-  std::string name;
-  double value = 0;
-  while (in >> name >> value) metrics[name] = value;
-}
-
-// A fitted basis's state, kept as one part per matrix under "basis_state.".
-constexpr const char* kBasisStatePrefix = "basis_state.";
-void keep_basis_state(const CheckpointStore& store, const Basis& basis) {
-  for (const auto& [name, matrix] : basis.save().matrices)
-    store.save(kBasisStatePrefix + name, matrix);
-}
-void load_kept_basis_state(const CheckpointStore& store, Basis& basis) {
-  const std::string prefix = kBasisStatePrefix;
-  BasisState state;
-  for (const auto& part : store.parts())
-    if (part.rfind(prefix, 0) == 0)
-      state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
-  basis.load(state);
-}
-
-// Stages 1-2 as they run without a checkpoint.
-TransferSignal traced_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
-                               const DirectionSet& set, const RunOptions& options,
-                               StageTimes& times, std::map<std::string, double>& metrics,
-                               TransferSignal* direct, std::uint64_t& rays_cast) {
-  TransportResult traced = trace_stage(plan, mesh, set, options);
+// Stage 2 (and the fit) from the traced rays.
+TransferSignal transfer_from_rays(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                                  const DirectionSet& set, TransportResult traced,
+                                  const RunOptions& options, StageTimes& times,
+                                  std::map<std::string, double>& metrics, TransferSignal* direct,
+                                  std::uint64_t& rays_cast) {
   rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
   if (plan.channels.groups.size() <= 1)
@@ -81,21 +50,13 @@ TransferSignal traced_transfer(const BakePlan& plan, const SceneSpec& scene, con
                            direct);
 }
 
-std::string rows_name(const char* what, std::size_t first, std::size_t last) {
-  char name[96];
-  std::snprintf(name, sizeof name, "%s.rows-%012zu-%012zu", what, first, last);
-  return name;
-}
-
-// Slab k of a grid of `slab` vertices, cut to [first, last).
-struct SlabRange {
-  std::size_t first, last;
-};
-std::vector<SlabRange> slabs_of(std::size_t first, std::size_t last, std::size_t slab) {
-  std::vector<SlabRange> out;
-  for (std::size_t k = first / slab; k * slab < last; ++k)
-    out.push_back({std::max(first, k * slab), std::min(last, (k + 1) * slab)});
-  return out;
+// Stages 1-2 as they run without a checkpoint.
+TransferSignal traced_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                               const DirectionSet& set, const RunOptions& options,
+                               StageTimes& times, std::map<std::string, double>& metrics,
+                               TransferSignal* direct, std::uint64_t& rays_cast) {
+  return transfer_from_rays(plan, scene, mesh, set, trace_stage(plan, mesh, set, options), options,
+                            times, metrics, direct, rays_cast);
 }
 
 // A slab is kept once both its parts exist (the transfer is saved last).
@@ -106,26 +67,12 @@ bool slab_kept(const CheckpointStore& store, const SlabRange& slab) {
 
 void keep_slab(const CheckpointStore& store, const SlabRange& slab, const MatrixXfRow& rows,
                std::uint64_t rays) {
-  store.save(rows_name("rays", slab.first, slab.last),
-             Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
-  store.save(rows_name("transfer", slab.first, slab.last), rows);  // last: marks it kept
+  keep_count(store, "rays", slab, rays);
+  store.save(rows_name("transfer", slab), rows);  // last: marks it kept
 }
 
 std::uint64_t kept_rays(const CheckpointStore& store, const SlabRange& slab) {
-  return static_cast<std::uint64_t>(
-      store.load_doubles(rows_name("rays", slab.first, slab.last))(0, 0));
-}
-
-// A kept slab's rows, refused unless they have the slab's shape.
-MatrixXfRow kept_rows(const CheckpointStore& store, const SlabRange& slab, Eigen::Index cols) {
-  const std::string name = rows_name("transfer", slab.first, slab.last);
-  MatrixXfRow rows = store.load_floats(name);
-  if (rows.rows() != static_cast<Eigen::Index>(slab.last - slab.first) || rows.cols() != cols)
-    throw Error(store.folder().string() + "/" + name + ": holds a " + std::to_string(rows.rows()) +
-                " x " + std::to_string(rows.cols()) + " part where the slab needs " +
-                std::to_string(slab.last - slab.first) + " x " + std::to_string(cols) +
-                "; delete the folder or rerun with --restart");
-  return rows;
+  return kept_count(store, "rays", slab);
 }
 
 Eigen::Index transfer_dimension(const BakePlan& plan) {
@@ -210,8 +157,11 @@ TransferSignal whole_transfer(const BakePlan& plan, const SceneSpec& scene, cons
     rays_cast = static_cast<std::uint64_t>(store.load_doubles("rays")(0, 0));
     return out;
   }
+  // Traced in slabs, each kept; the stages after it keep their own parts
+  // (the fit's iterations and basis, each bounce, each channel's transfer).
   TransferSignal out =
-      traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
+      transfer_from_rays(plan, scene, mesh, set, slabbed_trace(plan, mesh, set, options), options,
+                         times, metrics, direct, rays_cast);
   if (plan.fit) keep_basis_state(store, *plan.basis);
   if (direct) store.save("direct", direct->coefficients);
   store.save_text("metrics", metrics_text(metrics));
@@ -395,30 +345,8 @@ void trace_bits(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
   transport.caster = caster ? &*caster : nullptr;
   TransportResult traced =
       diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
-  const std::size_t words = VisibilityBits::words_for(std::size_t(set.size()));
-  std::vector<std::int32_t> saved(2 * (slab.last - slab.first) * words);
-  std::memcpy(saved.data(), traced.visibility.words(0), saved.size() * sizeof(std::int32_t));
-  store.save(rows_name("bitrays", slab.first, slab.last),
-             Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(traced.rays_cast))));
-  store.save(rows_name("bits", slab.first, slab.last), saved);
-}
-
-// A kept slab's rows [range.first, range.last) copied into `bits` (whose
-// row 0 is vertex range.first).
-void copy_kept_bits(const CheckpointStore& store, const SlabRange& slab, const SlabRange& range,
-                    std::size_t words, VisibilityBits& bits) {
-  const std::string name = rows_name("bits", slab.first, slab.last);
-  const std::vector<std::int32_t> saved = store.load_ints(name);
-  if (saved.size() != 2 * (slab.last - slab.first) * words)
-    throw Error(store.folder().string() + "/" + name + ": holds " + std::to_string(saved.size()) +
-                " values where the slab needs " +
-                std::to_string(2 * (slab.last - slab.first) * words) +
-                "; delete the folder or rerun with --restart");
-  const std::size_t first = std::max(slab.first, range.first),
-                    last = std::min(slab.last, range.last);
-  if (first < last)
-    std::memcpy(bits.words(first - range.first), &saved[2 * (first - slab.first) * words],
-                (last - first) * words * sizeof(std::uint64_t));
+  keep_count(store, "bitrays", slab, traced.rays_cast);
+  keep_bits(store, "bits", slab, traced.visibility);
 }
 
 // The visibility bits of vertices [range.first, range.last) (this rank's
@@ -458,9 +386,7 @@ VisibilityBits kept_visibility(const BakePlan& plan, const Mesh& mesh, const Dir
     progress.finish();
     comm.barrier();  // every slab is kept
     rays = 0;
-    for (const auto& slab : slabs)
-      rays += static_cast<std::uint64_t>(
-          store.load_doubles(rows_name("bitrays", slab.first, slab.last))(0, 0));
+    for (const auto& slab : slabs) rays += kept_count(store, "bitrays", slab);
     if (comm.rank() == 0)
       store.save(kVisibilityRays, Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays))));
   } else {
@@ -487,7 +413,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
   if (!fitted_per_vertex_transfer(plan))
     throw Error("bake: a fit through slabs needs a diffuse transfer each vertex gets alone");
   const CheckpointStore& store = *options.checkpoint;
-  const std::string marker = "fitted-basis";
+  const std::string marker = kFittedBasisMarker;
   // Rank 0 says whether the basis was kept, for every rank: a rank that
   // looked itself could see the marker rank 0 writes in this very run.
   std::vector<char> basis_kept(1, 0);

@@ -243,6 +243,11 @@ std::string CheckpointStore::load_text(const std::string& name) const {
   return std::string(chars.begin(), chars.end());
 }
 
+void CheckpointStore::remove_part(const std::string& name) const {
+  std::error_code ignored;
+  fs::remove(folder_ / name, ignored);
+}
+
 void CheckpointStore::remove_temporaries() const {
   std::error_code ignored;
   for (const auto& entry : fs::directory_iterator(folder_, ignored))

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -25,12 +26,15 @@ auto at_hit(const Mesh& mesh, const Rows& previous, std::uint32_t triangle, floa
 }  // namespace
 
 MatrixXfRow gather_bounce(const Mesh& mesh, const DirectionSet& set, const HitLists& hits,
-                          const MatrixXfRow& previous, double albedo) {
+                          const MatrixXfRow& previous, double albedo, std::size_t first,
+                          std::size_t last) {
   if (hits.size() != mesh.vertex_count() ||
       previous.rows() != static_cast<Eigen::Index>(mesh.vertex_count()))
     throw Error("gather_bounce: hit lists and transfer do not match the mesh");
-  MatrixXfRow next(previous.rows(), previous.cols());
-  tbb::parallel_for(Eigen::Index(0), previous.rows(), [&](Eigen::Index p) {
+  last = std::min(last, mesh.vertex_count());
+  first = std::min(first, last);
+  MatrixXfRow next(Eigen::Index(last - first), previous.cols());
+  tbb::parallel_for(Eigen::Index(first), Eigen::Index(last), [&](Eigen::Index p) {
     Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(previous.cols());
     const Eigen::Vector3d n = mesh.normals[p].cast<double>();
     for (const SurfaceHit& h : hits[p]) {
@@ -41,25 +45,22 @@ MatrixXfRow gather_bounce(const Mesh& mesh, const DirectionSet& set, const HitLi
       const double b[3] = {1.0 - h.u - h.v, h.u, h.v};
       for (int c = 0; c < 3; ++c) sum += (weight * b[c]) * previous.row(t[c]).cast<double>();
     }
-    next.row(p) = (albedo * sum).cast<float>();
+    next.row(p - Eigen::Index(first)) = (albedo * sum).cast<float>();
   });
   return next;
 }
 
 Interreflection interreflect(const Mesh& mesh, const DirectionSet& set, const HitLists& hits,
                              const MatrixXfRow& direct, int bounces, double albedo,
-                             Progress* progress) {
+                             Progress* progress, const BounceCheckpoint& checkpoint) {
   if (!(albedo >= 0 && albedo <= 1))
     throw Error("inter-reflection needs an albedo in [0, 1]; got " + std::to_string(albedo));
-  Interreflection out{direct, {}};
-  MatrixXfRow previous = direct;
-  for (int b = 0; b < bounces; ++b) {
-    previous = gather_bounce(mesh, set, hits, previous, albedo);
-    out.total += previous;
-    out.bounce_norms.push_back(previous.cast<double>().norm());
-    if (progress) progress->add(1.0);
-  }
-  return out;
+  return bounce_passes(
+      direct, bounces,
+      [&](const MatrixXfRow& previous, std::size_t first, std::size_t last) {
+        return gather_bounce(mesh, set, hits, previous, albedo, first, last);
+      },
+      progress, checkpoint);
 }
 
 Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& direct, int bounces,

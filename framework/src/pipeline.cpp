@@ -8,7 +8,10 @@
 #include <cstdio>
 #include <fstream>
 
+#include "coupled_slabs.hpp"
+#include "kept_state.hpp"
 #include "prt/basis.hpp"
+#include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
@@ -267,12 +270,41 @@ TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const Direct
 
 namespace {
 
+// Each bounce's state is kept in the bake's checkpoint (when it has one).
+BounceCheckpoint bounce_checkpoint(const RunOptions& options) {
+  return {options.checkpoint, options.checkpoint_prefix,
+          [&options](const std::string& text) { options.message(text); }, options.slab_vertices};
+}
+
+// The fitted basis, or the one a killed run kept once its fit ended. The fit
+// keeps its own state in the checkpoint as it goes (eigentransport: after
+// each power iteration).
+void fit_basis(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+               const VisibilityBits& visibility, const RunOptions& options, StageTimes& times) {
+  const CheckpointStore* store = options.checkpoint;
+  if (store && store->has(kFittedBasisMarker)) {
+    load_kept_basis_state(*store, *plan.basis);
+    options.message("resuming: the fitted basis kept in " + store->folder().string());
+    return;
+  }
+  Stopwatch clock;
+  FitData fit{&mesh, &set, &visibility};
+  fit.checkpoint = store;
+  plan.basis->fit(fit);
+  times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
+  if (store) {
+    keep_basis_state(*store, *plan.basis);
+    store->save_text(kFittedBasisMarker, plan.basis_record.name);  // last: marks it kept
+  }
+}
+
 void add_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                  TransportResult& result, const RunOptions& options,
                  std::map<std::string, double>& metrics) {
   Progress progress("inter-reflection", plan.bounces, "", options.quiet);
-  Interreflection light = interreflect(mesh, set, result.hits, result.transfer.coefficients,
-                                       plan.bounces, plan.bounce_albedo, &progress);
+  Interreflection light =
+      interreflect(mesh, set, result.hits, result.transfer.coefficients, plan.bounces,
+                   plan.bounce_albedo, &progress, bounce_checkpoint(options));
   // How much the bounces add per vertex (transfer norm with / without - 1):
   // near zero on convex parts, large in concave ones.
   std::vector<double> gain(static_cast<std::size_t>(light.total.rows()));
@@ -305,10 +337,7 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
                               const RunOptions& options, StageTimes& times,
                               std::map<std::string, double>& metrics, TransferSignal* direct) {
   Stopwatch clock;
-  if (plan.fit) {
-    plan.basis->fit({&mesh, &set, &result.visibility});
-    times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
-  }
+  if (plan.fit) fit_basis(plan, mesh, set, result.visibility, options, times);
   // Projected from the bits when they were kept (or traced before by a sweep).
   const bool have_bits =
       result.visibility.vertices() == mesh.vertex_count() && result.visibility.vertices() > 0;
@@ -321,8 +350,8 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     if (direct) {  // without bounces, as the bake would be with bounces = 0
       *direct = result.transfer;
       if (plan.subsurface)
-        direct->coefficients +=
-            subsurface_transfer(mesh, direct->coefficients, plan.subsurface_material);
+        direct->coefficients += slabbed_subsurface(
+            mesh, direct->coefficients, plan.subsurface_material, options, "subsurface-direct");
     }
     clock = Stopwatch();
     add_bounces(plan, mesh, set, result, options, metrics);
@@ -331,7 +360,8 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
   MatrixXfRow scattered;
   if (plan.subsurface) {
     clock = Stopwatch();
-    scattered = subsurface_transfer(mesh, result.transfer.coefficients, plan.subsurface_material);
+    scattered = slabbed_subsurface(mesh, result.transfer.coefficients, plan.subsurface_material,
+                                   options, "subsurface");
     times.add("subsurface (hierarchical diffusion)", clock.seconds());
   }
   if (!plan.glossy) {
@@ -342,8 +372,8 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
   clock = Stopwatch();
   Progress progress("glossy matrices", double(mesh.vertex_count()), "", options.quiet);
   const std::vector<Frame> frames = tangent_frames(mesh);
-  TransferSignal transfer = glossy_transfer(mesh, set, result.visibility, *plan.basis, glossy,
-                                            frames, plan.glossy_method, &progress);
+  TransferSignal transfer =
+      slabbed_glossy_transfer(plan, mesh, set, result.visibility, frames, options, &progress);
   times.add("glossy matrices (" + std::to_string(glossy.rows()) + "x" +
                 std::to_string(plan.basis->size()) + ")",
             clock.seconds());
@@ -366,7 +396,7 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
     Progress bounce_progress("glossy inter-reflection", plan.bounces, "", options.quiet);
     GlossyInterreflection light = glossy_interreflect(
         mesh, set, result.hits, transfer.coefficients, *plan.exit, glossy, plan.basis->size(),
-        frames, plan.bounces, plan.bounce_albedo, &bounce_progress);
+        frames, plan.bounces, plan.bounce_albedo, &bounce_progress, bounce_checkpoint(options));
     const double direct_norm = transfer.coefficients.cast<double>().norm();
     transfer.coefficients = std::move(light.total);
     char line[200];
@@ -430,11 +460,43 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
       channel.glossy_operator =
           GlossyOperator::make(channel.brdf, *channel.exit, channel.incident_order,
                                channel.least_squares, channel.cutoff);
-    // The rays are traced once; every channel but the last works on a copy.
-    TransportResult rays = g + 1 < channels.groups.size() ? traced : std::move(traced);
+    // Each channel's transfer is kept once done; its stages keep their own
+    // parts (bounces) under its prefix.
+    RunOptions channel_options = options;
+    channel_options.checkpoint_prefix =
+        options.checkpoint_prefix + "channel-" + std::to_string(g + 1) + ".";
+    const std::string& prefix = channel_options.checkpoint_prefix;
+    const CheckpointStore* store = options.checkpoint;
     TransferSignal channel_direct;
-    parts.push_back(transfer_stage(channel, scene, mesh, set, std::move(rays), options, times,
-                                   metrics, direct ? &channel_direct : nullptr));
+    if (store && store->has(prefix + "transfer")) {
+      options.message("resuming: channel transfer " + std::to_string(g + 1) + " of " +
+                      std::to_string(channels.groups.size()) + " kept in " +
+                      store->folder().string());
+      TransferSignal part;
+      part.kind = channel.glossy ? "glossy" : "diffuse";
+      part.exit_rows = channel.glossy ? channel.glossy_operator.rows() : 1;
+      part.coefficients = store->load_floats(prefix + "transfer");
+      if (direct) {
+        channel_direct = part;
+        channel_direct.coefficients = store->load_floats(prefix + "direct");
+      }
+      read_metrics(store->load_text(prefix + "metrics"), metrics);
+      if (channel.fit) load_kept_basis_state(*store, *plan.basis);
+      parts.push_back(std::move(part));
+    } else {
+      // The rays are traced once; every channel but the last works on a copy.
+      TransportResult rays = g + 1 < channels.groups.size() ? traced : std::move(traced);
+      parts.push_back(transfer_stage(channel, scene, mesh, set, std::move(rays), channel_options,
+                                     times, metrics, direct ? &channel_direct : nullptr));
+      if (store) {
+        if (direct) store->save(prefix + "direct", channel_direct.coefficients);
+        store->save_text(prefix + "metrics", metrics_text(metrics));
+        store->save(prefix + "transfer", parts.back().coefficients);  // last: marks it kept
+        for (const std::string& part : store->parts())  // its stages' parts: done with
+          for (const char* stage : {"bounce-", "glossy.", "subsurface"})
+            if (part.rfind(prefix + stage, 0) == 0) store->remove_part(part);
+      }
+    }
     if (direct) directs.push_back(std::move(channel_direct));
   }
   if (direct) *direct = stack_channels(directs, channels);

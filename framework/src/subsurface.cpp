@@ -100,22 +100,44 @@ std::vector<double> vertex_areas(const Mesh& mesh) {
   return area;
 }
 
-MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
-                                const SubsurfaceMaterial& m) {
+// The hierarchy, built once: positions and areas in mm, and per node the sum
+// of A_q t_q of its vertices.
+struct SubsurfaceScattering::Hierarchy {
+  SubsurfaceMaterial material;
+  Dipole profile;
+  double f_dt;
+  std::vector<double> area;
+  std::vector<Eigen::Vector3d> position;
+  std::vector<int> order;
+  std::vector<Node> nodes;
+  Eigen::MatrixXd aggregate;
+  const MatrixXfRow& transfer;
+  Hierarchy(const MatrixXfRow& transfer, const SubsurfaceMaterial& m)
+      : material(m),
+        profile(m),
+        f_dt(1.0 - diffuse_fresnel_reflectance(m.eta)),
+        transfer(transfer) {}
+};
+
+SubsurfaceScattering::SubsurfaceScattering(const Mesh& mesh, const MatrixXfRow& transfer,
+                                           const SubsurfaceMaterial& m) {
   check(m);
   const auto v_count = static_cast<int>(mesh.vertex_count());
   if (transfer.rows() != v_count) throw Error("subsurface: transfer rows do not match the mesh");
-  const Dipole profile(m);
-  const double scale = m.mm_per_unit, f_dt = 1.0 - diffuse_fresnel_reflectance(m.eta);
-  std::vector<double> area = vertex_areas(mesh);
+  auto h = std::make_unique<Hierarchy>(transfer, m);
+  const double scale = m.mm_per_unit;
+  std::vector<double>& area = h->area;
+  area = vertex_areas(mesh);
   for (double& a : area) a *= scale * scale;  // mm^2
-  std::vector<Eigen::Vector3d> position(v_count);
+  std::vector<Eigen::Vector3d>& position = h->position;
+  position.resize(std::size_t(v_count));
   for (int v = 0; v < v_count; ++v) position[v] = mesh.positions[v].cast<double>() * scale;
 
   // Build the hierarchy over a permutation of the vertices.
-  std::vector<int> order(v_count);
+  std::vector<int>& order = h->order;
+  order.resize(std::size_t(v_count));
   std::iota(order.begin(), order.end(), 0);
-  std::vector<Node> nodes;
+  std::vector<Node>& nodes = h->nodes;
   nodes.reserve(2 * v_count / kLeaf + 2);
   std::function<int(int, int)> build = [&](int begin, int end) {
     const int id = static_cast<int>(nodes.size());
@@ -149,7 +171,8 @@ MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
   build(0, v_count);
   // Aggregated A_q t_q per node, children before parents (they have larger ids).
   const Eigen::Index n = transfer.cols();
-  Eigen::MatrixXd aggregate = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nodes.size()), n);
+  Eigen::MatrixXd& aggregate = h->aggregate;
+  aggregate = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nodes.size()), n);
   for (int id = static_cast<int>(nodes.size()) - 1; id >= 0; --id) {
     const Node& node = nodes[id];
     if (node.left < 0)
@@ -158,32 +181,47 @@ MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
     else
       aggregate.row(id) = aggregate.row(node.left) + aggregate.row(node.right);
   }
+  hierarchy_ = std::move(h);
+}
 
-  MatrixXfRow out(transfer.rows(), n);
-  tbb::parallel_for(0, v_count, [&](int p) {
+SubsurfaceScattering::~SubsurfaceScattering() = default;
+
+MatrixXfRow SubsurfaceScattering::rows(std::size_t first, std::size_t last) const {
+  const Hierarchy& h = *hierarchy_;
+  if (first > last || last > h.position.size())
+    throw Error("subsurface: rows " + std::to_string(first) + " to " + std::to_string(last) +
+                " of " + std::to_string(h.position.size()) + " vertices");
+  const Eigen::Index n = h.transfer.cols();
+  MatrixXfRow out(Eigen::Index(last - first), n);
+  tbb::parallel_for(int(first), int(last), [&](int p) {
     Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(n);
     std::vector<int> stack{0};
     while (!stack.empty()) {
-      const Node& node = nodes[stack.back()];
+      const Node& node = h.nodes[stack.back()];
       const int id = stack.back();
       stack.pop_back();
-      const double distance = (position[p] - node.centroid).norm();
-      if (node.left >= 0 && node.radius > m.error * distance) {
+      const double distance = (h.position[p] - node.centroid).norm();
+      if (node.left >= 0 && node.radius > h.material.error * distance) {
         stack.push_back(node.left);
         stack.push_back(node.right);
       } else if (node.left >= 0) {
-        sum += profile(distance) * aggregate.row(id);
+        sum += h.profile(distance) * h.aggregate.row(id);
       } else {
         for (int i = node.begin; i < node.end; ++i) {
-          const int q = order[i];
-          sum += profile((position[p] - position[q]).norm()) * area[q] *
-                 transfer.row(q).cast<double>();
+          const int q = h.order[i];
+          sum += h.profile((h.position[p] - h.position[q]).norm()) * h.area[q] *
+                 h.transfer.row(q).cast<double>();
         }
       }
     }
-    out.row(p) = (f_dt * f_dt * sum).cast<float>();
+    out.row(Eigen::Index(p - int(first))) = (h.f_dt * h.f_dt * sum).cast<float>();
   });
   return out;
+}
+
+MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
+                                const SubsurfaceMaterial& m) {
+  return SubsurfaceScattering(mesh, transfer, m).rows(0, mesh.vertex_count());
 }
 
 Eigen::MatrixX3f subsurface_direct(const Mesh& mesh, const Eigen::MatrixX3f& irradiance,

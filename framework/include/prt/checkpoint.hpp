@@ -62,6 +62,8 @@ class CheckpointStore {
   std::vector<std::int32_t> load_ints(const std::string& name) const;
   // Names of the parts present, sorted.
   std::vector<std::string> parts() const;
+  // Deletes a part superseded by a later one (a bounce's state by the next's).
+  void remove_part(const std::string& name) const;
   // Removes temporaries that killed processes left (".tmp-PID" files).
   void remove_temporaries() const;
   // Deletes the folder (after the output is in place).

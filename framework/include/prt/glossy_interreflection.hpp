@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "prt/basis.hpp"
+#include "prt/bounce_passes.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/frame.hpp"
 #include "prt/glossy.hpp"
@@ -25,20 +26,19 @@ namespace prt {
 class Progress;
 
 // One pass: `previous` (v x N_r N_i glossy transfer) -> the transfer of the
-// light it sends on (same shape).
+// light it sends on (same shape), or of vertices [first, last) only.
 MatrixXfRow glossy_bounce(const Mesh& mesh, const DirectionSet& directions, const HitLists& hits,
                           const MatrixXfRow& previous, const Basis& exit_basis,
                           const GlossyOperator& glossy, int light_size,
-                          const std::vector<Frame>& frames, double albedo);
+                          const std::vector<Frame>& frames, double albedo, std::size_t first = 0,
+                          std::size_t last = static_cast<std::size_t>(-1));
 
-struct GlossyInterreflection {
-  MatrixXfRow total;                 // direct + every bounce
-  std::vector<double> bounce_norms;  // Frobenius norm of each bounce's transfer
-};
+using GlossyInterreflection = BouncedTransfer;
 GlossyInterreflection glossy_interreflect(const Mesh& mesh, const DirectionSet& directions,
                                           const HitLists& hits, const MatrixXfRow& direct,
                                           const Basis& exit_basis, const GlossyOperator& glossy,
                                           int light_size, const std::vector<Frame>& frames,
-                                          int bounces, double albedo, Progress* progress);
+                                          int bounces, double albedo, Progress* progress,
+                                          const BounceCheckpoint& checkpoint = {});
 
 }  // namespace prt

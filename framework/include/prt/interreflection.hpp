@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "prt/bounce_passes.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/mesh.hpp"
 #include "prt/transfer.hpp"
@@ -20,17 +21,16 @@ namespace prt {
 
 class Progress;
 
-// One bounce: `previous` (v x n) -> the light it sends to each vertex (v x n).
+// One bounce: `previous` (v x n) -> the light it sends to each vertex (v x n),
+// or to vertices [first, last) only (a row each).
 MatrixXfRow gather_bounce(const Mesh& mesh, const DirectionSet& directions, const HitLists& hits,
-                          const MatrixXfRow& previous, double albedo);
+                          const MatrixXfRow& previous, double albedo, std::size_t first = 0,
+                          std::size_t last = static_cast<std::size_t>(-1));
 
-struct Interreflection {
-  MatrixXfRow total;                 // direct + every bounce
-  std::vector<double> bounce_norms;  // Frobenius norm of each bounce's transfer
-};
+using Interreflection = BouncedTransfer;
 Interreflection interreflect(const Mesh& mesh, const DirectionSet& directions, const HitLists& hits,
                              const MatrixXfRow& direct, int bounces, double albedo,
-                             Progress* progress);
+                             Progress* progress, const BounceCheckpoint& checkpoint = {});
 
 // The ground truth's bounces, independent of any basis and of the bake's
 // directions: per vertex `samples` fresh cosine-distributed rays gather the

@@ -49,6 +49,9 @@ struct RunOptions {
   // transfers each vertex gets alone are then computed in slabs of vertices.
   const CheckpointStore* checkpoint = nullptr;
   std::size_t slab_vertices = 65536;
+  // Before the names of the parts a stage keeps: a bake of several channel
+  // transfers runs the stages once per channel, each under its own prefix.
+  std::string checkpoint_prefix;
   // Ranks of a distributed bake (prt-mpi); null: this process alone. Each
   // rank traces and compresses its shard of vertices; rank 0's result is the
   // whole bake, the other ranks' results are empty.

@@ -10,6 +10,7 @@
 // albedo tints the result like the rest of the transfer.
 #pragma once
 #include <Eigen/Core>
+#include <memory>
 #include <string>
 
 #include "prt/mesh.hpp"
@@ -44,6 +45,24 @@ double dipole_total_reflectance(const SubsurfaceMaterial& m);
 // s_p per vertex for the diffuse transfer `irradiance_transfer` (v x n).
 MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& irradiance_transfer,
                                 const SubsurfaceMaterial& material);
+
+// The same in parts: the hierarchy over every vertex is built once, then
+// s_p is gathered for any range of vertices (a slab of a checkpointed bake).
+// Keeps a reference to `irradiance_transfer`.
+class SubsurfaceScattering {
+ public:
+  SubsurfaceScattering(const Mesh& mesh, const MatrixXfRow& irradiance_transfer,
+                       const SubsurfaceMaterial& material);
+  ~SubsurfaceScattering();
+  SubsurfaceScattering(const SubsurfaceScattering&) = delete;
+  SubsurfaceScattering& operator=(const SubsurfaceScattering&) = delete;
+  // s_p of vertices [first, last), a row each.
+  MatrixXfRow rows(std::size_t first, std::size_t last) const;
+
+ private:
+  struct Hierarchy;
+  std::unique_ptr<const Hierarchy> hierarchy_;
+};
 
 // The ground truth's multiple scattering: the same dipole summed directly
 // over every pair of vertices (no hierarchy, no basis), from the irradiance

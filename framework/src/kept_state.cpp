@@ -1,0 +1,46 @@
+#include "kept_state.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+#include "prt/basis.hpp"
+#include "prt/checkpoint.hpp"
+
+namespace prt {
+
+namespace {
+constexpr const char* kBasisStatePrefix = "basis_state.";
+}
+
+void keep_basis_state(const CheckpointStore& store, const Basis& basis) {
+  for (const auto& [name, matrix] : basis.save().matrices)
+    store.save(kBasisStatePrefix + name, matrix);
+}
+
+void load_kept_basis_state(const CheckpointStore& store, Basis& basis) {
+  const std::string prefix = kBasisStatePrefix;
+  BasisState state;
+  for (const auto& part : store.parts())
+    if (part.rfind(prefix, 0) == 0)
+      state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
+  basis.load(state);
+}
+
+std::string metrics_text(const std::map<std::string, double>& metrics) {
+  std::string text;
+  char line[256];
+  for (const auto& [name, value] : metrics) {
+    std::snprintf(line, sizeof line, "%s %.17g\n", name.c_str(), value);
+    text += line;
+  }
+  return text;
+}
+
+void read_metrics(const std::string& text, std::map<std::string, double>& metrics) {
+  std::istringstream in(text);
+  std::string name;
+  double value = 0;
+  while (in >> name >> value) metrics[name] = value;
+}
+
+}  // namespace prt

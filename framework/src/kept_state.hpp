@@ -1,0 +1,23 @@
+// What the bake's stages keep in a checkpoint besides rows of a transfer: a
+// fitted basis's state and the metrics of the stages done.
+#pragma once
+#include <map>
+#include <string>
+
+namespace prt {
+
+class Basis;
+class CheckpointStore;
+
+// Written after the basis state's parts, so that it marks the basis kept.
+inline constexpr const char* kFittedBasisMarker = "fitted-basis";
+
+// One part per matrix, under "basis_state.".
+void keep_basis_state(const CheckpointStore& store, const Basis& basis);
+void load_kept_basis_state(const CheckpointStore& store, Basis& basis);
+
+// A line "name value" per metric, exact to the last bit.
+std::string metrics_text(const std::map<std::string, double>& metrics);
+void read_metrics(const std::string& text, std::map<std::string, double>& metrics);
+
+}  // namespace prt

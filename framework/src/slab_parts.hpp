@@ -1,0 +1,51 @@
+// A bake's work kept in a checkpoint slab by slab: the names of a slab's
+// parts and the checked loading of each (rows of a transfer, visibility
+// bits, counts). Shared by the per-vertex, fitted and coupled paths.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "prt/checkpoint.hpp"
+#include "prt/error.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+// Vertices [first, last): slab k of a grid, cut to a range.
+struct SlabRange {
+  std::size_t first, last;
+  std::size_t size() const { return last - first; }
+};
+
+// The slabs of a grid of `slab` vertices that meet [first, last), cut to it.
+std::vector<SlabRange> slabs_of(std::size_t first, std::size_t last, std::size_t slab);
+
+// "what.rows-FIRST-LAST": the part `what` of vertices [first, last).
+std::string rows_name(const char* what, std::size_t first, std::size_t last);
+inline std::string rows_name(const char* what, const SlabRange& slab) {
+  return rows_name(what, slab.first, slab.last);
+}
+
+// A kept part that does not have the shape its slab needs.
+Error misshapen_part(const CheckpointStore& store, const std::string& name,
+                     const std::string& holds, const std::string& needs);
+
+// Part `what` of a slab: its rows, refused unless they have the slab's shape.
+MatrixXfRow kept_rows(const CheckpointStore& store, const SlabRange& slab, Eigen::Index cols,
+                      const char* what = "transfer");
+
+// A count (rays cast) kept as part `what` of a slab.
+void keep_count(const CheckpointStore& store, const char* what, const SlabRange& slab,
+                std::uint64_t count);
+std::uint64_t kept_count(const CheckpointStore& store, const char* what, const SlabRange& slab);
+
+// Visibility bits of a slab (row 0: vertex slab.first) kept as part `what`,
+// and their rows [range.first, range.last) copied back into `bits` (whose
+// row 0 is vertex range.first).
+void keep_bits(const CheckpointStore& store, const char* what, const SlabRange& slab,
+               const VisibilityBits& bits);
+void copy_kept_bits(const CheckpointStore& store, const SlabRange& slab, const SlabRange& range,
+                    std::size_t words, VisibilityBits& bits, const char* what = "bits");
+
+}  // namespace prt
