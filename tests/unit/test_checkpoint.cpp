@@ -190,3 +190,89 @@ constant = [1, 1, 1]
     CHECK(data->metrics == reference.metrics);
   }
 }
+
+TEST_CASE("a bake that couples vertices keeps its stages in slabs and resumes from them",
+          "[checkpoint]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  // Three channel transfers (a coloured kd with bounces), each with two
+  // bounces and subsurface light; and a glossy one with a bounce.
+  for (const std::string& material :
+       {std::string("diffuse = [0.9, 0.5, 0.2]\nsubsurface = true"),
+        std::string("brdf = \"phong\"\ndiffuse = [0.6, 0.3, 0.3]\nspecular = 0.4\nexponent = 8")}) {
+    INFO(material);
+    const SceneSpec s = SceneSpec::parse(R"(
+[mesh]
+generate = "open-box"
+detail = 1
+[material]
+)" + material + R"(
+[transport]
+rays = 128
+bounces = 2
+[basis]
+plugin = "sh"
+order = 3
+[exit]
+plugin = "hsh"
+order = 2
+[compressor]
+plugin = "pca"
+components = 2
+[lighting]
+constant = [1.0, 0.7, 0.4]
+)",
+                                         "coupled.toml", registry);
+    StageTimes times;
+    const BakeData reference = bake(s, registry, {true}, times);
+    const fs::path output = fresh_folder("coupled") / "bake.h5";
+    const BakePlan plan = plan_bake(s, registry);
+    REQUIRE_FALSE(per_vertex_transfer(plan));
+    const CheckpointStore store(output, bake_key(s, plan), "test");
+    RunOptions options{true};
+    options.checkpoint = &store;
+    options.slab_vertices = 100;
+    const BakeData first = bake(s, registry, options, times);
+    const auto parts = store.parts();
+    const auto count = [&](const std::string& prefix) {
+      return std::count_if(parts.begin(), parts.end(),
+                           [&](const std::string& p) { return p.rfind(prefix, 0) == 0; });
+    };
+    const auto slabs = (reference.mesh.vertex_count() + 99) / 100;
+    REQUIRE(slabs > 2);
+    CHECK(count("trace-rays.rows-") == long(slabs));
+    CHECK(count("trace-hits.rows-") == long(slabs));
+    const long channels = long(plan.channels.groups.size());
+    REQUIRE(channels > 1);
+    for (long g = 1; g <= channels; ++g) {
+      const std::string prefix = "channel-" + std::to_string(g) + ".";
+      CHECK(store.has(prefix + "transfer"));
+      CHECK(count(prefix + "bounce-") == 0);  // the stages' parts go once the channel is kept
+      CHECK(count(prefix + "glossy.") == 0);
+    }
+    REQUIRE(store.has("transfer"));
+    // Killed before the last channel was kept, and before a slab of the
+    // trace was: the rerun traces that slab and computes that channel again.
+    const std::string last = "channel-" + std::to_string(channels) + ".transfer";
+    for (const std::string& lost :
+         {std::string("transfer"), last, std::string("trace-rays.rows-000000000100-000000000200")})
+      REQUIRE(fs::remove(store.folder() / lost));
+    const BakeData resumed = bake(s, registry, options, times);
+    for (const BakeData* data : {&first, &resumed}) {
+      CHECK(data->transfer.coefficients == reference.transfer.coefficients);
+      CHECK(data->transfer.channel_groups == reference.transfer.channel_groups);
+      CHECK(data->compressed.weights == reference.compressed.weights);
+      CHECK(data->metrics == reference.metrics);
+    }
+    // Damaged hits (a triangle the mesh does not have) are refused.
+    std::vector<std::int32_t> hits(100, 0);
+    hits[0] = 1;
+    hits.insert(hits.end(), {0, 1 << 30, 0, 0});
+    REQUIRE(fs::remove(store.folder() / "transfer"));
+    store.save("trace-hits.rows-000000000000-000000000100", hits);
+    CHECK_THROWS_WITH(bake(s, registry, options, times),
+                      Catch::Contains("trace-hits.rows-000000000000-000000000100") &&
+                          Catch::Contains("--restart"));
+    store.remove();
+  }
+}

@@ -1,5 +1,10 @@
 #include <catch2/catch.hpp>
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
 
+#include "prt/bounce_passes.hpp"
+#include "prt/checkpoint.hpp"
 #include "prt/environment.hpp"
 #include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
@@ -8,6 +13,7 @@
 #include "prt/transport.hpp"
 
 using namespace prt;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -162,4 +168,74 @@ TEST_CASE(
   const Eigen::MatrixX3f direct = subsurface_direct(sphere, lit3, exact);
   CHECK((hierarchy.col(0) - direct.col(0)).norm() / direct.col(0).norm() < 1e-4);
   CHECK(direct.col(0).minCoeff() > 0);  // light reaches the unlit side
+}
+
+TEST_CASE("bounces and subsurface gathered a slab of vertices at a time equal the whole",
+          "[interreflection][checkpoint]") {
+  const Mesh box = make_open_box(8);
+  const TransportResult t = traced(box, 512);
+  const DirectionSet set = DirectionSet::make("fibonacci", 512, 1);
+  const MatrixXfRow& direct = t.transfer.coefficients;
+  const MatrixXfRow whole = gather_bounce(box, set, t.hits, direct, 0.8);
+  const std::size_t v = box.vertex_count(), cut = v / 3;
+  REQUIRE(cut > 10);
+  CHECK(gather_bounce(box, set, t.hits, direct, 0.8, cut, v) == whole.bottomRows(v - cut));
+  CHECK(gather_bounce(box, set, t.hits, direct, 0.8, 0, cut) == whole.topRows(cut));
+  CHECK(gather_bounce(box, set, t.hits, direct, 0.8, cut, cut).rows() == 0);
+  const SubsurfaceMaterial marble;
+  const MatrixXfRow scattered = subsurface_transfer(box, direct, marble);
+  const SubsurfaceScattering parts(box, direct, marble);
+  CHECK(parts.rows(cut, v) == scattered.bottomRows(v - cut));
+  CHECK(parts.rows(0, cut) == scattered.topRows(cut));
+  CHECK_THROWS_WITH(parts.rows(cut, v + 1), Catch::Contains("vertices"));
+}
+
+TEST_CASE("bounces kept in a checkpoint resume after a kill to the same transfer",
+          "[interreflection][checkpoint]") {
+  const fs::path output = fs::temp_directory_path() / "prt_bounces" / "bake.h5";
+  fs::remove_all(output.parent_path());
+  fs::create_directories(output.parent_path());
+  const CheckpointStore store(output, "key", "test");
+  const MatrixXfRow direct = MatrixXfRow::Random(50, 3);
+  // A bounce that halves the light and mixes neighbouring rows, counting the
+  // rows it gathers; "killed" (throws) once it has gathered `limit` rows.
+  std::size_t gathered = 0, limit = SIZE_MAX;
+  const BounceFunction bounce = [&](const MatrixXfRow& previous, std::size_t first,
+                                    std::size_t last) {
+    if (gathered + (last - first) > limit) throw std::runtime_error("killed");
+    gathered += last - first;
+    MatrixXfRow out(Eigen::Index(last - first), previous.cols());
+    for (std::size_t p = first; p < last; ++p)
+      out.row(Eigen::Index(p - first)) =
+          0.25f * (previous.row(Eigen::Index(p)) + previous.row(Eigen::Index((p + 7) % 50)));
+    return out;
+  };
+  const BouncedTransfer reference = bounce_passes(direct, 3, bounce, nullptr);
+  REQUIRE(gathered == 150);
+  std::vector<std::string> said;
+  BounceCheckpoint checkpoint{&store, "channel-2.",
+                              [&](const std::string& text) { said.push_back(text); }, 20};
+  // Killed inside bounce 2 after its first slab (20 rows), then again inside
+  // bounce 3; each rerun gathers only what was not kept.
+  gathered = 0, limit = 50 + 20 + 5;
+  CHECK_THROWS_WITH(bounce_passes(direct, 3, bounce, nullptr, checkpoint), "killed");
+  CHECK(store.has("channel-2.bounce-1"));
+  CHECK(store.has("channel-2.bounce-2.rows-000000000000-000000000020"));
+  gathered = 0, limit = 30 + 45;
+  CHECK_THROWS_WITH(bounce_passes(direct, 3, bounce, nullptr, checkpoint), "killed");
+  CHECK(gathered == 30 + 40);  // bounce 2's last 30 rows, bounce 3's first two slabs
+  CHECK_FALSE(store.has("channel-2.bounce-1"));  // superseded by bounce 2's state
+  gathered = 0, limit = SIZE_MAX;
+  const BouncedTransfer resumed = bounce_passes(direct, 3, bounce, nullptr, checkpoint);
+  CHECK(gathered == 10);
+  CHECK(resumed.total == reference.total);
+  CHECK(resumed.bounce_norms == reference.bounce_norms);
+  REQUIRE(said.size() >= 3);
+  CHECK(said[0] == "resuming: inter-reflection (channel-2) after bounce 1 of 3");
+  CHECK_THAT(said[1], Catch::StartsWith("resuming: 1 of 3 slabs of bounce 2 kept in"));
+  // A kept state that does not fit this transfer is refused with a message.
+  store.save("channel-2.bounce-3.total", MatrixXfRow(MatrixXfRow::Zero(4, 3)));
+  CHECK_THROWS_WITH(bounce_passes(direct, 3, bounce, nullptr, checkpoint),
+                    Catch::Contains("does not match the transfer") && Catch::Contains("--restart"));
+  store.remove();
 }
