@@ -34,6 +34,7 @@ struct Args {
   std::size_t slab_vertices = 65536;
   std::uint64_t memory = 0;  // per rank, bytes (0: the default share of RAM)
   int threads = 0;
+  double checkpoint_seconds = 60;
 };
 
 double peak_memory_gb() {
@@ -74,6 +75,7 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
   options.checkpoint = &*checkpoint;
   options.slab_vertices = args.slab_vertices;
   options.memory_budget = double(args.memory);
+  options.checkpoint_seconds = args.checkpoint_seconds;
   options.comm = &comm;
   if (!root) options.log = [](const std::string&) {};
   BakeData data = bake(scene, registry, options, times);
@@ -145,6 +147,12 @@ int main(int argc, char** argv) {
                    "transfer is kept on disk and compressed in passes")
       ->transform(CLI::AsSizeValue(false))
       ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
+  bake_cmd
+      ->add_option("--checkpoint-seconds", args.checkpoint_seconds,
+                   "LBG keeps its state (each rank's labels, rank 0's means) in the checkpoint "
+                   "at most this often")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e9));
   bake_cmd->add_option("--threads", args.threads, "threads per rank (default: every core)")
       ->check(CLI::Range(1, 4096));
   try {

@@ -613,11 +613,9 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const Distribution shard = distributed
                                  ? Distribution{&comm, shard_of(vertices, comm.rank(), comm.size())}
                                  : Distribution::whole_signal(vertices);
-  Distribution encode_where = shard;
-  if (!distributed) {  // one process keeps its compressor's state in the checkpoint
-    encode_where.checkpoint = options.checkpoint;
-    encode_where.checkpoint_seconds = options.checkpoint_seconds;
-  }
+  Distribution encode_where = shard;  // the compressor keeps its state in the checkpoint
+  encode_where.checkpoint = options.checkpoint;
+  encode_where.checkpoint_seconds = options.checkpoint_seconds;
   const bool on_disk = transfer_on_disk(plan, data.mesh, shard.shard.rows(), options);
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);

@@ -2,7 +2,8 @@
 # prt-mpi on a real CGAL mesh equals prt bake byte for byte, for 1 to 4
 # ranks (more ranks than cores: --oversubscribe): iterative CPCA with
 # superclusters and an eigentransport basis fitted by the ranks together
-# (also killed after the fit and resumed on other ranks); on 3 ranks static
+# (also killed after the fit and resumed on other ranks; VQ killed inside
+# LBG and resumed); on 3 ranks static
 # CPCA from a hyper-box start, PCA, glossy VQ and a sparse Haar
 # approximation with a rank that holds no vertex. A
 # compressor that cannot run distributed is refused on every rank with one
@@ -146,6 +147,31 @@ grep -q "fit basis" <<<"$out" && { echo "FAIL: fitted again after resuming: $out
 cmp -s "$work/eigen_kill.serial.h5" "$work/eigen_kill.h5" ||
   { echo "FAIL: the resumed distributed fit changes the file"; exit 1; }
 echo "killed after the distributed fit on 3 ranks, resumed on 2: the file is identical"
+
+# Killed (every rank) inside LBG and rerun on as many ranks: each rank kept
+# its labels and rank 0 the means, so LBG resumes where it was, to the file
+# of prt bake.
+sed -e 's/plugin = "cpca"/plugin = "vq"\niterations = 400\ntolerance = 0.0/' \
+  -e 's/^clusters = 64$/clusters = 128/' -e '/^method\|^components\|^supercluster/d' \
+  "$work/iterative.toml" >"$work/vq_kill.toml"
+"$prt" -q bake "$work/vq_kill.toml" -o "$work/vq_kill.serial.h5" >/dev/null
+setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/vq_kill.toml" -o "$work/vq_kill.h5" \
+  --checkpoint-seconds 0 >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 600); do  # until LBG has kept a state (at most a minute)
+  [ -e "$work/.vq_kill.h5.checkpoint/lbg.state" ] && break
+  sleep 0.1
+done
+kill -9 -- "-$pid" 2>/dev/null || true
+wait "$pid" 2>/dev/null || true
+pkill -9 -f "$work/vq_kill.toml" 2>/dev/null || true
+[ -e "$work/.vq_kill.h5.checkpoint/lbg.state" ] || { echo "FAIL: no LBG state kept"; exit 1; }
+[ ! -e "$work/vq_kill.h5" ] || { echo "FAIL: the killed bake finished first"; exit 1; }
+out=$("${mpirun[@]}" -np 3 "$prt_mpi" bake "$work/vq_kill.toml" -o "$work/vq_kill.h5" 2>&1)
+grep -q "resuming: LBG at iteration" <<<"$out" || { echo "FAIL: LBG did not resume: $out"; exit 1; }
+cmp -s "$work/vq_kill.serial.h5" "$work/vq_kill.h5" ||
+  { echo "FAIL: the resumed distributed LBG changes the file"; exit 1; }
+echo "killed inside distributed LBG on 3 ranks, resumed: $(grep -o 'resuming: LBG at iteration [0-9]*' <<<"$out"); the file is identical"
 
 # Refusals end every rank with one clear message and no output.
 scene coherent bunny00.off $'plugin = "sh"\norder = 4' \

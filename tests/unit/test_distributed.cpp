@@ -4,12 +4,14 @@
 // segment sums are compared with one process on the whole signal.
 #include <catch2/catch.hpp>
 #include <condition_variable>
+#include <filesystem>
 #include <mutex>
 #include <random>
 #include <string>
 #include <thread>
 
 #include "../common/thread_communicator.hpp"
+#include "prt/checkpoint.hpp"
 #include "prt/clustering.hpp"
 #include "prt/segment_sum.hpp"
 
@@ -184,5 +186,58 @@ TEST_CASE("small clusters (Gram matrices) and large ones (scatter) fit alike on 
         CHECK(shared[k].eigenvalues == one[k].eigenvalues);
       }
     });
+  }
+}
+
+TEST_CASE("distributed LBG keeps each rank's labels and resumes to the same clusters",
+          "[distributed][checkpoint]") {
+  const MatrixXfRow x = clustered_rows(3 * kSegmentRows + 1000, 12, 9);
+  clustering::LbgOptions options;
+  options.clusters = 16;
+  options.tolerance = 0;
+  options.max_iterations = 9;
+  const clustering::Clusters one = clustering::lbg(x, options);
+  for (int ranks : {1, 3}) {
+    INFO("ranks " << ranks);
+    const auto output = std::filesystem::temp_directory_path() / "prt_lbg_kept" / "bake.h5";
+    std::filesystem::remove_all(output.parent_path());
+    std::filesystem::create_directories(output.parent_path());
+    const CheckpointStore store(output, "key", "test");
+    clustering::LbgOptions kept = options;
+    kept.keep = &store;
+    kept.keep_seconds = 0;    // after every iteration
+    kept.max_iterations = 4;  // "killed" after iteration 4: its state is kept
+    on_ranks(x, ranks, [&](int, const clustering::Rows& rows) { clustering::lbg(rows, kept); });
+    REQUIRE(store.has("lbg.state"));
+    for (int r = 0; r < ranks; ++r) {  // each rank's labels, under its shard's rows
+      const Shard shard = shard_of(x.rows(), r, ranks);
+      CHECK(store.has("lbg.labels.0.rows-" + std::to_string(shard.first) + "-" +
+                      std::to_string(shard.last)));
+    }
+    kept.max_iterations = options.max_iterations;
+    std::vector<clustering::Clusters> results(static_cast<std::size_t>(ranks));
+    on_ranks(x, ranks, [&](int r, const clustering::Rows& rows) {
+      results[std::size_t(r)] = clustering::lbg(rows, kept);
+    });
+    std::vector<std::int32_t> labels;
+    for (const auto& result : results) {
+      labels.insert(labels.end(), result.labels.begin(), result.labels.end());
+      CHECK(result.means == one.means);
+      CHECK(result.energy == one.energy);
+      CHECK(result.iterations == one.iterations);
+      CHECK(result.log.size() < one.log.size());  // it resumed: fewer iterations ran
+    }
+    CHECK(labels == one.labels);
+    // Another rank count finds no labels for its shards and starts afresh, to
+    // the same clusters.
+    if (ranks > 1) {
+      kept.keep_seconds = 1e9;
+      on_ranks(x, 2, [&](int r, const clustering::Rows& rows) {
+        const clustering::Clusters again = clustering::lbg(rows, kept);
+        CHECK(again.means == one.means);
+        if (r == 0) CHECK(again.log.size() == one.log.size());
+      });
+    }
+    store.remove();
   }
 }

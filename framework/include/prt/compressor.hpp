@@ -19,8 +19,10 @@ struct Distribution {
   const Communicator* comm = &solo();
   Shard shard;
   // Where a long encode keeps its state, at most every checkpoint_seconds,
-  // and finds it again when the bake is rerun after a kill (prt bake's
-  // checkpoint folder; one process only). Null: nothing is kept.
+  // and finds it again when the bake is rerun after a kill (the bake's
+  // checkpoint folder; a distributed run's ranks share it, so a distributed
+  // encode keeps parts named by its shard, decides when to keep on one rank
+  // for all, and resumes on every rank or none). Null: nothing is kept.
   const CheckpointStore* checkpoint = nullptr;
   double checkpoint_seconds = 60;
   static Distribution whole_signal(Eigen::Index rows) { return {&solo(), whole(rows)}; }

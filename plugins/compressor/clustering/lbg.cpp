@@ -254,38 +254,57 @@ int update_means(const Rows& rows, std::vector<std::int32_t>& label, std::vector
 }
 
 // The loop's state between two iterations, kept in a checkpoint: the means
-// and the figures in one part, written after the labels (in one of two
-// parts by the parity of a count of saves, each led by its count), so a
-// kill between the two writes leaves the previous state whole.
+// and the figures in one part ("lbg.state", by rank 0), written after every
+// rank's labels (each rank its shard's rows, in one of two parts by the
+// parity of a count of saves, each led by its count), so a kill between the
+// writes leaves the previous state whole.
 struct LbgState {
   int next_iteration = 0;
   int sequence = 0;  // counts the states kept by one run
   double previous = 0, energy = 0;
   RowMatrixXd means;
-  std::vector<std::int32_t> labels;
+  std::vector<std::int32_t> labels;  // this rank's rows
 };
 
-std::string labels_part(int sequence) {
-  return "lbg.labels." + std::to_string(sequence % 2);
+std::string labels_part(int sequence, const Shard& shard) {
+  return "lbg.labels." + std::to_string(sequence % 2) + ".rows-" + std::to_string(shard.first) +
+         "-" + std::to_string(shard.last);
 }
 
-void keep_state(const CheckpointStore& store, const LbgState& s) {
-  std::vector<std::int32_t> labels;
-  labels.reserve(s.labels.size() + 1);
-  labels.push_back(s.sequence);
-  labels.insert(labels.end(), s.labels.begin(), s.labels.end());
-  store.save(labels_part(s.sequence), labels);
-  // k rows of means, then a row of figures (at least 4 columns wide).
-  const Eigen::Index k = s.means.rows(), n = s.means.cols();
-  Eigen::MatrixXd state = Eigen::MatrixXd::Zero(k + 1, std::max<Eigen::Index>(n, 4));
-  state.topLeftCorner(k, n) = s.means;
-  state.row(k).head<4>() << double(s.next_iteration), double(s.sequence), s.previous, s.energy;
-  store.save("lbg.state", state);
+// Keeps the state; false on every rank when a rank could not write its part
+// (a full disk ends the keeping, not the encode).
+bool keep_state(const CheckpointStore& store, const Rows& rows, const LbgState& s) {
+  bool failed = false;
+  try {
+    std::vector<std::int32_t> labels;
+    labels.reserve(s.labels.size() + 1);
+    labels.push_back(s.sequence);
+    labels.insert(labels.end(), s.labels.begin(), s.labels.end());
+    store.save(labels_part(s.sequence, rows.shard), labels);
+  } catch (const Error& e) {
+    log_warning(std::string("LBG: keeping its state failed, going on without: ") + e.what());
+    failed = true;
+  }
+  if (rows.any(failed)) return false;  // also: every rank's labels are kept
+  if (rows.comm.rank() == 0) {
+    // k rows of means, then a row of figures (at least 4 columns wide).
+    const Eigen::Index k = s.means.rows(), n = s.means.cols();
+    Eigen::MatrixXd state = Eigen::MatrixXd::Zero(k + 1, std::max<Eigen::Index>(n, 4));
+    state.topLeftCorner(k, n) = s.means;
+    state.row(k).head<4>() << double(s.next_iteration), double(s.sequence), s.previous, s.energy;
+    try {
+      store.save("lbg.state", state);
+    } catch (const Error& e) {
+      log_warning(std::string("LBG: keeping its state failed, going on without: ") + e.what());
+      failed = true;
+    }
+  }
+  return !rows.any(failed);
 }
 
 // The state a killed run kept, when it fits this run (else none).
-std::optional<LbgState> kept_state(const CheckpointStore& store, Eigen::Index rows, int k,
-                                   Eigen::Index n) {
+std::optional<LbgState> kept_state(const CheckpointStore& store, const Rows& rows, int k) {
+  const Eigen::Index n = rows.cols();
   if (!store.has("lbg.state")) return std::nullopt;
   const Eigen::MatrixXd state = store.load_doubles("lbg.state");
   if (state.rows() != k + 1 || state.cols() != std::max<Eigen::Index>(n, 4)) return std::nullopt;
@@ -295,10 +314,11 @@ std::optional<LbgState> kept_state(const CheckpointStore& store, Eigen::Index ro
   s.previous = state(k, 2);
   s.energy = state(k, 3);
   s.means = state.topLeftCorner(k, n);
-  const std::string part = labels_part(s.sequence);
-  if (!store.has(part)) return std::nullopt;
+  const std::string part = labels_part(s.sequence, rows.shard);
+  if (!store.has(part)) return std::nullopt;  // another rank count: its shards differ
   std::vector<std::int32_t> labels = store.load_ints(part);
-  if (Eigen::Index(labels.size()) != rows + 1 || labels[0] != s.sequence) return std::nullopt;
+  if (Eigen::Index(labels.size()) != rows.local() + 1 || labels[0] != s.sequence)
+    return std::nullopt;
   s.labels.assign(labels.begin() + 1, labels.end());
   for (std::int32_t l : s.labels)
     if (l < 0 || l >= k) return std::nullopt;
@@ -323,23 +343,23 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
   if (options.alpha > 0 && rows.distributed())
     throw Error("LBG: geometry-coherent clustering (alpha > 0) needs every vertex in one process");
   const int k = static_cast<int>(std::min<Eigen::Index>(options.clusters, rows.total()));
-  if (options.keep && rows.distributed())
-    throw Error("LBG: a distributed run keeps no checkpoint of its iterations");
   std::mt19937_64 rng(options.seed);
   Clusters result;
   double previous = std::numeric_limits<double>::infinity();
   int first_iteration = 0;
   std::optional<LbgState> kept;
   try {
-    if (options.keep) kept = kept_state(*options.keep, rows.local(), k, rows.cols());
+    if (options.keep) kept = kept_state(*options.keep, rows, k);
   } catch (const Error& e) {  // a damaged part: start afresh rather than fail every rerun
     log_warning(std::string("LBG: the kept state is unreadable, starting afresh: ") + e.what());
   }
-  const CheckpointStore* keep = options.keep;
+  if (options.keep && rows.any(!kept)) kept.reset();  // every rank resumes, or none
+  const CheckpointStore* keep = options.keep;  // null once keeping failed, on every rank alike
   int sequence = kept ? kept->sequence + 1 : 0;
   if (kept) {
-    log_info("resuming: LBG at iteration " + std::to_string(kept->next_iteration + 1) +
-             ", kept in " + options.keep->folder().string());
+    if (rows.comm.rank() == 0)
+      log_info("resuming: LBG at iteration " + std::to_string(kept->next_iteration + 1) +
+               ", kept in " + options.keep->folder().string());
     result.means = std::move(kept->means);
     result.labels = std::move(kept->labels);
     previous = kept->previous;
@@ -368,14 +388,11 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
     result.log.push_back({clock.seconds(), energy, rows.total(), rows.cols(), k, "lbg"});
     if (refilled == 0 && (energy == 0 || (previous - energy) / previous < options.tolerance)) break;
     previous = energy;
-    if (keep && since_kept.seconds() >= options.keep_seconds) {
-      try {
-        keep_state(*keep,
-                   {iteration + 1, sequence++, previous, energy, result.means, result.labels});
-      } catch (const Error& e) {  // a full disk ends the keeping, not the encode
-        log_warning(std::string("LBG: keeping its state failed, going on without: ") + e.what());
+    // Rank 0's clock decides for every rank, so that all keep the same iteration.
+    if (keep && rows.any(rows.comm.rank() == 0 && since_kept.seconds() >= options.keep_seconds)) {
+      if (!keep_state(*keep, rows,
+                      {iteration + 1, sequence++, previous, energy, result.means, result.labels}))
         keep = nullptr;
-      }
       since_kept = Stopwatch();
     }
   }

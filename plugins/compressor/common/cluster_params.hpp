@@ -61,13 +61,12 @@ inline clustering::LbgOptions with_mesh(clustering::LbgOptions o, const Params& 
   return o;
 }
 
-// The options with where this encode keeps its state (a single process's
-// checkpoint; a distributed encode keeps none).
+// The options with where this encode keeps its state (the checkpoint its
+// ranks share: LBG keeps each rank's labels and rank 0's means; CPCA's
+// passes are kept by a single process only).
 inline clustering::LbgOptions kept_in(clustering::LbgOptions o, const Distribution& where) {
-  if (where.comm->size() == 1) {
-    o.keep = where.checkpoint;
-    o.keep_seconds = where.checkpoint_seconds;
-  }
+  o.keep = where.checkpoint;
+  o.keep_seconds = where.checkpoint_seconds;
   return o;
 }
 
