@@ -149,8 +149,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
   bake_cmd
       ->add_option("--checkpoint-seconds", args.checkpoint_seconds,
-                   "LBG keeps its state (each rank's labels, rank 0's means) in the checkpoint "
-                   "at most this often")
+                   "compression keeps its state (each rank's labels, rank 0's means or models) "
+                   "in the checkpoint at most this often")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1e9));
   bake_cmd->add_option("--threads", args.threads, "threads per rank (default: every core)")

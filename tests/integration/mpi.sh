@@ -3,7 +3,7 @@
 # ranks (more ranks than cores: --oversubscribe): iterative CPCA with
 # superclusters and an eigentransport basis fitted by the ranks together
 # (also killed after the fit and resumed on other ranks; VQ killed inside
-# LBG and resumed); on 3 ranks static
+# LBG and iterative CPCA between passes, each resumed); on 3 ranks static
 # CPCA from a hyper-box start, PCA, glossy VQ and a sparse Haar
 # approximation with a rank that holds no vertex. A
 # compressor that cannot run distributed is refused on every rank with one
@@ -172,6 +172,26 @@ grep -q "resuming: LBG at iteration" <<<"$out" || { echo "FAIL: LBG did not resu
 cmp -s "$work/vq_kill.serial.h5" "$work/vq_kill.h5" ||
   { echo "FAIL: the resumed distributed LBG changes the file"; exit 1; }
 echo "killed inside distributed LBG on 3 ranks, resumed: $(grep -o 'resuming: LBG at iteration [0-9]*' <<<"$out"); the file is identical"
+# The same between passes of iterative CPCA (each rank's labels and the
+# labels its models were fitted to; rank 0 the models).
+setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/iterative.toml" -o "$work/cpca_kill.h5" \
+  --slab-vertices 4096 --checkpoint-seconds 0 >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 600); do
+  [ -e "$work/.cpca_kill.h5.checkpoint/cpca.state" ] && break
+  sleep 0.1
+done
+kill -9 -- "-$pid" 2>/dev/null || true
+wait "$pid" 2>/dev/null || true
+pkill -9 -f "$work/cpca_kill.h5" 2>/dev/null || true
+[ -e "$work/.cpca_kill.h5.checkpoint/cpca.state" ] || { echo "FAIL: no CPCA state kept"; exit 1; }
+[ ! -e "$work/cpca_kill.h5" ] || { echo "FAIL: the killed CPCA bake finished first"; exit 1; }
+out=$("${mpirun[@]}" -np 3 "$prt_mpi" bake "$work/iterative.toml" -o "$work/cpca_kill.h5" \
+        --slab-vertices 4096 2>&1)
+grep -q "resuming: CPCA at" <<<"$out" || { echo "FAIL: CPCA did not resume: $out"; exit 1; }
+cmp -s "$work/iterative.serial.h5" "$work/cpca_kill.h5" ||
+  { echo "FAIL: the resumed distributed CPCA changes the file"; exit 1; }
+echo "killed between distributed CPCA passes on 3 ranks, resumed: $(grep -o 'resuming: CPCA at [^,]*, pass [0-9]*' <<<"$out"); the file is identical"
 
 # Refusals end every rank with one clear message and no output.
 scene coherent bunny00.off $'plugin = "sh"\norder = 4' \

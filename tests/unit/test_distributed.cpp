@@ -241,3 +241,51 @@ TEST_CASE("distributed LBG keeps each rank's labels and resumes to the same clus
     store.remove();
   }
 }
+
+TEST_CASE("distributed CPCA keeps each rank's labels before a pass and resumes to the same result",
+          "[distributed][checkpoint]") {
+  const MatrixXfRow x = clustered_rows(3 * kSegmentRows + 1000, 12, 9);
+  for (auto method : {clustering::Method::iterative, clustering::Method::adaptive}) {
+    clustering::CpcaOptions options;
+    options.lbg.clusters = 12;
+    options.method = method;
+    options.components = 3;
+    options.iterations_per_component = 2;
+    options.adaptive_iterations = 2;
+    const clustering::CpcaResult one = clustering::cpca(x, options);
+    const auto output = std::filesystem::temp_directory_path() / "prt_cpca_kept" / "bake.h5";
+    std::filesystem::remove_all(output.parent_path());
+    std::filesystem::create_directories(output.parent_path());
+    const CheckpointStore store(output, "key", "test");
+    clustering::CpcaOptions kept = options;
+    kept.lbg.keep = &store;
+    kept.lbg.keep_seconds = 0;  // before every pass
+    const int ranks = 3;
+    // The first run keeps a state before each pass; the rerun resumes from
+    // the last (as after a kill before the last pass) and must end the same.
+    for (int run = 0; run < 2; ++run) {
+      INFO("method " << int(method) << ", run " << run);
+      std::vector<clustering::CpcaResult> results(static_cast<std::size_t>(ranks));
+      on_ranks(x, ranks, [&](int r, const clustering::Rows& rows) {
+        results[std::size_t(r)] = clustering::cpca(rows, kept);
+      });
+      REQUIRE(store.has("cpca.state"));
+      const Shard last = shard_of(x.rows(), ranks - 1, ranks);
+      const std::string shard_rows =
+          ".rows-" + std::to_string(last.first) + "-" + std::to_string(last.last);
+      CHECK((store.has("cpca.labels.0" + shard_rows) || store.has("cpca.labels.1" + shard_rows)));
+      std::vector<std::int32_t> labels;
+      for (const auto& result : results) {
+        labels.insert(labels.end(), result.labels.begin(), result.labels.end());
+        REQUIRE(result.models.size() == one.models.size());
+        for (std::size_t k = 0; k < one.models.size(); ++k) {
+          CHECK(result.models[k].mean == one.models[k].mean);
+          CHECK(result.models[k].basis == one.models[k].basis);
+        }
+        if (run == 1) CHECK(result.log.size() < one.log.size());  // LBG and passes skipped
+      }
+      CHECK(labels == one.labels);
+    }
+    store.remove();
+  }
+}

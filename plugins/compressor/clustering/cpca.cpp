@@ -266,20 +266,21 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
   const int clusters = static_cast<int>(std::min<Eigen::Index>(options.lbg.clusters, rows.total()));
   std::optional<CpcaState> kept;
   try {
-    if (keep && !rows.distributed())
-      kept = kept_cpca_state(*keep, rows.local(), clusters, rows.cols());
+    if (keep) kept = kept_cpca_state(*keep, rows, clusters);
   } catch (const Error& e) {  // a damaged part: start afresh rather than fail every rerun
     log_warning(std::string("CPCA: the kept state is unreadable, starting afresh: ") + e.what());
   }
+  if (keep && rows.any(!kept)) kept.reset();  // every rank resumes, or none
   Refitter refitter(rows, clusters);
   int first_component = 1, first_iteration = 0, sequence = 0;
   const bool adaptive_kept = kept && kept->phase == 1;
-  if (kept) {
+  if (kept && rows.comm.rank() == 0)
     log_info("resuming: CPCA at " +
              (adaptive_kept ? "adaptive pass " + std::to_string(kept->iteration + 1)
                             : "component " + std::to_string(kept->component) + ", pass " +
                                   std::to_string(kept->iteration + 1)) +
              ", kept in " + keep->folder().string());
+  if (kept) {
     result.labels = std::move(kept->labels);
     refitter.restore(std::move(kept->models), std::move(kept->fitted_labels));
     first_component = kept->component;
@@ -295,17 +296,15 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
   // Keeps the state at the start of a pass (once a fit has been made), at
   // most every keep_seconds.
   Stopwatch since_kept;
+  // Rank 0's clock decides for every rank, so that all keep the same pass.
   const auto keep_before_pass = [&](int phase, int component, int iteration) {
-    if (!keep || rows.distributed() || refitter.models().empty() ||
-        since_kept.seconds() < options.lbg.keep_seconds)
+    if (!keep || refitter.models().empty() ||
+        !rows.any(rows.comm.rank() == 0 && since_kept.seconds() >= options.lbg.keep_seconds))
       return;
-    try {
-      keep_cpca_state(*keep, {phase, component, iteration, sequence++, result.labels,
-                              refitter.labels(), refitter.models()});
-    } catch (const Error& e) {  // a full disk ends the keeping, not the encode
-      log_warning(std::string("CPCA: keeping its state failed, going on without: ") + e.what());
+    if (!keep_cpca_state(*keep, rows,
+                         {phase, component, iteration, sequence++, result.labels, refitter.labels(),
+                          refitter.models()}))
       keep = nullptr;
-    }
     since_kept = Stopwatch();
   };
 

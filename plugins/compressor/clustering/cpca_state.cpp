@@ -2,26 +2,31 @@
 
 #include <string>
 
+#include "prt/error.hpp"
+#include "prt/log.hpp"
+
 namespace prt::clustering {
 
 namespace {
 
-std::string labels_part(const char* what, int sequence) {
-  return std::string("cpca.") + what + "." + std::to_string(sequence % 2);
+std::string labels_part(const char* what, int sequence, const Shard& shard) {
+  return std::string("cpca.") + what + "." + std::to_string(sequence % 2) + ".rows-" +
+         std::to_string(shard.first) + "-" + std::to_string(shard.last);
 }
 
-void save_labels(const CheckpointStore& store, const char* what, int sequence,
+void save_labels(const CheckpointStore& store, const char* what, int sequence, const Shard& shard,
                  const std::vector<std::int32_t>& labels) {
   std::vector<std::int32_t> part;
   part.reserve(labels.size() + 1);
   part.push_back(sequence);
   part.insert(part.end(), labels.begin(), labels.end());
-  store.save(labels_part(what, sequence), part);
+  store.save(labels_part(what, sequence, shard), part);
 }
 
 std::optional<std::vector<std::int32_t>> load_labels(const CheckpointStore& store, const char* what,
-                                                     int sequence, Eigen::Index rows, int k) {
-  const std::string name = labels_part(what, sequence);
+                                                     int sequence, const Shard& shard,
+                                                     Eigen::Index rows, int k) {
+  const std::string name = labels_part(what, sequence, shard);
   if (!store.has(name)) return std::nullopt;
   const std::vector<std::int32_t> part = store.load_ints(name);
   if (Eigen::Index(part.size()) != rows + 1 || part[0] != sequence) return std::nullopt;
@@ -30,11 +35,7 @@ std::optional<std::vector<std::int32_t>> load_labels(const CheckpointStore& stor
   return std::vector<std::int32_t>(part.begin() + 1, part.end());
 }
 
-}  // namespace
-
-void keep_cpca_state(const CheckpointStore& store, const CpcaState& s) {
-  save_labels(store, "labels", s.sequence, s.labels);
-  save_labels(store, "fitted", s.sequence, s.fitted_labels);
+void save_models(const CheckpointStore& store, const CpcaState& s) {
   // Figures, then per model: its direction count, mean, directions and eigenvalues.
   std::vector<double> v{double(s.phase), double(s.component), double(s.iteration),
                         double(s.sequence), double(s.models.size())};
@@ -49,8 +50,29 @@ void keep_cpca_state(const CheckpointStore& store, const CpcaState& s) {
                                v.data(), static_cast<Eigen::Index>(v.size()), 1)));
 }
 
-std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, Eigen::Index rows, int k,
-                                         Eigen::Index n) {
+}  // namespace
+
+bool keep_cpca_state(const CheckpointStore& store, const Rows& rows, const CpcaState& s) {
+  bool failed = false;
+  try {
+    save_labels(store, "labels", s.sequence, rows.shard, s.labels);
+    save_labels(store, "fitted", s.sequence, rows.shard, s.fitted_labels);
+  } catch (const Error& e) {
+    log_warning(std::string("CPCA: keeping its state failed, going on without: ") + e.what());
+    failed = true;
+  }
+  if (rows.any(failed)) return false;  // also: every rank's labels are kept
+  if (rows.comm.rank() == 0) try {
+      save_models(store, s);
+    } catch (const Error& e) {
+      log_warning(std::string("CPCA: keeping its state failed, going on without: ") + e.what());
+      failed = true;
+    }
+  return !rows.any(failed);
+}
+
+std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, const Rows& rows, int k) {
+  const Eigen::Index n = rows.cols();
   if (!store.has("cpca.state")) return std::nullopt;
   const Eigen::MatrixXd part = store.load_doubles("cpca.state");
   if (part.cols() != 1 || part.rows() < 5) return std::nullopt;
@@ -76,8 +98,8 @@ std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, Eigen::In
     s.models.push_back(std::move(m));
   }
   if (at != size) return std::nullopt;
-  auto labels = load_labels(store, "labels", s.sequence, rows, k);
-  auto fitted = load_labels(store, "fitted", s.sequence, rows, k);
+  auto labels = load_labels(store, "labels", s.sequence, rows.shard, rows.local(), k);
+  auto fitted = load_labels(store, "fitted", s.sequence, rows.shard, rows.local(), k);
   if (!labels || !fitted) return std::nullopt;
   s.labels = std::move(*labels);
   s.fitted_labels = std::move(*fitted);

@@ -1,9 +1,9 @@
 // Iterative and adaptive CPCA's state between two passes, kept in a bake's
 // checkpoint so that a killed compression resumes where it was and gives
 // the bits an uninterrupted run gives (issue 15). The labels go first, in
-// one of two parts by the sequence number's parity and led by it; the state
-// that names them last: a kill between the writes leaves the previous
-// state whole.
+// one of two parts by the sequence number's parity and led by it (one per
+// rank under prt-mpi); the state that names them last: a kill between the
+// writes leaves the previous state whole.
 #pragma once
 #include <optional>
 
@@ -22,11 +22,14 @@ struct CpcaState {
   std::vector<ClusterModel> models;         // the refitter's models (kept when unchanged)
 };
 
-void keep_cpca_state(const CheckpointStore& store, const CpcaState& state);
+// Each rank keeps its shard's labels (parts named by the shard's rows), then
+// rank 0 the models and position once every rank's are written. False on
+// every rank when any could not write (a full disk ends the keeping, not the
+// encode).
+bool keep_cpca_state(const CheckpointStore& store, const Rows& rows, const CpcaState& state);
 
-// The kept state when it fits a run of `rows` local rows, k clusters and n
-// columns (else none).
-std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, Eigen::Index rows, int k,
-                                         Eigen::Index n);
+// The kept state when it fits this run's rows (this rank's shard), k
+// clusters and the rows' columns (else none).
+std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, const Rows& rows, int k);
 
 }  // namespace prt::clustering
