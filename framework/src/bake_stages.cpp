@@ -214,16 +214,8 @@ TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const Direc
     throw Error(
         "bake: this transfer couples vertices (fitted basis, bounces, subsurface or "
         "per-channel transfers) and cannot be computed in slabs");
-  TransportOptions transport;
-  transport.shadowed = plan.shadowed;
-  transport.keep_visibility = plan.keep_visibility;
-  transport.first_vertex = first;
-  transport.last_vertex = last;
-  transport.caster = caster;
   TransportResult traced =
-      plan.keep_visibility
-          ? diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, progress)
-          : diffuse_transfer(mesh, set, *plan.basis, transport, progress);
+      trace_slab(plan, mesh, set, caster, first, last, plan.keep_visibility, false, progress);
   rays_cast = traced.rays_cast;
   if (!plan.glossy) return std::move(traced.transfer);
   return glossy_transfer(mesh, set, traced.visibility, *plan.basis, plan.glossy_operator, frames,
@@ -337,14 +329,8 @@ void trace_bits(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                 const CheckpointStore& store, std::optional<RayCaster>& caster,
                 const SlabRange& slab, Progress& progress) {
   if (plan.shadowed && !caster) caster.emplace(mesh);
-  TransportOptions transport;
-  transport.shadowed = plan.shadowed;
-  transport.keep_visibility = true;
-  transport.first_vertex = slab.first;
-  transport.last_vertex = slab.last;
-  transport.caster = caster ? &*caster : nullptr;
-  TransportResult traced =
-      diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
+  TransportResult traced = trace_slab(plan, mesh, set, caster ? &*caster : nullptr, slab.first,
+                                      slab.last, true, false, &progress);
   keep_count(store, "bitrays", slab, traced.rays_cast);
   keep_bits(store, "bits", slab, traced.visibility);
 }

@@ -42,28 +42,10 @@ void keep_state(const BounceCheckpoint& c, int b, const MatrixXfRow& previous,
 // and kept.
 MatrixXfRow bounce_in_slabs(const BounceCheckpoint& c, int b, const MatrixXfRow& previous,
                             const BounceFunction& bounce) {
-  const CheckpointStore& store = *c.store;
-  const std::string what = marker_of(c, b);
-  const auto slabs =
-      slabs_of(0, std::size_t(previous.rows()), std::max<std::size_t>(1, c.slab_vertices));
-  std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += store.has(rows_name(what.c_str(), slab));
-  if (kept > 0 && c.message)
-    c.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-              " slabs of bounce " + std::to_string(b) + " kept in " + store.folder().string());
-  MatrixXfRow next(previous.rows(), previous.cols());
-  for (const auto& slab : slabs) {
-    const std::string name = rows_name(what.c_str(), slab);
-    MatrixXfRow rows;
-    if (store.has(name)) {
-      rows = kept_rows(store, slab, previous.cols(), what.c_str());
-    } else {
-      rows = bounce(previous, slab.first, slab.last);
-      store.save(name, rows);
-    }
-    next.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) = rows;
-  }
-  return next;
+  return rows_in_slabs(
+      *c.store, marker_of(c, b), std::size_t(previous.rows()), previous.cols(), c.slab_vertices,
+      [&](const SlabRange& slab) { return bounce(previous, slab.first, slab.last); },
+      "bounce " + std::to_string(b), c.message);
 }
 
 // The last bounce kept (0: none), its state loaded into previous and out.

@@ -74,6 +74,21 @@ void load_hits(const CheckpointStore& store, const SlabRange& slab, const Mesh& 
 
 }  // namespace
 
+TransportResult trace_slab(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                           const RayCaster* caster, std::size_t first, std::size_t last,
+                           bool keep_visibility, bool keep_hits, Progress* progress) {
+  TransportOptions transport;
+  transport.shadowed = plan.shadowed;
+  transport.keep_visibility = keep_visibility;
+  transport.keep_hits = keep_hits;
+  transport.first_vertex = first;
+  transport.last_vertex = last;
+  transport.caster = caster;
+  return keep_visibility
+             ? diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, progress)
+             : diffuse_transfer(mesh, set, *plan.basis, transport, progress);
+}
+
 TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                               const RunOptions& options) {
   const CheckpointStore& store = *options.checkpoint;
@@ -107,17 +122,8 @@ TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const Dire
       progress.add(double(slab.size()), double(rays));
     } else {
       if (plan.shadowed && !caster) caster.emplace(mesh);
-      TransportOptions transport;
-      transport.shadowed = plan.shadowed;
-      transport.keep_hits = hits;
-      transport.keep_visibility = plan.keep_visibility;
-      transport.first_vertex = slab.first;
-      transport.last_vertex = slab.last;
-      transport.caster = caster ? &*caster : nullptr;
-      TransportResult traced =
-          plan.keep_visibility
-              ? diffuse_transfer(mesh, set, Eigen::MatrixXd(s, 0), transport, &progress)
-              : diffuse_transfer(mesh, set, *plan.basis, transport, &progress);
+      TransportResult traced = trace_slab(plan, mesh, set, caster ? &*caster : nullptr, slab.first,
+                                          slab.last, plan.keep_visibility, hits, &progress);
       if (plan.keep_visibility) {
         keep_bits(store, kBits, slab, traced.visibility);
         if (slab.size() > 0)
@@ -150,39 +156,26 @@ TransferSignal slabbed_glossy_transfer(const BakePlan& plan, const Mesh& mesh,
   if (!options.checkpoint)
     return glossy_transfer(mesh, set, visibility, *plan.basis, glossy, frames, plan.glossy_method,
                            progress);
-  const CheckpointStore& store = *options.checkpoint;
-  const std::string part = options.checkpoint_prefix + "glossy";
-  const std::size_t v = mesh.vertex_count(), s = std::size_t(set.size());
-  const std::size_t words = VisibilityBits::words_for(s);
-  const auto slabs = slabs_of(0, v, std::max<std::size_t>(1, options.slab_vertices));
-  std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += store.has(rows_name(part.c_str(), slab));
-  if (kept > 0)
-    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-                    " slabs of the glossy matrices kept in " + store.folder().string());
+  const std::size_t s = std::size_t(set.size()), words = VisibilityBits::words_for(s);
   TransferSignal out;
   out.kind = "glossy";
   out.exit_rows = glossy.rows();
-  const Eigen::Index cols = Eigen::Index(glossy.rows()) * plan.basis->size();
-  out.coefficients.resize(Eigen::Index(v), cols);
-  for (const auto& slab : slabs) {
-    const std::string name = rows_name(part.c_str(), slab);
-    MatrixXfRow rows;
-    if (store.has(name)) {
-      rows = kept_rows(store, slab, cols, part.c_str());
-      if (progress) progress->add(double(slab.size()));
-    } else {
-      VisibilityBits bits(slab.size(), s);
-      if (slab.size() > 0)
-        std::memcpy(bits.words(0), visibility.words(slab.first),
-                    slab.size() * words * sizeof(std::uint64_t));
-      rows = glossy_transfer(mesh, set, bits, *plan.basis, glossy, frames, plan.glossy_method,
-                             progress, slab.first)
-                 .coefficients;
-      store.save(name, rows);
-    }
-    out.coefficients.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) = rows;
-  }
+  out.coefficients = rows_in_slabs(
+      *options.checkpoint, options.checkpoint_prefix + "glossy", mesh.vertex_count(),
+      Eigen::Index(glossy.rows()) * plan.basis->size(), options.slab_vertices,
+      [&](const SlabRange& slab) {
+        VisibilityBits bits(slab.size(), s);
+        if (slab.size() > 0)
+          std::memcpy(bits.words(0), visibility.words(slab.first),
+                      slab.size() * words * sizeof(std::uint64_t));
+        return glossy_transfer(mesh, set, bits, *plan.basis, glossy, frames, plan.glossy_method,
+                               progress, slab.first)
+            .coefficients;
+      },
+      "the glossy matrices", [&](const std::string& text) { options.message(text); },
+      [&](const SlabRange& slab) {
+        if (progress) progress->add(double(slab.size()));
+      });
   return out;
 }
 
@@ -190,30 +183,15 @@ MatrixXfRow slabbed_subsurface(const Mesh& mesh, const MatrixXfRow& transfer,
                                const SubsurfaceMaterial& material, const RunOptions& options,
                                const std::string& what) {
   if (!options.checkpoint) return subsurface_transfer(mesh, transfer, material);
-  const CheckpointStore& store = *options.checkpoint;
-  const std::string part = options.checkpoint_prefix + what;
-  const auto slabs =
-      slabs_of(0, mesh.vertex_count(), std::max<std::size_t>(1, options.slab_vertices));
-  std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += store.has(rows_name(part.c_str(), slab));
-  if (kept > 0)
-    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-                    " slabs of subsurface scattering kept in " + store.folder().string());
-  MatrixXfRow out(transfer.rows(), transfer.cols());
   std::optional<SubsurfaceScattering> scattering;  // built only when a slab is missing
-  for (const auto& slab : slabs) {
-    const std::string name = rows_name(part.c_str(), slab);
-    MatrixXfRow rows;
-    if (store.has(name)) {
-      rows = kept_rows(store, slab, transfer.cols(), part.c_str());
-    } else {
-      if (!scattering) scattering.emplace(mesh, transfer, material);
-      rows = scattering->rows(slab.first, slab.last);
-      store.save(name, rows);
-    }
-    out.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) = rows;
-  }
-  return out;
+  return rows_in_slabs(
+      *options.checkpoint, options.checkpoint_prefix + what, mesh.vertex_count(), transfer.cols(),
+      options.slab_vertices,
+      [&](const SlabRange& slab) {
+        if (!scattering) scattering.emplace(mesh, transfer, material);
+        return scattering->rows(slab.first, slab.last);
+      },
+      "subsurface scattering", [&](const std::string& text) { options.message(text); });
 }
 
 }  // namespace prt

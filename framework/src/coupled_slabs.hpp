@@ -13,6 +13,14 @@
 
 namespace prt {
 
+// Vertices [slab.first, slab.last) traced as the plan says: their visibility
+// bits (keep_visibility) or their transfer projected while tracing, and the
+// hits of their blocked rays (keep_hits). `caster` is shared by many slabs
+// (null: unshadowed).
+TransportResult trace_slab(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                           const RayCaster* caster, std::size_t first, std::size_t last,
+                           bool keep_visibility, bool keep_hits, Progress* progress);
+
 // The trace: what the stages after it need of a slab (its projected rows or
 // its visibility bits, and for bounces the hits of its blocked rays) is kept
 // as soon as the slab is traced. Equals trace_stage's result.

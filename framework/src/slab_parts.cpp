@@ -69,4 +69,32 @@ void copy_kept_bits(const CheckpointStore& store, const SlabRange& slab, const S
                 (last - first) * words * sizeof(std::uint64_t));
 }
 
+MatrixXfRow rows_in_slabs(const CheckpointStore& store, const std::string& what,
+                          std::size_t vertices, Eigen::Index cols, std::size_t slab_vertices,
+                          const std::function<MatrixXfRow(const SlabRange&)>& compute,
+                          const std::string& label,
+                          const std::function<void(const std::string&)>& message,
+                          const std::function<void(const SlabRange&)>& on_kept) {
+  const auto slabs = slabs_of(0, vertices, std::max<std::size_t>(1, slab_vertices));
+  std::size_t kept = 0;
+  for (const auto& slab : slabs) kept += store.has(rows_name(what.c_str(), slab));
+  if (kept > 0 && message)
+    message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
+            " slabs of " + label + " kept in " + store.folder().string());
+  MatrixXfRow out(Eigen::Index(vertices), cols);
+  for (const auto& slab : slabs) {
+    const std::string name = rows_name(what.c_str(), slab);
+    MatrixXfRow rows;
+    if (store.has(name)) {
+      rows = kept_rows(store, slab, cols, what.c_str());
+      if (on_kept) on_kept(slab);
+    } else {
+      rows = compute(slab);
+      store.save(name, rows);
+    }
+    out.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) = rows;
+  }
+  return out;
+}
+
 }  // namespace prt

@@ -3,6 +3,7 @@
 // bits, counts). Shared by the per-vertex, fitted and coupled paths.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -47,5 +48,16 @@ void keep_bits(const CheckpointStore& store, const char* what, const SlabRange& 
                const VisibilityBits& bits);
 void copy_kept_bits(const CheckpointStore& store, const SlabRange& slab, const SlabRange& range,
                     std::size_t words, VisibilityBits& bits, const char* what = "bits");
+
+// The rows [0, vertices) of a stage, computed slab by slab through the
+// checkpoint: a slab kept as part `what` is loaded (`on_kept` hears of it,
+// for progress), any other is computed by `compute` and kept. `message`
+// hears "resuming: k of n slabs of <label> kept in ..." when any were.
+MatrixXfRow rows_in_slabs(const CheckpointStore& store, const std::string& what,
+                          std::size_t vertices, Eigen::Index cols, std::size_t slab_vertices,
+                          const std::function<MatrixXfRow(const SlabRange&)>& compute,
+                          const std::string& label,
+                          const std::function<void(const std::string&)>& message,
+                          const std::function<void(const SlabRange&)>& on_kept = {});
 
 }  // namespace prt

@@ -129,18 +129,23 @@ echo "shards kept on disk (--memory 1M): prt-mpi on 3 ranks (CPCA, eigen) = prt 
 sed -e 's/plugin = "cpca"/plugin = "vq"/' -e 's/^components = 4$/iterations = 400\ntolerance = 0.0/' \
   "$work/eigen.toml" >"$work/eigen_kill.toml"
 "$prt" -q bake "$work/eigen_kill.toml" -o "$work/eigen_kill.serial.h5" >/dev/null
-setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/eigen_kill.toml" -o "$work/eigen_kill.h5" \
-  >/dev/null 2>&1 &
-pid=$!
-for _ in $(seq 600); do  # until the fitted basis is kept (at most a minute)
-  [ -e "$work/.eigen_kill.h5.checkpoint/fitted-basis" ] && break
-  sleep 0.1
-done
-kill -9 -- "-$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
-pkill -9 -f "$work/eigen_kill.toml" 2>/dev/null || true
-[ -e "$work/.eigen_kill.h5.checkpoint/fitted-basis" ] || { echo "FAIL: no fitted basis kept"; exit 1; }
-[ ! -e "$work/eigen_kill.h5" ] || { echo "FAIL: the killed bake finished first"; exit 1; }
+# kill_when <scene> <output> <part> <flags...>: a 3-rank bake of the scene,
+# every rank killed as soon as the part is kept in its checkpoint.
+kill_when() {
+  setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/$1.toml" -o "$work/$2.h5" "${@:4}" \
+    >/dev/null 2>&1 &
+  pid=$!
+  for _ in $(seq 600); do  # at most a minute
+    [ -e "$work/.$2.h5.checkpoint/$3" ] && break
+    sleep 0.1
+  done
+  kill -9 -- "-$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  pkill -9 -f "$work/$2.h5" 2>/dev/null || true
+  [ -e "$work/.$2.h5.checkpoint/$3" ] || { echo "FAIL ($2): no $3 kept"; exit 1; }
+  [ ! -e "$work/$2.h5" ] || { echo "FAIL ($2): the killed bake finished first"; exit 1; }
+}
+kill_when eigen_kill eigen_kill fitted-basis
 out=$("${mpirun[@]}" -np 2 "$prt_mpi" bake "$work/eigen_kill.toml" -o "$work/eigen_kill.h5" 2>&1)
 grep -q "resuming: the fitted basis kept" <<<"$out" || { echo "FAIL: did not resume: $out"; exit 1; }
 grep -q "fit basis" <<<"$out" && { echo "FAIL: fitted again after resuming: $out"; exit 1; }
@@ -155,18 +160,7 @@ sed -e 's/plugin = "cpca"/plugin = "vq"\niterations = 400\ntolerance = 0.0/' \
   -e 's/^clusters = 64$/clusters = 128/' -e '/^method\|^components\|^supercluster/d' \
   "$work/iterative.toml" >"$work/vq_kill.toml"
 "$prt" -q bake "$work/vq_kill.toml" -o "$work/vq_kill.serial.h5" >/dev/null
-setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/vq_kill.toml" -o "$work/vq_kill.h5" \
-  --checkpoint-seconds 0 >/dev/null 2>&1 &
-pid=$!
-for _ in $(seq 600); do  # until LBG has kept a state (at most a minute)
-  [ -e "$work/.vq_kill.h5.checkpoint/lbg.state" ] && break
-  sleep 0.1
-done
-kill -9 -- "-$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
-pkill -9 -f "$work/vq_kill.toml" 2>/dev/null || true
-[ -e "$work/.vq_kill.h5.checkpoint/lbg.state" ] || { echo "FAIL: no LBG state kept"; exit 1; }
-[ ! -e "$work/vq_kill.h5" ] || { echo "FAIL: the killed bake finished first"; exit 1; }
+kill_when vq_kill vq_kill lbg.state --checkpoint-seconds 0
 out=$("${mpirun[@]}" -np 3 "$prt_mpi" bake "$work/vq_kill.toml" -o "$work/vq_kill.h5" 2>&1)
 grep -q "resuming: LBG at iteration" <<<"$out" || { echo "FAIL: LBG did not resume: $out"; exit 1; }
 cmp -s "$work/vq_kill.serial.h5" "$work/vq_kill.h5" ||
@@ -174,18 +168,7 @@ cmp -s "$work/vq_kill.serial.h5" "$work/vq_kill.h5" ||
 echo "killed inside distributed LBG on 3 ranks, resumed: $(grep -o 'resuming: LBG at iteration [0-9]*' <<<"$out"); the file is identical"
 # The same between passes of iterative CPCA (each rank's labels and the
 # labels its models were fitted to; rank 0 the models).
-setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/iterative.toml" -o "$work/cpca_kill.h5" \
-  --slab-vertices 4096 --checkpoint-seconds 0 >/dev/null 2>&1 &
-pid=$!
-for _ in $(seq 600); do
-  [ -e "$work/.cpca_kill.h5.checkpoint/cpca.state" ] && break
-  sleep 0.1
-done
-kill -9 -- "-$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
-pkill -9 -f "$work/cpca_kill.h5" 2>/dev/null || true
-[ -e "$work/.cpca_kill.h5.checkpoint/cpca.state" ] || { echo "FAIL: no CPCA state kept"; exit 1; }
-[ ! -e "$work/cpca_kill.h5" ] || { echo "FAIL: the killed CPCA bake finished first"; exit 1; }
+kill_when iterative cpca_kill cpca.state --slab-vertices 4096 --checkpoint-seconds 0
 out=$("${mpirun[@]}" -np 3 "$prt_mpi" bake "$work/iterative.toml" -o "$work/cpca_kill.h5" \
         --slab-vertices 4096 2>&1)
 grep -q "resuming: CPCA at" <<<"$out" || { echo "FAIL: CPCA did not resume: $out"; exit 1; }

@@ -24,6 +24,12 @@ fs::path fresh_folder(const std::string& name) {
   return folder;
 }
 
+// How many of a checkpoint's parts have names that start with `prefix`.
+long parts_named(const std::vector<std::string>& parts, const std::string& prefix) {
+  return long(std::count_if(parts.begin(), parts.end(),
+                            [&](const std::string& p) { return p.rfind(prefix, 0) == 0; }));
+}
+
 SceneSpec scene(PluginRegistry& registry, const std::string& material, const std::string& basis) {
   const std::string text = R"(
 [mesh]
@@ -170,10 +176,7 @@ constant = [1, 1, 1]
   options.slab_vertices = 100;  // several slabs of bits
   const BakeData first = bake(s, registry, options, times);
   const auto parts = store.parts();
-  const auto count = [&](const std::string& prefix) {
-    return std::count_if(parts.begin(), parts.end(),
-                         [&](const std::string& p) { return p.rfind(prefix, 0) == 0; });
-  };
+  const auto count = [&](const std::string& prefix) { return parts_named(parts, prefix); };
   CHECK(count("bits.rows-") > 1);
   CHECK(count("eigen.z.") > 0);  // a state per power iteration
   REQUIRE(store.has("fitted-basis"));
@@ -234,10 +237,7 @@ constant = [1.0, 0.7, 0.4]
     options.slab_vertices = 100;
     const BakeData first = bake(s, registry, options, times);
     const auto parts = store.parts();
-    const auto count = [&](const std::string& prefix) {
-      return std::count_if(parts.begin(), parts.end(),
-                           [&](const std::string& p) { return p.rfind(prefix, 0) == 0; });
-    };
+    const auto count = [&](const std::string& prefix) { return parts_named(parts, prefix); };
     const auto slabs = (reference.mesh.vertex_count() + 99) / 100;
     REQUIRE(slabs > 2);
     CHECK(count("trace-rays.rows-") == long(slabs));

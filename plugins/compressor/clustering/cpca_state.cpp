@@ -2,8 +2,7 @@
 
 #include <string>
 
-#include "prt/error.hpp"
-#include "prt/log.hpp"
+#include "kept_on_ranks.hpp"
 
 namespace prt::clustering {
 
@@ -53,22 +52,13 @@ void save_models(const CheckpointStore& store, const CpcaState& s) {
 }  // namespace
 
 bool keep_cpca_state(const CheckpointStore& store, const Rows& rows, const CpcaState& s) {
-  bool failed = false;
-  try {
-    save_labels(store, "labels", s.sequence, rows.shard, s.labels);
-    save_labels(store, "fitted", s.sequence, rows.shard, s.fitted_labels);
-  } catch (const Error& e) {
-    log_warning(std::string("CPCA: keeping its state failed, going on without: ") + e.what());
-    failed = true;
-  }
-  if (rows.any(failed)) return false;  // also: every rank's labels are kept
-  if (rows.comm.rank() == 0) try {
-      save_models(store, s);
-    } catch (const Error& e) {
-      log_warning(std::string("CPCA: keeping its state failed, going on without: ") + e.what());
-      failed = true;
-    }
-  return !rows.any(failed);
+  return keep_on_ranks(
+      rows, "CPCA",
+      [&] {
+        save_labels(store, "labels", s.sequence, rows.shard, s.labels);
+        save_labels(store, "fitted", s.sequence, rows.shard, s.fitted_labels);
+      },
+      [&] { save_models(store, s); });
 }
 
 std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, const Rows& rows, int k) {

@@ -11,6 +11,7 @@
 #include <optional>
 #include <random>
 
+#include "kept_on_ranks.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
@@ -271,35 +272,26 @@ std::string labels_part(int sequence, const Shard& shard) {
          "-" + std::to_string(shard.last);
 }
 
-// Keeps the state; false on every rank when a rank could not write its part
-// (a full disk ends the keeping, not the encode).
+// Keeps the state; false on every rank when a rank could not write its part.
 bool keep_state(const CheckpointStore& store, const Rows& rows, const LbgState& s) {
-  bool failed = false;
-  try {
-    std::vector<std::int32_t> labels;
-    labels.reserve(s.labels.size() + 1);
-    labels.push_back(s.sequence);
-    labels.insert(labels.end(), s.labels.begin(), s.labels.end());
-    store.save(labels_part(s.sequence, rows.shard), labels);
-  } catch (const Error& e) {
-    log_warning(std::string("LBG: keeping its state failed, going on without: ") + e.what());
-    failed = true;
-  }
-  if (rows.any(failed)) return false;  // also: every rank's labels are kept
-  if (rows.comm.rank() == 0) {
-    // k rows of means, then a row of figures (at least 4 columns wide).
-    const Eigen::Index k = s.means.rows(), n = s.means.cols();
-    Eigen::MatrixXd state = Eigen::MatrixXd::Zero(k + 1, std::max<Eigen::Index>(n, 4));
-    state.topLeftCorner(k, n) = s.means;
-    state.row(k).head<4>() << double(s.next_iteration), double(s.sequence), s.previous, s.energy;
-    try {
-      store.save("lbg.state", state);
-    } catch (const Error& e) {
-      log_warning(std::string("LBG: keeping its state failed, going on without: ") + e.what());
-      failed = true;
-    }
-  }
-  return !rows.any(failed);
+  return keep_on_ranks(
+      rows, "LBG",
+      [&] {
+        std::vector<std::int32_t> labels;
+        labels.reserve(s.labels.size() + 1);
+        labels.push_back(s.sequence);
+        labels.insert(labels.end(), s.labels.begin(), s.labels.end());
+        store.save(labels_part(s.sequence, rows.shard), labels);
+      },
+      [&] {
+        // k rows of means, then a row of figures (at least 4 columns wide).
+        const Eigen::Index k = s.means.rows(), n = s.means.cols();
+        Eigen::MatrixXd state = Eigen::MatrixXd::Zero(k + 1, std::max<Eigen::Index>(n, 4));
+        state.topLeftCorner(k, n) = s.means;
+        state.row(k).head<4>() << double(s.next_iteration), double(s.sequence), s.previous,
+            s.energy;
+        store.save("lbg.state", state);
+      });
 }
 
 // The state a killed run kept, when it fits this run (else none).
