@@ -87,11 +87,9 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
                                 bool on_disk) {
   const CheckpointStore& store = *options.checkpoint;
   const auto slabs = slabs_of(first, last, std::max<std::size_t>(1, options.slab_vertices));
-  std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += slab_kept(store, slab);
-  if (kept > 0)
-    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-                    " slabs of vertices kept in " + store.folder().string());
+  const std::size_t kept = say_kept_slabs(
+      store, slabs, [&](const SlabRange& slab) { return slab_kept(store, slab); }, "vertices",
+      [&](const std::string& text) { options.message(text); });
   Stopwatch clock;
   std::optional<RayCaster> caster;
   if (plan.shadowed && kept < slabs.size()) caster.emplace(mesh);
@@ -252,11 +250,9 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   // of the mesh), by creating its claim file. Claims carry this run's id, so
   // those of a killed run do not hold a slab back.
   const std::string run = run_id(comm);
-  std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += slab_kept(store, slab);
-  if (kept > 0)
-    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-                    " slabs of vertices kept in " + store.folder().string());
+  say_kept_slabs(
+      store, slabs, [&](const SlabRange& slab) { return slab_kept(store, slab); }, "vertices",
+      [&](const std::string& text) { options.message(text); });
   Stopwatch clock;
   std::optional<RayCaster> caster;
   std::vector<Frame> frames;
@@ -352,11 +348,9 @@ VisibilityBits kept_visibility(const BakePlan& plan, const Mesh& mesh, const Dir
       slabs_of(0, mesh.vertex_count(), std::max<std::size_t>(1, options.slab_vertices));
   std::optional<RayCaster> caster;
   if (trace_all) {
-    std::size_t kept = 0;
-    for (const auto& slab : slabs) kept += bits_kept(store, slab);
-    if (kept > 0)
-      options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-                      " slabs of visibility bits kept in " + store.folder().string());
+    say_kept_slabs(
+        store, slabs, [&](const SlabRange& slab) { return bits_kept(store, slab); },
+        "visibility bits", [&](const std::string& text) { options.message(text); });
     Progress progress(
         comm.size() > 1 ? "trace visibility (slabs done or taken)" : "trace visibility",
         double(mesh.vertex_count()), plan.shadowed ? "rays" : "", options.quiet);
@@ -399,11 +393,10 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
   if (!fitted_per_vertex_transfer(plan))
     throw Error("bake: a fit through slabs needs a diffuse transfer each vertex gets alone");
   const CheckpointStore& store = *options.checkpoint;
-  const std::string marker = kFittedBasisMarker;
   // Rank 0 says whether the basis was kept, for every rank: a rank that
   // looked itself could see the marker rank 0 writes in this very run.
   std::vector<char> basis_kept(1, 0);
-  if (comm.rank() == 0) basis_kept[0] = store.has(marker) ? 1 : 0;
+  if (comm.rank() == 0) basis_kept[0] = store.has(kFittedBasisMarker) ? 1 : 0;
   comm.broadcast(basis_kept, 0);
   const SlabRange own{std::size_t(shard.first), std::size_t(shard.last)};
   const bool rows_kept = basis_kept[0] && (own.first == own.last || slab_kept(store, own));
@@ -433,8 +426,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
       plan.basis->fit(fit);
       times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
       if (comm.rank() == 0) {
-        keep_basis_state(store, *plan.basis);
-        store.save_text(marker, plan.basis_record.name);  // last: marks the basis kept
+        keep_fitted_basis(store, *plan.basis, plan.basis_record.name);
       }
     }
     clock = Stopwatch();

@@ -95,11 +95,9 @@ TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const Dire
   const std::size_t v = mesh.vertex_count(), s = std::size_t(set.size());
   const std::size_t words = VisibilityBits::words_for(s);
   const auto slabs = slabs_of(0, v, std::max<std::size_t>(1, options.slab_vertices));
-  std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += store.has(rows_name(kRays, slab));
-  if (kept > 0)
-    options.message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-                    " slabs of the trace kept in " + store.folder().string());
+  say_kept_slabs(
+      store, slabs, [&](const SlabRange& slab) { return store.has(rows_name(kRays, slab)); },
+      "the trace", [&](const std::string& text) { options.message(text); });
   Stopwatch clock;
   TransportResult out;
   const Eigen::Index cols = plan.keep_visibility ? 0 : plan.basis->size();

@@ -26,6 +26,11 @@ void load_kept_basis_state(const CheckpointStore& store, Basis& basis) {
   basis.load(state);
 }
 
+void keep_fitted_basis(const CheckpointStore& store, const Basis& basis, const std::string& name) {
+  keep_basis_state(store, basis);
+  store.save_text(kFittedBasisMarker, name);  // last: marks the basis kept
+}
+
 std::string metrics_text(const std::map<std::string, double>& metrics) {
   std::string text;
   char line[256];

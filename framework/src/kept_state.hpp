@@ -15,6 +15,8 @@ inline constexpr const char* kFittedBasisMarker = "fitted-basis";
 // One part per matrix, under "basis_state.".
 void keep_basis_state(const CheckpointStore& store, const Basis& basis);
 void load_kept_basis_state(const CheckpointStore& store, Basis& basis);
+// The state, then the marker (naming the plug-in) that says it is whole.
+void keep_fitted_basis(const CheckpointStore& store, const Basis& basis, const std::string& name);
 
 // A line "name value" per metric, exact to the last bit.
 std::string metrics_text(const std::map<std::string, double>& metrics);

@@ -292,10 +292,7 @@ void fit_basis(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
   fit.checkpoint = store;
   plan.basis->fit(fit);
   times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
-  if (store) {
-    keep_basis_state(*store, *plan.basis);
-    store->save_text(kFittedBasisMarker, plan.basis_record.name);  // last: marks it kept
-  }
+  if (store) keep_fitted_basis(*store, *plan.basis, plan.basis_record.name);
 }
 
 void add_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,

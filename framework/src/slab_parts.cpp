@@ -69,6 +69,17 @@ void copy_kept_bits(const CheckpointStore& store, const SlabRange& slab, const S
                 (last - first) * words * sizeof(std::uint64_t));
 }
 
+std::size_t say_kept_slabs(const CheckpointStore& store, const std::vector<SlabRange>& slabs,
+                           const std::function<bool(const SlabRange&)>& kept,
+                           const std::string& label,
+                           const std::function<void(const std::string&)>& message) {
+  const auto count = std::count_if(slabs.begin(), slabs.end(), kept);
+  if (count > 0 && message)
+    message("resuming: " + std::to_string(count) + " of " + std::to_string(slabs.size()) +
+            " slabs of " + label + " kept in " + store.folder().string());
+  return std::size_t(count);
+}
+
 MatrixXfRow rows_in_slabs(const CheckpointStore& store, const std::string& what,
                           std::size_t vertices, Eigen::Index cols, std::size_t slab_vertices,
                           const std::function<MatrixXfRow(const SlabRange&)>& compute,
@@ -76,11 +87,9 @@ MatrixXfRow rows_in_slabs(const CheckpointStore& store, const std::string& what,
                           const std::function<void(const std::string&)>& message,
                           const std::function<void(const SlabRange&)>& on_kept) {
   const auto slabs = slabs_of(0, vertices, std::max<std::size_t>(1, slab_vertices));
-  std::size_t kept = 0;
-  for (const auto& slab : slabs) kept += store.has(rows_name(what.c_str(), slab));
-  if (kept > 0 && message)
-    message("resuming: " + std::to_string(kept) + " of " + std::to_string(slabs.size()) +
-            " slabs of " + label + " kept in " + store.folder().string());
+  say_kept_slabs(
+      store, slabs, [&](const SlabRange& slab) { return store.has(rows_name(what.c_str(), slab)); },
+      label, message);
   MatrixXfRow out(Eigen::Index(vertices), cols);
   for (const auto& slab : slabs) {
     const std::string name = rows_name(what.c_str(), slab);

@@ -49,6 +49,13 @@ void keep_bits(const CheckpointStore& store, const char* what, const SlabRange& 
 void copy_kept_bits(const CheckpointStore& store, const SlabRange& slab, const SlabRange& range,
                     std::size_t words, VisibilityBits& bits, const char* what = "bits");
 
+// How many of `slabs` are kept (by `kept`); says "resuming: k of n slabs of
+// <label> kept in ..." when any are.
+std::size_t say_kept_slabs(const CheckpointStore& store, const std::vector<SlabRange>& slabs,
+                           const std::function<bool(const SlabRange&)>& kept,
+                           const std::string& label,
+                           const std::function<void(const std::string&)>& message);
+
 // The rows [0, vertices) of a stage, computed slab by slab through the
 // checkpoint: a slab kept as part `what` is loaded (`on_kept` hears of it,
 // for progress), any other is computed by `compute` and kept. `message`
