@@ -56,7 +56,7 @@ GLuint compile(GLenum type, const std::string& source, const char* name) {
 }  // namespace
 
 GLuint build_program(const char* name, const std::string& defines, const char* vertex,
-                     const char* fragment) {
+                     const char* fragment, const char* captured) {
   const std::string header = "#version 330 core\n" + defines + "#line 1\n";
   const GLuint vs = compile(GL_VERTEX_SHADER, header + vertex, name);
   GLuint fs = 0;
@@ -69,6 +69,7 @@ GLuint build_program(const char* name, const std::string& defines, const char* v
   const GLuint program = glCreateProgram();
   glAttachShader(program, vs);
   glAttachShader(program, fs);
+  if (captured) glTransformFeedbackVaryings(program, 1, &captured, GL_INTERLEAVED_ATTRIBS);
   glLinkProgram(program);
   glDeleteShader(vs);
   glDeleteShader(fs);

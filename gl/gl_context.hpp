@@ -23,7 +23,9 @@ class OffscreenContext {
 
 // Compiles and links a program from the shader sources with `defines`
 // prepended (after #version); throws prt::Error with the driver's log.
+// `captured`, when given, names a vertex-shader output that transform
+// feedback writes to a buffer.
 GLuint build_program(const char* name, const std::string& defines, const char* vertex,
-                     const char* fragment);
+                     const char* fragment, const char* captured = nullptr);
 
 }  // namespace prt

@@ -8,8 +8,12 @@
 // view on the CPU by the exit plug-in, so any exit basis works).
 // Where n' allows (ATTRIBUTES), the cluster index and the weights arrive as
 // vertex attributes instead of buffer fetches.
+// Single-pass drawing runs this stage once per vertex (CAPTURE: points with
+// transform feedback into `captured`), then draws the triangles with the
+// captured colours as a plain vertex-colour draw: an indexed draw would run
+// it again for every triangle corner its vertex cache misses.
 // The host prepends: #version, ROWS, COMPONENTS, SPARSE, GLOSSY, ATTRIBUTES,
-// WEIGHT_VEC4S.
+// WEIGHT_VEC4S, CAPTURE.
 
 layout(location = 0) in vec3 position;
 #if ATTRIBUTES
@@ -34,8 +38,20 @@ uniform samplerBuffer exit_values;        // R32F, glossy: ROWS per vertex
 invariant gl_Position;
 
 out vec3 colour;
+#if CAPTURE
+out vec4 captured;
+#endif
+
+void shade();
 
 void main() {
+  shade();
+#if CAPTURE
+  captured = vec4(colour, 1.0);
+#endif
+}
+
+void shade() {
   gl_Position = view_projection * vec4(position, 1.0);
   int v = gl_VertexID;
 #if COMPONENTS < 0

@@ -78,7 +78,11 @@ int main(int argc, char** argv) {
     const Eigen::MatrixX3d light = relighting.light(scene.load_environment());
     Params gl_params;
     gl_params.set("background", false);
+    // Two renderers (two contexts), so that neither re-uploads its scene
+    // when the other draws: their frames alternate, and the machine's drift
+    // hits both alike.
     auto renderer = registry.create<Renderer>("opengl", gl_params);
+    auto plain_renderer = registry.create<Renderer>("opengl", gl_params);
     const Camera camera = scene.make_camera(data.mesh);
     const Relit relit = relighting.relight(data.compressed, light, camera);
     RenderInput prt_input = relighting.input(data.compressed, relit, light, camera);
@@ -87,20 +91,18 @@ int main(int argc, char** argv) {
     plain.albedo = Eigen::Vector3f::Ones();  // vertex_radiance includes the albedo
     plain.vertex_radiance = &relit.vertex_radiance;
 
-    auto time_frames = [&](const RenderInput& input, std::vector<double>* relight = nullptr) {
-      renderer->render(input);  // upload and warm up
-      std::vector<double> draw;
-      for (int f = 0; f < frames; ++f) {
-        renderer->render(input);
-        const auto stats = renderer->statistics();
-        draw.push_back(stats.at("draw_seconds"));
-        if (relight) relight->push_back(stats.at("relight_seconds"));
-      }
-      return median(draw);
-    };
-    std::vector<double> constants;
-    const double prt_frame = time_frames(prt_input, &constants);
-    const double plain_frame = time_frames(plain);
+    renderer->render(prt_input);  // upload and warm up
+    plain_renderer->render(plain);
+    std::vector<double> prt_frames, plain_frames, constants;
+    for (int f = 0; f < frames; ++f) {
+      renderer->render(prt_input);
+      prt_frames.push_back(renderer->statistics().at("draw_seconds"));
+      constants.push_back(renderer->statistics().at("relight_seconds"));
+      plain_renderer->render(plain);
+      plain_frames.push_back(plain_renderer->statistics().at("draw_seconds"));
+    }
+    const double prt_frame = median(prt_frames);
+    const double plain_frame = median(plain_frames);
     const auto& c = data.compressed;
     std::printf("scene %s: %zu vertices, %zu triangles, %s, %lld clusters, n' = %d, %s %s\n",
                 scene_file.c_str(), data.mesh.vertex_count(), data.mesh.triangle_count(),

@@ -154,9 +154,13 @@ class OpenGLRenderer final : public Renderer {
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
     glEnableVertexAttribArray(0);
     build_index_buffer(mesh, t);
+    vertices_ = v;
 
     std::string defines =
         "#define ROWS " + std::to_string(rows) + "\n#define GLOSSY " + (glossy ? "1" : "0") + "\n";
+    // One draw of all clusters (not the paper's per-cluster passes): shade
+    // each vertex once into a buffer, then draw it as plain vertex colours.
+    capture_ = t && groups_.size() == 1;
     if (!t) {
       defines += "#define COMPONENTS -1\n#define SPARSE 0\n#define ATTRIBUTES 0\n";
     } else {
@@ -181,7 +185,16 @@ class OpenGLRenderer final : public Renderer {
       weight_index_.upload(GL_R32I, t->weight_index.data(),
                            t->weight_index.size() * sizeof(std::int32_t));
     }
-    program_ = build_program("transfer", defines, kTransferVert, kTransferFrag);
+    defines += std::string("#define CAPTURE ") + (capture_ ? "1" : "0") + "\n";
+    program_ = build_program("transfer", defines, kTransferVert, kTransferFrag,
+                             capture_ ? "captured" : nullptr);
+    if (capture_) {
+      captured_.upload(GL_RGBA32F, nullptr, v * 4 * sizeof(float));
+      plain_program_ = build_program("captured colours",
+                                     "#define ROWS 1\n#define GLOSSY 0\n#define COMPONENTS -1\n"
+                                     "#define SPARSE 0\n#define ATTRIBUTES 0\n#define CAPTURE 0\n",
+                                     kTransferVert, kTransferFrag);
+    }
   }
 
   // Cluster index (location 1) and weights padded to whole vec4s (locations
@@ -314,6 +327,24 @@ class OpenGLRenderer final : public Renderer {
     vertex_colour_.bind(program_, "vertex_colour", 4);
     group_of_cluster_.bind(program_, "group_of_cluster", 5);
     exit_values_.bind(program_, "exit_values", 6);
+    if (capture_) {
+      // Each vertex shaded once (an indexed draw shades a vertex again for
+      // every triangle corner that misses the driver's vertex cache), then
+      // the triangles drawn with those colours.
+      glEnable(GL_RASTERIZER_DISCARD);
+      glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, captured_.buffer);
+      glBeginTransformFeedback(GL_POINTS);
+      glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(vertices_));
+      glEndTransformFeedback();
+      glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
+      glDisable(GL_RASTERIZER_DISCARD);
+      glUseProgram(plain_program_);
+      glUniformMatrix4fv(glGetUniformLocation(plain_program_, "view_projection"), 1, GL_FALSE,
+                         vp.data());
+      captured_.bind(plain_program_, "vertex_colour", 4);
+      draw_range(0, total_indices());
+      return;
+    }
     const bool layered = groups_.size() > 1;
     if (layered) {
       // Depth first, so the colour passes shade only the visible surface.
@@ -373,8 +404,11 @@ class OpenGLRenderer final : public Renderer {
     if (weight_attribute_buffer_) glDeleteBuffers(1, &weight_attribute_buffer_);
     cluster_attribute_buffer_ = weight_attribute_buffer_ = 0;
     if (program_) glDeleteProgram(program_);
+    if (plain_program_) glDeleteProgram(plain_program_);
+    plain_program_ = 0;
+    capture_ = false;
     for (TextureBuffer* b : {&constants_, &cluster_of_vertex_, &group_of_cluster_, &weights_,
-                             &weight_index_, &vertex_colour_, &exit_values_})
+                             &weight_index_, &vertex_colour_, &exit_values_, &captured_})
       b->release();
     vao_ = index_buffer_ = program_ = 0;
     vertex_buffer_ = 0;
@@ -404,6 +438,12 @@ class OpenGLRenderer final : public Renderer {
   int width_ = 0, height_ = 0;
   GLuint framebuffer_ = 0, renderbuffers_[2] = {0, 0};
   GLuint vao_ = 0, vertex_buffer_ = 0, index_buffer_ = 0, program_ = 0;
+  // Single-pass drawing: program_ writes each vertex's colour to captured_,
+  // which plain_program_ then draws.
+  bool capture_ = false;
+  GLuint plain_program_ = 0;
+  TextureBuffer captured_;
+  std::size_t vertices_ = 0;
   GLuint cluster_attribute_buffer_ = 0, weight_attribute_buffer_ = 0;
   // Locations 2..15 (position 0, cluster 1): n' <= 56 weights as attributes.
   static constexpr int kMaxWeightVec4s = 14;
