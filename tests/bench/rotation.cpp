@@ -22,11 +22,20 @@
 
 namespace {
 
-// Median nanoseconds per call, each sample a batch of 100 calls run(i).
-double median_ns(int repeats, const auto& run) {
-  return 1e9 / 100 * prt::bench::median_seconds(repeats, [&] {
-           for (int i = 0; i < 100; ++i) run(i);
-         });
+// Nanoseconds per call of run_a and run_b: medians of `repeats` batches of
+// 100 calls each, the two batches alternating so that the machine's drift
+// hits both alike.
+std::pair<double, double> alternating_ns(int repeats, const auto& run_a, const auto& run_b) {
+  std::vector<double> a, b;
+  for (int r = 0; r < repeats; ++r) {
+    prt::Stopwatch clock_a;
+    for (int i = 0; i < 100; ++i) run_a(i);
+    a.push_back(clock_a.seconds());
+    prt::Stopwatch clock_b;
+    for (int i = 0; i < 100; ++i) run_b(i);
+    b.push_back(clock_b.seconds());
+  }
+  return {1e9 / 100 * prt::bench::median(a), 1e9 / 100 * prt::bench::median(b)};
 }
 
 }  // namespace
@@ -44,20 +53,26 @@ int main(int argc, char** argv) {
   const Eigen::MatrixXd rgb = Eigen::MatrixXd::Random(n, 3);
   Eigen::MatrixXd out(n, 3);
   double sink = 0;
-  const double build_apply = median_ns(200, [&](int i) {
-    sh::Rotation(order, rotations[i]).apply(rgb, out);
-    sink += out(0, 0);
-  });
   const sh::Rotation fixed(order, rotations[0]);
-  const double apply = median_ns(200, [&](int) {
-    fixed.apply(rgb, out);
-    sink += out(0, 0);
-  });
+  const auto [build_apply, apply] = alternating_ns(
+      200,
+      [&](int i) {
+        sh::Rotation(order, rotations[i]).apply(rgb, out);
+        sink += out(0, 0);
+      },
+      [&](int) {
+        fixed.apply(rgb, out);
+        sink += out(0, 0);
+      });
   const Eigen::MatrixXd dense = fixed.dense();
-  const double dense_apply = median_ns(200, [&](int) {
-    out.noalias() = dense * rgb;
-    sink += out(0, 0);
-  });
+  const double dense_apply = prt::bench::median_seconds(200,
+                                                        [&] {
+                                                          for (int i = 0; i < 100; ++i) {
+                                                            out.noalias() = dense * rgb;
+                                                            sink += out(0, 0);
+                                                          }
+                                                        }) *
+                             1e9 / 100;
   long long mads = 0;
   for (int l = 0; l < order; ++l) mads += 3LL * (2 * l + 1) * (2 * l + 1);
   std::printf("SH rotation order %d (l = 0..%d), RGB: %lld block-diagonal multiply-adds\n", order,

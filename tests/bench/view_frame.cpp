@@ -37,30 +37,36 @@ namespace {
 
 using prt::bench::median;
 
-// The time to stream `bytes` of per-vertex data once on every core: each of
-// `vertices` reads its share of one array and writes three floats, as a
-// relight must at least. Median of `repeats` passes.
-double stream_seconds(Eigen::Index vertices, double bytes, int repeats) {
-  const Eigen::Index out_floats = 3 * vertices;
-  const Eigen::Index in_floats =
-      std::max<Eigen::Index>(vertices, Eigen::Index(bytes / sizeof(float)) - out_floats);
-  const Eigen::Index per_vertex = std::max<Eigen::Index>(1, in_floats / vertices);
-  std::vector<float> in(static_cast<std::size_t>(per_vertex * vertices), 1.f);
-  std::vector<float> out(static_cast<std::size_t>(out_floats));
-  const double seconds = prt::bench::median_seconds(repeats, [&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, vertices, 1024), [&](const auto& range) {
+// Streams `bytes` of per-vertex data once on every core: each of `vertices`
+// reads its share of one array and writes three floats, as a relight must at
+// least.
+class Stream {
+ public:
+  Stream(Eigen::Index vertices, double bytes) : vertices_(vertices) {
+    const Eigen::Index out_floats = 3 * vertices;
+    const Eigen::Index in_floats =
+        std::max<Eigen::Index>(vertices, Eigen::Index(bytes / sizeof(float)) - out_floats);
+    per_vertex_ = std::max<Eigen::Index>(1, in_floats / vertices);
+    in_.assign(static_cast<std::size_t>(per_vertex_ * vertices), 1.f);
+    out_.resize(static_cast<std::size_t>(out_floats));
+  }
+  void operator()() {
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, vertices_, 1024), [&](const auto& range) {
       for (Eigen::Index p = range.begin(); p < range.end(); ++p) {
         float sum = 0;
-        for (Eigen::Index j = 0; j < per_vertex; ++j) sum += in[p * per_vertex + j];
-        out[p] = sum;
-        out[vertices + p] = sum;
-        out[2 * vertices + p] = sum;
+        for (Eigen::Index j = 0; j < per_vertex_; ++j) sum += in_[p * per_vertex_ + j];
+        out_[p] = sum;
+        out_[vertices_ + p] = sum;
+        out_[2 * vertices_ + p] = sum;
       }
     });
-  });
-  if (out[0] < 0) std::puts("");
-  return seconds;
-}
+    if (out_[0] < 0) std::puts("");
+  }
+
+ private:
+  Eigen::Index vertices_, per_vertex_;
+  std::vector<float> in_, out_;
+};
 
 }  // namespace
 
@@ -128,16 +134,20 @@ int main(int argc, char** argv) {
     const RelightKernel kernel = relighting.prepare(c);
     const MatrixXfRow* exit_values = data.transfer.glossy() ? &relit.exit_values : nullptr;
     const int cpu_frames = std::max(frames, 200);
-    std::vector<double> cpu;
-    Eigen::MatrixX3f radiance;  // reused, as a viewer's frame buffer is
-    for (int f = 0; f < cpu_frames; ++f) {
+    const double bytes = kernel.streamed_bytes(exit_values != nullptr);
+    Stream stream(c.vertices(), bytes);
+    std::vector<double> cpu, streamed;
+    Eigen::MatrixX3f radiance;              // reused, as a viewer's frame buffer is
+    for (int f = 0; f < cpu_frames; ++f) {  // alternating, as the GPU frames
       Stopwatch clock;
       kernel.radiance(light, exit_values, radiance);
       cpu.push_back(clock.seconds());
       if (radiance.rows() == 0) std::puts("");
+      Stopwatch stream_clock;
+      stream();
+      streamed.push_back(stream_clock.seconds());
     }
-    const double bytes = kernel.streamed_bytes(exit_values != nullptr);
-    const double bound = stream_seconds(c.vertices(), bytes, cpu_frames);
+    const double bound = median(streamed);
     std::printf("CPU  per-cluster constants, GL path (%lld clusters) %9.3f ms\n",
                 static_cast<long long>(c.clusters()), 1e3 * median(constants));
     std::printf("CPU  relight every vertex (constants + sums) %9.3f ms\n", 1e3 * median(cpu));
