@@ -57,6 +57,31 @@ TEST_CASE("visible products give the same bits on one core and on all", "[visibl
   CHECK(visible_times(scene, set, traced.visibility, right) == all);
 }
 
+TEST_CASE("visible products of many rows equal each row's own, bit for bit", "[visible]") {
+  // A row's sums must not depend on which rows share its call (a kernel that
+  // shares a tile's loads between neighbouring rows, or blocks them, must
+  // still give each row exactly its own bits, where a partner's bits are
+  // clear too). Column counts around the packet (8) and two packets' panels.
+  const Mesh scene = test::sphere_over_plane();
+  const DirectionSet set = DirectionSet::cubemap(6);
+  const TransportResult traced = test::trace_visibility_only(scene, set);
+  const std::size_t count = scene.vertex_count();
+  std::vector<std::uint32_t> vertices(count);
+  for (std::size_t v = 0; v < count; ++v) vertices[v] = static_cast<std::uint32_t>(v);
+  for (const Eigen::Index columns : {1, 8, 20, 58, 64, 65}) {
+    CAPTURE(columns);
+    const PaddedRows right(Eigen::MatrixXd::Random(set.size(), columns));
+    PaddedRows together, alone;
+    visible_times(scene, set, vertices.data(), count, traced.visibility.words(0), right, together);
+    Eigen::Index differing = 0;
+    for (std::size_t v = 0; v < count; ++v) {
+      visible_times(scene, set, &vertices[v], 1, traced.visibility.words(v), right, alone);
+      differing += (together.block(Eigen::Index(v), 1) != alone.block(0, 1)) ? 1 : 0;
+    }
+    CHECK(differing == 0);
+  }
+}
+
 TEST_CASE("visible products over shards: rows of the whole, sums the same bits on any ranks",
           "[visible][distributed]") {
   // Three segments of vertices, the last short, and 6 x 4 x 4 directions.
