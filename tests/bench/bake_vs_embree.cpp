@@ -41,22 +41,15 @@ int main(int argc, char** argv) {
               mesh_file.c_str(), mesh.vertex_count(), rays, order, order * order);
 
   const std::vector<std::uint32_t> order_of_vertices = morton_order(mesh);
-  std::vector<double> raw, bake;
   std::uint64_t rays_raw = 0, rays_bake = 0;
-  for (int r = 0; r < repeats; ++r) {
-    Stopwatch raw_clock;
-    rays_raw = bench::raw_trace(mesh, set, order_of_vertices, bench::RawSettings{}).rays;
-    raw.push_back(raw_clock.seconds());
-
-    Stopwatch bake_clock;
-    const Eigen::MatrixXd projection =
-        set.weights.asDiagonal() * sh::evaluate(order, set.directions);
-    const TransportResult result = diffuse_transfer(mesh, set, projection, {true, false}, nullptr);
-    bake.push_back(bake_clock.seconds());
-    rays_bake = result.rays_cast;
-  }
-  // Raw and bake alternate within each repeat, so drift hits both alike.
-  const double raw_s = bench::median(raw), bake_s = bench::median(bake);
+  const auto [raw_s, bake_s] = bench::alternating_median_seconds(
+      repeats,
+      [&] { rays_raw = bench::raw_trace(mesh, set, order_of_vertices, bench::RawSettings{}).rays; },
+      [&] {
+        const Eigen::MatrixXd projection =
+            set.weights.asDiagonal() * sh::evaluate(order, set.directions);
+        rays_bake = diffuse_transfer(mesh, set, projection, {true, false}, nullptr).rays_cast;
+      });
   const double ratio = bake_s / raw_s;
   std::printf("rays per run: raw %llu, bake %llu%s\n", (unsigned long long)rays_raw,
               (unsigned long long)rays_bake,

@@ -22,20 +22,11 @@
 
 namespace {
 
-// Nanoseconds per call of run_a and run_b: medians of `repeats` batches of
-// 100 calls each, the two batches alternating so that the machine's drift
-// hits both alike.
-std::pair<double, double> alternating_ns(int repeats, const auto& run_a, const auto& run_b) {
-  std::vector<double> a, b;
-  for (int r = 0; r < repeats; ++r) {
-    prt::Stopwatch clock_a;
-    for (int i = 0; i < 100; ++i) run_a(i);
-    a.push_back(clock_a.seconds());
-    prt::Stopwatch clock_b;
-    for (int i = 0; i < 100; ++i) run_b(i);
-    b.push_back(clock_b.seconds());
-  }
-  return {1e9 / 100 * prt::bench::median(a), 1e9 / 100 * prt::bench::median(b)};
+// Runs run(i) for i = 0..99: one timed batch.
+auto batch_of_100(const auto& run) {
+  return [&run] {
+    for (int i = 0; i < 100; ++i) run(i);
+  };
 }
 
 }  // namespace
@@ -54,25 +45,25 @@ int main(int argc, char** argv) {
   Eigen::MatrixXd out(n, 3);
   double sink = 0;
   const sh::Rotation fixed(order, rotations[0]);
-  const auto [build_apply, apply] = alternating_ns(
-      200,
-      [&](int i) {
-        sh::Rotation(order, rotations[i]).apply(rgb, out);
-        sink += out(0, 0);
-      },
-      [&](int) {
-        fixed.apply(rgb, out);
-        sink += out(0, 0);
-      });
+  auto build_and_apply = [&](int i) {
+    sh::Rotation(order, rotations[i]).apply(rgb, out);
+    sink += out(0, 0);
+  };
+  auto apply_fixed = [&](int) {
+    fixed.apply(rgb, out);
+    sink += out(0, 0);
+  };
+  const auto [build_apply_s, apply_s] = bench::alternating_median_seconds(
+      200, batch_of_100(build_and_apply), batch_of_100(apply_fixed));
   const Eigen::MatrixXd dense = fixed.dense();
-  const double dense_apply = prt::bench::median_seconds(200,
-                                                        [&] {
-                                                          for (int i = 0; i < 100; ++i) {
-                                                            out.noalias() = dense * rgb;
-                                                            sink += out(0, 0);
-                                                          }
-                                                        }) *
-                             1e9 / 100;
+  auto dense_product = [&](int) {
+    out.noalias() = dense * rgb;
+    sink += out(0, 0);
+  };
+  const double dense_s = bench::median_seconds(200, batch_of_100(dense_product));
+  // Nanoseconds per call (a batch is 100 calls).
+  const double build_apply = 1e7 * build_apply_s, apply = 1e7 * apply_s,
+               dense_apply = 1e7 * dense_s;
   long long mads = 0;
   for (int l = 0; l < order; ++l) mads += 3LL * (2 * l + 1) * (2 * l + 1);
   std::printf("SH rotation order %d (l = 0..%d), RGB: %lld block-diagonal multiply-adds\n", order,

@@ -2,6 +2,7 @@
 // machines are shared and noisy).
 #pragma once
 #include <algorithm>
+#include <utility>
 #include <vector>
 
 #include "prt/progress.hpp"
@@ -23,6 +24,24 @@ double median_seconds(int repeats, const Run& run) {
     times.push_back(clock.seconds());
   }
   return median(times);
+}
+
+// Median wall times of run_a() and run_b(), in seconds, over `repeats` calls
+// of each, the calls alternating, so that the machine's drift (up to 2x over
+// minutes) hits a stage and its bound alike.
+template <class RunA, class RunB>
+std::pair<double, double> alternating_median_seconds(int repeats, const RunA& run_a,
+                                                     const RunB& run_b) {
+  std::vector<double> a, b;
+  for (int r = 0; r < repeats; ++r) {
+    Stopwatch clock_a;
+    run_a();
+    a.push_back(clock_a.seconds());
+    Stopwatch clock_b;
+    run_b();
+    b.push_back(clock_b.seconds());
+  }
+  return {median(a), median(b)};
 }
 
 }  // namespace prt::bench
