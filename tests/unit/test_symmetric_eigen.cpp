@@ -1,8 +1,10 @@
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <utility>
 
 #include "prt/symmetric_eigen.hpp"
 
@@ -111,4 +113,31 @@ TEST_CASE("largest eigenpairs at the extremes", "[eigen][extremes]") {
   CHECK(both.values[0] == Approx(exact.eigenvalues()[1]));
   CHECK(both.values[1] == Approx(exact.eigenvalues()[0]));
   check_pairs(pair, both, 1e-12);
+}
+
+TEST_CASE("largest eigenpairs with clustered eigenvalues, on either tridiagonal solver",
+          "[eigen][extremes]") {
+  // Eigenvalues equal to 1e-13 apart: inverse iteration must reorthogonalise
+  // within the cluster, MRRR must separate it. n <= 16 count takes the first
+  // (many pairs of a small matrix), n > 16 count the second.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g;
+  for (const auto& [n, count] : {std::pair<Eigen::Index, Eigen::Index>{40, 8}, {200, 3}}) {
+    INFO("n " << n << ", count " << count);
+    Eigen::MatrixXd random(n, n);
+    for (auto& v : random.reshaped()) v = g(rng);
+    const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(random).householderQ();
+    Eigen::VectorXd spectrum = Eigen::VectorXd::LinSpaced(n, 0.0, 1.0);
+    spectrum.head(4) << 3, 3 * (1 + 1e-13), 3 * (1 - 1e-13), 3;
+    const Eigen::MatrixXd a = q * spectrum.asDiagonal() * q.transpose();
+    const Eigenpairs pairs = largest_eigenpairs(0.5 * (a + a.transpose()), count);
+    REQUIRE(pairs.values.size() == count);
+    check_pairs(a, pairs, 1e-12);
+    for (Eigen::Index i = 0; i < std::min<Eigen::Index>(count, 4); ++i)
+      CHECK(pairs.values[i] == Approx(3).epsilon(1e-12));
+    // The cluster's vectors span the cluster's space: Q's first four columns.
+    const Eigen::MatrixXd in_space =
+        q.leftCols(4).transpose() * pairs.vectors.leftCols(std::min<Eigen::Index>(count, 4));
+    CHECK((in_space.colwise().norm().array() - 1).abs().maxCoeff() < 1e-10);
+  }
 }

@@ -1,7 +1,9 @@
 // The largest eigenpairs of a symmetric matrix, without the full
 // decomposition: Householder tridiagonalisation (Eigen), then only the wanted
-// eigenpairs of the tridiagonal matrix (LAPACK's MRRR, dstemr), then the
-// back-transform of those vectors. A full Eigen solve computes and
+// eigenpairs of the tridiagonal matrix (LAPACK: MRRR, dstemr, for a few
+// pairs; every eigenvalue by dsterf and inverse iteration, dstein, when many
+// pairs of a small matrix are wanted), then the back-transform of those
+// vectors, a reflector at a time. A full Eigen solve computes and
 // accumulates every eigenvector, which dominates per-cluster PCA.
 #pragma once
 #include <Eigen/Core>
