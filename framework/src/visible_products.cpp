@@ -163,6 +163,83 @@ void masked_sums(const MaskedSums& m, std::size_t first, std::size_t last, Padde
                                    out.row(first_out_row + Eigen::Index(r - first)));
 }
 
+// Products along chains of output rows. With c_rj = a_r . b_j (normals / pi
+// and directions, one way or the other), output row r is a_r . N_r, where
+// N_r = sum over the set bits j of r's bit row of b_j (x) rows.row(j) (3
+// rows). Neighbouring output rows have nearly the same bits (for the bunny
+// at 6,144 cube-map directions, 6.5% of the visible pairs differ between
+// consecutive directions, ~10% between vertices in Morton order), so N_r is
+// N_{r'} of the row before it in the chain plus the rows r has and r' has
+// not, less the reverse: 3 multiply-adds per differing pair instead of one
+// per set bit. Each chain starts with a direct sum, and chains are fixed by
+// the caller from the shapes alone (not by tasks, threads or ranks), so a
+// row's bits do not depend on them; rounding builds up over kChain steps
+// at most.
+constexpr std::size_t kChain = 64;
+constexpr int kChainPanel = 8;  // 3 x 8 packets of sums in registers
+
+template <int Packets>
+struct ChainKernel {
+  static void run(int first_packet, const MaskedSums& m, const std::uint32_t* chain,
+                  std::size_t length, std::size_t first_word, std::size_t last_word,
+                  PaddedRows& out) {
+    const auto stride = static_cast<std::size_t>(m.rows->stride());
+    const double* base = m.rows->row(0) + 8 * first_packet;
+    Packet n[3][Packets];
+    // n += sign b_j (x) rows.row(j) for the set bits j of word `word`'s `tile`.
+    const auto add = [&](std::uint64_t tile, std::size_t word, double sign) {
+      for (; tile; tile &= tile - 1) {
+        const std::size_t j = 64 * word + static_cast<std::size_t>(std::countr_zero(tile));
+        const double* row = base + j * stride;
+        const double bx = sign * m.b[3 * j], by = sign * m.b[3 * j + 1], bz = sign * m.b[3 * j + 2];
+        for (int p = 0; p < Packets; ++p) {
+          const Packet x = load(row + 8 * p);
+          n[0][p] += bx * x;
+          n[1][p] += by * x;
+          n[2][p] += bz * x;
+        }
+      }
+    };
+    for (int c = 0; c < 3; ++c)
+      for (int p = 0; p < Packets; ++p) n[c][p] = Packet{};
+    for (std::size_t i = 0; i < length; ++i) {
+      const std::size_t r = chain[i];
+      const std::uint64_t* bits = m.bits + r * m.words;
+      if (i == 0) {
+        for (std::size_t w = first_word; w < last_word; ++w) add(bits[w], w, 1.0);
+      } else {
+        const std::uint64_t* before = m.bits + std::size_t(chain[i - 1]) * m.words;
+        for (std::size_t w = first_word; w < last_word; ++w) {
+          add(bits[w] & ~before[w], w, 1.0);
+          add(before[w] & ~bits[w], w, -1.0);
+        }
+      }
+      const double* a = m.a + 3 * r;
+      double* target = out.row(Eigen::Index(r)) + 8 * first_packet;
+      for (int p = 0; p < Packets; ++p)
+        store(target + 8 * p, a[0] * n[0][p] + a[1] * n[1][p] + a[2] * n[2][p]);
+    }
+  }
+};
+
+// out.row(r) for the output rows r of one chain, in its order, over the
+// gathered rows of words [first_word, last_word).
+void chained_sums(const MaskedSums& m, const std::uint32_t* chain, std::size_t length,
+                  PaddedRows& out, std::size_t first_word, std::size_t last_word) {
+  const Eigen::Index packets = m.rows->stride() / 8;
+  last_word = std::min(last_word, m.words);
+  for (int panel = 0; panel < packets; panel += kChainPanel) {
+    const int width = static_cast<int>(std::min<Eigen::Index>(kChainPanel, packets - panel));
+    [&]<int... P>(std::integer_sequence<int, P...>) {
+      ((width == P + 1
+            ? (ChainKernel<P + 1>::run(panel, m, chain, length, first_word, last_word, out), true)
+            : false) ||
+       ...);
+    }
+    (std::make_integer_sequence<int, kChainPanel>());
+  }
+}
+
 // Rows of x, y, z of `count` vectors (the mesh's normals are floats), scaled.
 std::vector<double> coordinates(const auto& vectors, std::size_t count, double scale) {
   std::vector<double> xyz(3 * count);
@@ -212,10 +289,28 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBi
     out = PaddedRows(Eigen::Index(visibility.vertices()), right.cols());
   const MaskedSums m{visibility.words(0), VisibilityBits::words_for(s), a.data(),
                      set.directions.data(), &right};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, visibility.vertices(), 256),
-                    [&](const auto& range) {
-                      masked_sums(m, range.begin(), range.end(), out, Eigen::Index(range.begin()));
-                    });
+  // Chains of kChain vertices along the Morton curve of each segment's
+  // vertices (segments of the whole mesh, as segment_sum's, so that a rank's
+  // shard holds whole chains): neighbours in space see nearly the same
+  // directions, where neighbours in the file differ in ~30% of their pairs.
+  const std::size_t count = visibility.vertices(), end = first_vertex + count;
+  std::vector<std::uint32_t> order;  // local vertex indices, chain after chain
+  std::vector<std::size_t> starts;
+  order.reserve(count);
+  for (std::size_t from = first_vertex; from < end;) {
+    const std::size_t to = std::min(
+        end, std::size_t(segment_end(Eigen::Index(from) / kSegmentRows, Eigen::Index(end))));
+    const std::vector<std::uint32_t> curve = morton_order(mesh, from, to);
+    for (std::size_t i = 0; i < curve.size(); ++i) {
+      if (i % kChain == 0) starts.push_back(order.size());
+      order.push_back(std::uint32_t(curve[i] - first_vertex));
+    }
+    from = to;
+  }
+  starts.push_back(order.size());
+  tbb::parallel_for(std::size_t(0), starts.size() - 1, [&](std::size_t c) {
+    chained_sums(m, order.data() + starts[c], starts[c + 1] - starts[c], out, 0, m.words);
+  });
 }
 
 Eigen::MatrixXd visible_times(const Mesh& mesh, const DirectionSet& set,
@@ -291,9 +386,13 @@ Eigen::MatrixXd visible_transpose_sum(const Mesh& mesh, const DirectionSet& set,
     const auto begin = std::size_t(segment_begin(segment) - shard.first),
                end = std::size_t(segment_end(segment, shard.total) - shard.first);
     PaddedRows sums(set.size(), cols);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s, 512), [&](const auto& range) {
-      masked_sums(m, range.begin(), range.end(), sums, Eigen::Index(range.begin()), begin / 64,
-                  (end + 63) / 64);
+    // Chains of kChain consecutive directions.
+    const std::size_t chains = (s + kChain - 1) / kChain;
+    tbb::parallel_for(std::size_t(0), chains, [&](std::size_t c) {
+      std::uint32_t chain[kChain];
+      const std::size_t length = std::min(kChain, s - c * kChain);
+      for (std::size_t i = 0; i < length; ++i) chain[i] = std::uint32_t(c * kChain + i);
+      chained_sums(m, chain, length, sums, begin / 64, (end + 63) / 64);
     });
     std::vector<double> values(s * std::size_t(cols));
     Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
