@@ -188,6 +188,10 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
     if (!gram[i]) scattered.push_back(int(i));
   Blocks total;
   std::vector<bool> wanted(static_cast<std::size_t>(means.rows()), false);
+  struct ScatterScratch {
+    Eigen::MatrixXd centred, sum;
+  };
+  tbb::enumerable_thread_specific<ScatterScratch> scatter_scratch;
   for (std::size_t start = 0; start < scattered.size(); start += group) {
     std::fill(wanted.begin(), wanted.end(), false);
     for (std::size_t i = start; i < std::min(scattered.size(), start + group); ++i)
@@ -202,21 +206,28 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
             if (l >= 0 && wanted[std::size_t(l)]) members[l].push_back(p);
           }
           Blocks out;
-          Eigen::MatrixXd centred, sum;
-          for (const auto& [cluster, list] : members) {
-            centred.resize(n, static_cast<Eigen::Index>(list.size()));
+          std::vector<std::pair<const std::vector<Eigen::Index>*, std::vector<double>*>> work;
+          for (const auto& [cluster, list] : members) work.push_back({&list, &out[cluster]});
+          // A cluster's block is one rank update of its members in row order
+          // (the same bits on any thread); the clusters of a segment run on
+          // every core, as a signal has few segments (5 for the bunny).
+          tbb::parallel_for(std::size_t(0), work.size(), [&](std::size_t i) {
+            const std::vector<Eigen::Index>& list = *work[i].first;
+            const std::int32_t cluster = labels[std::size_t(list.front())];
+            ScatterScratch& scratch = scatter_scratch.local();
+            scratch.centred.resize(n, static_cast<Eigen::Index>(list.size()));
             for (std::size_t j = 0; j < list.size(); ++j)
-              centred.col(Eigen::Index(j)) =
+              scratch.centred.col(Eigen::Index(j)) =
                   (rows.x.row(list[j]).cast<double>() - means.row(cluster)).transpose();
-            sum.setZero(n, n);
-            sum.selfadjointView<Eigen::Lower>().rankUpdate(centred);
+            scratch.sum.setZero(n, n);
+            scratch.sum.selfadjointView<Eigen::Lower>().rankUpdate(scratch.centred);
             // The lower triangle, column by column: half the bytes to add and send.
-            std::vector<double>& block = out[cluster];
+            std::vector<double>& block = *work[i].second;
             block.resize(std::size_t(n * (n + 1) / 2));
             std::size_t at = 0;
             for (Eigen::Index c = 0; c < n; ++c)
-              for (Eigen::Index r = c; r < n; ++r) block[at++] = sum(r, c);
-          }
+              for (Eigen::Index r = c; r < n; ++r) block[at++] = scratch.sum(r, c);
+          });
           rows.release(begin, end);
           return out;
         },
