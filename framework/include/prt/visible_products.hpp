@@ -85,7 +85,12 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_
 
 // T right for all of `visibility`'s vertices, on every core; `out` keeps its
 // storage when it has the shape already. The bits' rows are the mesh's
-// vertices from `first_vertex` on (a rank's shard; default all).
+// vertices from `first_vertex` on (a rank's shard; default all). Rows are
+// summed along chains of 64 vertices on the Morton curve of each segment of
+// the mesh (kSegmentRows): a row's sums are carried from its neighbour's,
+// adding only the directions where their bits differ. The chains depend on
+// the mesh and the segments alone, so a shard that starts at a segment gets
+// the whole product's rows, bit for bit, on any number of cores.
 void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
                    const PaddedRows& right, PaddedRows& out, std::size_t first_vertex = 0);
 Eigen::MatrixXd visible_times(const Mesh& mesh, const DirectionSet& set,
@@ -107,9 +112,11 @@ Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& se
 // T^T left over the vertices of a shard (the bits' and left's rows are the
 // mesh's vertices [shard.first, shard.last)), summed over every rank's
 // shard by segment_sum: one partial per segment of vertices, added along a
-// fixed tree. The result is on every rank, the same bits for any number of
-// ranks and cores (not those of visible_transpose_times, which adds every
-// vertex in one running sum).
+// fixed tree. Within a segment, directions are summed along chains of 64
+// consecutive directions, each carried from the one before it (as
+// visible_times' vertices). The result is on every rank, the same bits for
+// any number of ranks and cores (not those of visible_transpose_times, which
+// adds every vertex in one running sum, directly).
 Eigen::MatrixXd visible_transpose_sum(const Mesh& mesh, const DirectionSet& set,
                                       const TransposedVisibility& transposed,
                                       const PaddedRows& left, const Shard& shard,
