@@ -20,7 +20,7 @@ namespace prt {
 
 namespace {
 
-// Eigen's full solver: the fallback when MRRR reports a failure.
+// Eigen's full solver: the last fallback, when LAPACK reports a failure.
 Eigenpairs full_solve(const Eigen::MatrixXd& a, Eigen::Index count) {
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(a);
   Eigenpairs out;

@@ -293,21 +293,26 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBi
   // vertices (segments of the whole mesh, as segment_sum's, so that a rank's
   // shard holds whole chains): neighbours in space see nearly the same
   // directions, where neighbours in the file differ in ~30% of their pairs.
-  const std::size_t count = visibility.vertices(), end = first_vertex + count;
-  std::vector<std::uint32_t> order;  // local vertex indices, chain after chain
-  std::vector<std::size_t> starts;
-  order.reserve(count);
-  for (std::size_t from = first_vertex; from < end;) {
-    const std::size_t to = std::min(
-        end, std::size_t(segment_end(Eigen::Index(from) / kSegmentRows, Eigen::Index(end))));
-    const std::vector<std::uint32_t> curve = morton_order(mesh, from, to);
-    for (std::size_t i = 0; i < curve.size(); ++i) {
-      if (i % kChain == 0) starts.push_back(order.size());
-      order.push_back(std::uint32_t(curve[i] - first_vertex));
-    }
-    from = to;
-  }
-  starts.push_back(order.size());
+  const std::size_t count = visibility.vertices();
+  const auto segment = [&](std::uint32_t v) {  // of a local vertex, from the shard's first
+    return (first_vertex + v) / std::size_t(kSegmentRows) -
+           first_vertex / std::size_t(kSegmentRows);
+  };
+  // One sort along the whole mesh's curve, then a stable split by segment
+  // (a counting sort): each segment's vertices in curve order.
+  std::vector<std::uint32_t> curve = morton_order(mesh, first_vertex, first_vertex + count);
+  for (std::uint32_t& v : curve) v -= std::uint32_t(first_vertex);
+  const std::size_t segments = count == 0 ? 0 : segment(std::uint32_t(count - 1)) + 1;
+  std::vector<std::size_t> begin(segments + 1, 0);
+  for (std::uint32_t v : curve) ++begin[segment(v) + 1];
+  for (std::size_t g = 0; g < segments; ++g) begin[g + 1] += begin[g];
+  std::vector<std::uint32_t> order(count);  // local vertex indices, segment after segment
+  std::vector<std::size_t> next(begin.begin(), begin.end() - 1);
+  for (std::uint32_t v : curve) order[next[segment(v)]++] = v;
+  std::vector<std::size_t> starts;  // chains: kChain vertices, none across segments
+  for (std::size_t g = 0; g < segments; ++g)
+    for (std::size_t i = begin[g]; i < begin[g + 1]; i += kChain) starts.push_back(i);
+  starts.push_back(count);
   tbb::parallel_for(std::size_t(0), starts.size() - 1, [&](std::size_t c) {
     chained_sums(m, order.data() + starts[c], starts[c + 1] - starts[c], out, 0, m.words);
   });

@@ -89,8 +89,9 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_
 // summed along chains of 64 vertices on the Morton curve of each segment of
 // the mesh (kSegmentRows): a row's sums are carried from its neighbour's,
 // adding only the directions where their bits differ. The chains depend on
-// the mesh and the segments alone, so a shard that starts at a segment gets
-// the whole product's rows, bit for bit, on any number of cores.
+// the mesh and the segments alone, so a shard that starts at a segment and
+// ends at one (or at the mesh's end) gets the whole product's rows, bit for
+// bit, on any number of cores.
 void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
                    const PaddedRows& right, PaddedRows& out, std::size_t first_vertex = 0);
 Eigen::MatrixXd visible_times(const Mesh& mesh, const DirectionSet& set,
