@@ -130,8 +130,7 @@ Eigenpairs largest_eigenpairs(const Eigen::MatrixXd& a, Eigen::Index count) {
   // The choice depends on the sizes only: the same input takes the same path.
   const bool many = n <= 16 * count;
   const bool solved =
-      many ? pairs_by_inverse_iteration(d, e, wanted, w, z) || pairs_by_mrrr(d, e, wanted, w, z)
-           : pairs_by_mrrr(d, e, wanted, w, z);
+      (many && pairs_by_inverse_iteration(d, e, wanted, w, z)) || pairs_by_mrrr(d, e, wanted, w, z);
   if (!solved) return full_solve(a, count);
   apply_q(tridiagonal, z);
   // Ascending from LAPACK: the largest first.

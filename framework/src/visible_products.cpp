@@ -137,11 +137,13 @@ struct TileKernel {
 };
 
 // Calls Kernel<P>::run(first_packet, args...) for panels covering `packets`
-// packets: whole panels of kMaxPanel, then the rest with its own fixed size.
+// packets: whole panels of sizeof...(P) packets, then the rest with its own
+// fixed size.
 template <template <int> class Kernel, int... P, class... Args>
 void for_each_panel(std::integer_sequence<int, P...>, Eigen::Index packets, Args&&... args) {
-  for (int first = 0; first < packets; first += kMaxPanel) {
-    const int width = static_cast<int>(std::min<Eigen::Index>(kMaxPanel, packets - first));
+  constexpr int kPanel = sizeof...(P);
+  for (int first = 0; first < packets; first += kPanel) {
+    const int width = static_cast<int>(std::min<Eigen::Index>(kPanel, packets - first));
     ((width == P + 1 ? (Kernel<P + 1>::run(first, args...), true) : false) || ...);
   }
 }
@@ -226,18 +228,8 @@ struct ChainKernel {
 // gathered rows of words [first_word, last_word).
 void chained_sums(const MaskedSums& m, const std::uint32_t* chain, std::size_t length,
                   PaddedRows& out, std::size_t first_word, std::size_t last_word) {
-  const Eigen::Index packets = m.rows->stride() / 8;
-  last_word = std::min(last_word, m.words);
-  for (int panel = 0; panel < packets; panel += kChainPanel) {
-    const int width = static_cast<int>(std::min<Eigen::Index>(kChainPanel, packets - panel));
-    [&]<int... P>(std::integer_sequence<int, P...>) {
-      ((width == P + 1
-            ? (ChainKernel<P + 1>::run(panel, m, chain, length, first_word, last_word, out), true)
-            : false) ||
-       ...);
-    }
-    (std::make_integer_sequence<int, kChainPanel>());
-  }
+  for_each_panel<ChainKernel>(std::make_integer_sequence<int, kChainPanel>(), m.rows->stride() / 8,
+                              m, chain, length, first_word, std::min(last_word, m.words), out);
 }
 
 // Rows of x, y, z of `count` vectors (the mesh's normals are floats), scaled.
@@ -294,24 +286,19 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBi
   // shard holds whole chains): neighbours in space see nearly the same
   // directions, where neighbours in the file differ in ~30% of their pairs.
   const std::size_t count = visibility.vertices();
-  const auto segment = [&](std::uint32_t v) {  // of a local vertex, from the shard's first
-    return (first_vertex + v) / std::size_t(kSegmentRows) -
-           first_vertex / std::size_t(kSegmentRows);
+  const auto segment = [&](std::uint32_t v) {  // of a local vertex
+    return (first_vertex + v) / std::size_t(kSegmentRows);
   };
-  // One sort along the whole mesh's curve, then a stable split by segment
-  // (a counting sort): each segment's vertices in curve order.
-  std::vector<std::uint32_t> curve = morton_order(mesh, first_vertex, first_vertex + count);
-  for (std::uint32_t& v : curve) v -= std::uint32_t(first_vertex);
-  const std::size_t segments = count == 0 ? 0 : segment(std::uint32_t(count - 1)) + 1;
-  std::vector<std::size_t> begin(segments + 1, 0);
-  for (std::uint32_t v : curve) ++begin[segment(v) + 1];
-  for (std::size_t g = 0; g < segments; ++g) begin[g + 1] += begin[g];
-  std::vector<std::uint32_t> order(count);  // local vertex indices, segment after segment
-  std::vector<std::size_t> next(begin.begin(), begin.end() - 1);
-  for (std::uint32_t v : curve) order[next[segment(v)]++] = v;
+  // The shard's vertices along the whole mesh's curve, then split by segment,
+  // each segment's in curve order (a stable sort).
+  std::vector<std::uint32_t> order = morton_order(mesh, first_vertex, first_vertex + count);
+  for (std::uint32_t& v : order) v -= std::uint32_t(first_vertex);  // local indices
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return segment(a) < segment(b); });
   std::vector<std::size_t> starts;  // chains: kChain vertices, none across segments
-  for (std::size_t g = 0; g < segments; ++g)
-    for (std::size_t i = begin[g]; i < begin[g + 1]; i += kChain) starts.push_back(i);
+  for (std::size_t i = 0; i < count; ++i)
+    if (starts.empty() || i - starts.back() == kChain || segment(order[i]) != segment(order[i - 1]))
+      starts.push_back(i);
   starts.push_back(count);
   tbb::parallel_for(std::size_t(0), starts.size() - 1, [&](std::size_t c) {
     chained_sums(m, order.data() + starts[c], starts[c + 1] - starts[c], out, 0, m.words);

@@ -205,15 +205,22 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
             const std::int32_t l = labels[std::size_t(p)];
             if (l >= 0 && wanted[std::size_t(l)]) members[l].push_back(p);
           }
-          Blocks out;
-          std::vector<std::pair<const std::vector<Eigen::Index>*, std::vector<double>*>> work;
-          for (const auto& [cluster, list] : members) work.push_back({&list, &out[cluster]});
           // A cluster's block is one rank update of its members in row order
           // (the same bits on any thread); the clusters of a segment run on
-          // every core, as a signal has few segments (5 for the bunny).
-          tbb::parallel_for(std::size_t(0), work.size(), [&](std::size_t i) {
-            const std::vector<Eigen::Index>& list = *work[i].first;
-            const std::int32_t cluster = labels[std::size_t(list.front())];
+          // every core, as a signal has few segments (5 for the bunny). The
+          // blocks are made first, so that the tasks only fill them.
+          Blocks out;
+          struct Task {
+            std::int32_t cluster;
+            const std::vector<Eigen::Index>* members;
+            std::vector<double>* block;
+          };
+          std::vector<Task> tasks;
+          for (const auto& [cluster, list] : members)
+            tasks.push_back({cluster, &list, &out[cluster]});
+          tbb::parallel_for(std::size_t(0), tasks.size(), [&](std::size_t i) {
+            const std::int32_t cluster = tasks[i].cluster;
+            const std::vector<Eigen::Index>& list = *tasks[i].members;
             ScatterScratch& scratch = scatter_scratch.local();
             scratch.centred.resize(n, static_cast<Eigen::Index>(list.size()));
             for (std::size_t j = 0; j < list.size(); ++j)
@@ -222,7 +229,7 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
             scratch.sum.setZero(n, n);
             scratch.sum.selfadjointView<Eigen::Lower>().rankUpdate(scratch.centred);
             // The lower triangle, column by column: half the bytes to add and send.
-            std::vector<double>& block = *work[i].second;
+            std::vector<double>& block = *tasks[i].block;
             block.resize(std::size_t(n * (n + 1) / 2));
             std::size_t at = 0;
             for (Eigen::Index c = 0; c < n; ++c)
