@@ -38,6 +38,8 @@ static_assert(kBlock % kLanes == 0, "blocks are whole packets");
 
 // Above this, the parts compute their own clusters' constants (see the constructor).
 constexpr std::int64_t kSharedConstantsBytes = std::int64_t(4) << 20;
+// ... and while the cluster data's copy in panels stays below this.
+constexpr std::int64_t kPanelBytes = std::int64_t(64) << 20;
 
 Lanes load_lanes(const float* p) {
   Lanes v;
@@ -92,6 +94,44 @@ void light_dots(const float* stored, Eigen::Index count, Eigen::Index n_i, const
   for (; r + 4 <= count; r += 4)
     light_dots_group<4>(stored + r * n_i, n_i, red, green, blue, into + 3 * r);
   for (; r < count; ++r) light_dots_group<1>(stored + r * n_i, n_i, red, green, blue, into + 3 * r);
+}
+
+// The stored rows of every cluster (its mean's `rows` rows, then its
+// representatives'), 16 to a panel and laid out d-major (panel[16 d + j] is
+// row j's d-th float), so that 16 rows' dots with the light vectorise over
+// the rows: each float of cluster data is one multiply-add per channel with a
+// broadcast light value, no sums reduced across lanes and no tail (the
+// row-major dots above read each row in packets and reduce 3 sums per row).
+constexpr int kPanelRows = kLanes;
+
+// into[48 q + 3 j + c] = row j of panel q . light channel c, for `count`
+// panels from `panel`, `Group` at a time (3 Group sums in registers).
+template <int Group>
+void panel_dots_group(const float* panel, Eigen::Index n_i, const float* red, const float* green,
+                      const float* blue, float* into) {
+  Lanes sums[Group][3] = {};
+  for (Eigen::Index d = 0; d < n_i; ++d) {
+    const float r = red[d], g = green[d], b = blue[d];
+    for (int q = 0; q < Group; ++q) {
+      const Lanes m = load_lanes(panel + (q * n_i + d) * kPanelRows);
+      sums[q][0] += m * r;
+      sums[q][1] += m * g;
+      sums[q][2] += m * b;
+    }
+  }
+  for (int q = 0; q < Group; ++q)
+    for (int j = 0; j < kPanelRows; ++j)
+      for (int c = 0; c < 3; ++c) into[3 * (q * kPanelRows + j) + c] = sums[q][c][j];
+}
+
+void panel_dots(const float* panels, Eigen::Index count, Eigen::Index n_i, const float* red,
+                const float* green, const float* blue, float* into) {
+  const Eigen::Index stride = n_i * kPanelRows;
+  Eigen::Index q = 0;
+  for (; q + 3 <= count; q += 3)
+    panel_dots_group<3>(panels + q * stride, n_i, red, green, blue, into + 3 * kPanelRows * q);
+  for (; q < count; ++q)
+    panel_dots_group<1>(panels + q * stride, n_i, red, green, blue, into + 3 * kPanelRows * q);
 }
 
 // constants(i, 3 r + c) = (vector_i read as rows x N_i) l, for the cluster's
@@ -229,12 +269,26 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
   for (Eigen::Index k = 0; k < clusters; ++k)
     begin[std::size_t(k) + 1] =
         begin[std::size_t(k)] + std::int64_t(t.components_of(k) + 1) * 3 * rows;
-  if (begin.back() * std::int64_t(sizeof(float)) <= kSharedConstantsBytes) {
+  // The shared pass reads the cluster data from panels (a copy, laid out
+  // once), so it is shared only while that copy stays small too.
+  const Eigen::Index n_i = t.dimension / rows;
+  const std::int64_t panel_count = (begin.back() / 3 + kPanelRows - 1) / kPanelRows;
+  if (begin.back() * std::int64_t(sizeof(float)) <= kSharedConstantsBytes &&
+      panel_count * kPanelRows * n_i * std::int64_t(sizeof(float)) <= kPanelBytes) {
     constant_begin_ = std::move(begin);
-    std::vector<char> used(std::size_t(clusters), 0);
-    for (auto k : t.cluster_of_vertex) used[std::size_t(k)] = 1;
-    for (Eigen::Index k = 0; k < clusters; ++k)
-      if (used[std::size_t(k)]) shared_clusters_.push_back(static_cast<std::int32_t>(k));
+    panels_.assign(std::size_t(panel_count * kPanelRows * n_i), 0.f);  // zero rows pad the last
+    tbb::parallel_for(Eigen::Index(0), clusters, [&](Eigen::Index k) {
+      const std::int64_t first = constant_begin_[std::size_t(k)] / 3;  // the cluster's first row
+      const std::int64_t count =
+          (constant_begin_[std::size_t(k) + 1] - constant_begin_[std::size_t(k)]) / 3;
+      for (std::int64_t r = 0; r < count; ++r) {
+        const float* row = r < rows ? t.means.row(k).data() + r * n_i
+                                    : t.representatives[std::size_t(k)].data() + (r - rows) * n_i;
+        float* panel = panels_.data() + (first + r) / kPanelRows * kPanelRows * n_i;
+        for (Eigen::Index d = 0; d < n_i; ++d)
+          panel[d * kPanelRows + (first + r) % kPanelRows] = row[d];
+      }
+    });
   }
 }
 
@@ -251,25 +305,27 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
   std::vector<float>* constants = &fresh;
   if (shared) {
     if (lock.try_lock()) constants = &scratch_->constants;
-    constants->resize(static_cast<std::size_t>(constant_begin_.back()));
+    constants->resize(panels_.size() / std::size_t(l.rows()) * 3);  // 3 per panel row
   }
-  // Shared constants: two parallel passes, every used cluster's constants
-  // split over the cores, then a task per part for the sums. (Each part
+  // Shared constants: two parallel passes, every cluster's constants (16
+  // stored rows at a time) split over the cores, then a task per part for
+  // the sums. (Each part
   // computing the constants of its own clusters repeated them on every core
   // for the bunny's CPCA: 0.15-0.18 ms a frame against 0.105 ms.) Isolated:
   // a thread waiting here must not pick up an outer task that relights this
   // kernel again.
   tbb::this_task_arena::isolate([&] {
-    if (shared)
+    if (shared) {
+      const Eigen::Index n_i = l.rows(), stride = n_i * kPanelRows;
+      const float *red = l.col(0).data(), *green = l.col(1).data(), *blue = l.col(2).data();
       tbb::parallel_for(
-          tbb::blocked_range<std::size_t>(0, shared_clusters_.size()),
+          tbb::blocked_range<Eigen::Index>(0, Eigen::Index(panels_.size()) / stride),
           [&](const auto& range) {
-            for (std::size_t i = range.begin(); i < range.end(); ++i) {
-              const std::int32_t k = shared_clusters_[i];
-              cluster_constants_into(t, k, rows_, l, constants->data() + constant_begin_[k]);
-            }
+            panel_dots(panels_.data() + range.begin() * stride, range.size(), n_i, red, green, blue,
+                       constants->data() + 3 * kPanelRows * range.begin());
           },
           tbb::static_partitioner());
+    }
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, parts_.size(), 1),
         [&](const auto& range) {

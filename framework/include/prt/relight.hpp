@@ -6,11 +6,11 @@
 // C_ki = M_ki l stay in registers while its vertices' weights stream past;
 // weights are stored compactly in that order (n'_k per vertex); the
 // constants of every cluster are computed first, into one buffer kept by the
-// kernel (or, when there are very many clusters, per part into a buffer per
-// task); the sums use kernels of fixed n' for the common sizes and are
-// written straight to mesh order. Glossy transfer is fused: each
-// vertex's exit-basis values toward the camera are dotted with its exit
-// vector without writing the v x 3 N_r exit coefficients.
+// kernel, from a copy of the cluster data laid out for 16 rows' dots at once
+// (or, when there are very many clusters, per part into a buffer per task); the sums use kernels of
+// fixed n' for the common sizes and are written straight to mesh order. Glossy transfer is fused:
+// each vertex's exit-basis values toward the camera are dotted with its exit vector without writing
+// the v x 3 N_r exit coefficients.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -65,17 +65,20 @@ class RelightKernel {
   struct Part {
     std::vector<std::int32_t> vertices;  // the range's vertices sorted by cluster (stable)
     std::vector<Run> runs;
-    std::vector<float> weights;  // n'_k per vertex, compact, then 16 floats of padding
+    std::vector<float, Eigen::aligned_allocator<float>>
+        weights;  // n'_k per vertex, compact, then 16 floats of padding
   };
 
   const CompressedTransfer* transfer_;
   int rows_;
   std::vector<Part> parts_;
   // When every cluster's constants fit a small shared buffer: where each
-  // cluster's go (clusters + 1 offsets) and the clusters that have vertices.
-  // Empty otherwise (each part computes its own runs' constants).
+  // cluster's go (clusters + 1 offsets; 3 floats per stored row of N_i), and
+  // the stored rows of every cluster in that order, copied into panels of
+  // 16 rows (relight.cpp). Empty otherwise (each part computes its own runs'
+  // constants from the transfer).
   std::vector<std::int64_t> constant_begin_;
-  std::vector<std::int32_t> shared_clusters_;
+  std::vector<float, Eigen::aligned_allocator<float>> panels_;  // 64-byte aligned: whole packets
   // The constants of the last frame's clusters, reused by the next (a fresh
   // buffer per frame would cost page faults for glossy transfer).
   struct Scratch {
