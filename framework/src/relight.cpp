@@ -18,11 +18,6 @@ namespace {
 
 using Rows3 = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
-// Vertices of one cluster handled together: small enough for the partial sums
-// to stay in registers / L1, large enough for the loops to vectorise; a
-// multiple of the 16 lanes below.
-constexpr int kBlock = 64;
-
 void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int rows) {
   const Eigen::Index n_i = light.rows();
   if (rows < 1 || n_i * rows != t.dimension)
@@ -34,7 +29,6 @@ void check_light(const CompressedTransfer& t, const Eigen::MatrixX3d& light, int
 // 16 floats in registers (GCC vector extension: AVX-512 where built for it).
 typedef float Lanes __attribute__((vector_size(64)));
 constexpr int kLanes = 16;
-static_assert(kBlock % kLanes == 0, "blocks are whole packets");
 
 // Above this, the parts compute their own clusters' constants (see the constructor).
 constexpr std::int64_t kSharedConstantsBytes = std::int64_t(4) << 20;
@@ -149,58 +143,64 @@ void cluster_constants_into(const CompressedTransfer& t, Eigen::Index k, int row
                out + 3 * rows);
 }
 
-// out_c[j] = C_0c + sum_i w_i[j] C_ic for `count` <= kBlock vertices whose
-// weights are stored component-major (w_i at weights + i * stride). 16
-// vertices' three sums stay in registers over all n' components. N >= 0
-// fixes n' at compile time so that the loop unrolls; N = -1 reads n_dyn.
+// red[v] = C_0r + sum_i w_i(v) C_ir (and green, blue) for the `size`
+// vertices of one run, whose weights are stored component-major (w_i at
+// weights + i * size): 16 vertices' three sums stay in registers over all n'
+// components, then go straight to mesh order. N >= 0 fixes n' at compile
+// time so that the loop unrolls; N = -1 reads n_dyn.
 template <int N>
-void diffuse_block(const float* constants, const float* weights, std::int64_t stride, int n_dyn,
-                   int count, float* r, float* g, float* b) {
+void diffuse_run(const float* constants, const float* weights, std::int64_t size, int n_dyn,
+                 const std::int32_t* vertices, float* red, float* green, float* blue) {
   const int n = N >= 0 ? N : n_dyn;
-  // The last packet reads past `count` into the next stored weights (the
-  // weights end with kLanes floats of padding); its extra lanes are
-  // written to r, g, b (kBlock floats each) and never read.
-  for (int j = 0; j < count; j += kLanes) {
-    Lanes red = Lanes{} + constants[0], green = Lanes{} + constants[1],
-          blue = Lanes{} + constants[2];
+  // The last packet reads past `size` into the next stored weights (the
+  // weights end with kLanes floats of padding); its extra lanes are never
+  // written.
+  for (std::int64_t j = 0; j < size; j += kLanes) {
+    Lanes sums[3] = {Lanes{} + constants[0], Lanes{} + constants[1], Lanes{} + constants[2]};
     for (int i = 0; i < n; ++i) {
-      const Lanes w = load_lanes(weights + i * stride + j);
+      const Lanes w = load_lanes(weights + i * size + j);
       const float* c = constants + 3 * (i + 1);
-      red += w * c[0];
-      green += w * c[1];
-      blue += w * c[2];
+      sums[0] += w * c[0];
+      sums[1] += w * c[1];
+      sums[2] += w * c[2];
     }
-    std::memcpy(r + j, &red, sizeof red);
-    std::memcpy(g + j, &green, sizeof green);
-    std::memcpy(b + j, &blue, sizeof blue);
+    alignas(64) float rgb[3][kLanes];
+    std::memcpy(rgb, sums, sizeof rgb);
+    const int count = static_cast<int>(std::min<std::int64_t>(kLanes, size - j));
+    for (int q = 0; q < count; ++q) {
+      const std::int32_t p = vertices[j + q];
+      red[p] = rgb[0][q];
+      green[p] = rgb[1][q];
+      blue[p] = rgb[2][q];
+    }
   }
 }
 
-using DiffuseBlock = void (*)(const float*, const float*, std::int64_t, int, int, float*, float*,
-                              float*);
+using DiffuseRun = void (*)(const float*, const float*, std::int64_t, int, const std::int32_t*,
+                            float*, float*, float*);
 
-DiffuseBlock diffuse_kernel(int n) {
+DiffuseRun diffuse_kernel(int n) {
   switch (n) {
     case 0:
-      return diffuse_block<0>;
+      return diffuse_run<0>;
     case 1:
-      return diffuse_block<1>;
+      return diffuse_run<1>;
     case 2:
-      return diffuse_block<2>;
+      return diffuse_run<2>;
     case 3:
-      return diffuse_block<3>;
+      return diffuse_run<3>;
     case 4:
-      return diffuse_block<4>;
+      return diffuse_run<4>;
     case 6:
-      return diffuse_block<6>;
+      return diffuse_run<6>;
     case 8:
-      return diffuse_block<8>;
+      return diffuse_run<8>;
     case 12:
-      return diffuse_block<12>;
+      return diffuse_run<12>;
     case 16:
-      return diffuse_block<16>;
+      return diffuse_run<16>;
     default:
-      return diffuse_block<-1>;
+      return diffuse_run<-1>;
   }
 }
 
@@ -253,7 +253,7 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
     }
     // Component i of a run's j-th vertex at run.weights + i * run.size + j, so
     // sums vectorise over vertices; kLanes floats of padding at the end, as
-    // the sums read whole packets (diffuse_block).
+    // the sums read whole packets (diffuse_run).
     part.weights.assign(std::size_t(weights) + kLanes, 0.f);
     for (const Run& run : part.runs)
       for (int i = 0; i < t.components_of(run.cluster); ++i)
@@ -384,19 +384,8 @@ void RelightKernel::radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* e
                      [&](Eigen::Index k, const float* constants, const std::int32_t* vertices,
                          std::int64_t size, const float* weights, float*) {
                        const int n_k = t.components_of(k);
-                       const DiffuseBlock block = diffuse_kernel(n_k);
-                       alignas(64) float r[kBlock], g[kBlock], b[kBlock];
-                       for (std::int64_t j0 = 0; j0 < size; j0 += kBlock) {
-                         const int count =
-                             static_cast<int>(std::min<std::int64_t>(kBlock, size - j0));
-                         block(constants, weights + j0, size, n_k, count, r, g, b);
-                         const std::int32_t* at = vertices + j0;
-                         for (int j = 0; j < count; ++j) {
-                           red[at[j]] = r[j];
-                           green[at[j]] = g[j];
-                           blue[at[j]] = b[j];
-                         }
-                       }
+                       diffuse_kernel(n_k)(constants, weights, size, n_k, vertices, red, green,
+                                           blue);
                      });
     return;
   }
