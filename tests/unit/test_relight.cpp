@@ -144,3 +144,26 @@ TEST_CASE("the relight kernel's result does not depend on how many parts it is s
   CHECK(radiance(tbb::this_task_arena::max_concurrency(), &values, 4) == glossy);
   CHECK(radiance(3, &values, 4) == glossy);
 }
+
+TEST_CASE("the relight kernel's per-part constants agree with its shared ones", "[relight]") {
+  // A cluster per vertex, as the exact form: up to 4 MB of constants the
+  // parts share, computed 16 stored rows at a time from panels; past that
+  // (360,000 clusters) each part computes its own runs' constants row by row.
+  const auto exact_like = [](int vertices) {
+    CompressedTransfer c;
+    c.dimension = 21;  // one packet and a tail of the row-by-row dots
+    c.means = MatrixXfRow::Random(vertices, c.dimension);
+    c.representatives.assign(std::size_t(vertices), MatrixXfRow(0, c.dimension));
+    c.weights = MatrixXfRow::Zero(vertices, 0);
+    for (int p = 0; p < vertices; ++p) c.cluster_of_vertex.push_back(p);
+    return c;
+  };
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(21, 3);
+  for (const int vertices : {20000, 360000}) {
+    const CompressedTransfer c = exact_like(vertices);
+    const Eigen::MatrixX3f expected = (c.means.cast<double>() * light).cast<float>();
+    const Eigen::MatrixX3f radiance = RelightKernel(c, 1).radiance(light);
+    INFO(vertices << " clusters");
+    CHECK((radiance - expected).cwiseAbs().maxCoeff() < 1e-5f);
+  }
+}
