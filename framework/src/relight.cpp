@@ -261,35 +261,68 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
           part.weights[std::size_t(run.weights + i * run.size + j)] =
               t.weights(part.vertices[std::size_t(run.begin + j)], i);
   });
-  // Where each cluster's constants go when one pass computes them all, for
-  // the parts to share: (n'_k + 1) stored vectors of 3 rows floats each.
-  // When that buffer would be large (many clusters, as the exact form's one
-  // per vertex), each part computes the constants of its own runs instead.
-  std::vector<std::int64_t> begin(std::size_t(clusters) + 1, 0);
+  // One pass computes every cluster's constants for the parts to share,
+  // unless that buffer or the panels' copy of the cluster data would be large
+  // (many clusters, as the exact form's one per vertex): each part then
+  // computes the constants of its own runs instead.
+  if (ClusterConstants::floats_for(t, rows) * std::int64_t(sizeof(float)) <=
+          kSharedConstantsBytes &&
+      ClusterConstants::bytes_for(t, rows) <= kPanelBytes)
+    shared_.emplace(t, rows);
+}
+
+std::int64_t ClusterConstants::floats_for(const CompressedTransfer& t, int rows) {
+  std::int64_t floats = 0;
+  for (Eigen::Index k = 0; k < t.clusters(); ++k)
+    floats += std::int64_t(t.components_of(k) + 1) * 3 * rows;
+  return floats;
+}
+
+std::int64_t ClusterConstants::bytes_for(const CompressedTransfer& t, int rows) {
+  const std::int64_t panels = (floats_for(t, rows) / 3 + kPanelRows - 1) / kPanelRows;
+  return panels * kPanelRows * (t.dimension / rows) * std::int64_t(sizeof(float));
+}
+
+ClusterConstants::ClusterConstants(const CompressedTransfer& t, int rows) {
+  if (rows < 1 || t.dimension % rows != 0 || t.sparse() ||
+      static_cast<Eigen::Index>(t.representatives.size()) != t.clusters())
+    throw Error("cluster constants: the transfer has no clusters of " + std::to_string(rows) +
+                " exit rows");
+  n_i_ = t.dimension / rows;
+  const Eigen::Index clusters = t.clusters();
+  begin_.assign(std::size_t(clusters) + 1, 0);
   for (Eigen::Index k = 0; k < clusters; ++k)
-    begin[std::size_t(k) + 1] =
-        begin[std::size_t(k)] + std::int64_t(t.components_of(k) + 1) * 3 * rows;
-  // The shared pass reads the cluster data from panels (a copy, laid out
-  // once), so it is shared only while that copy stays small too.
-  const Eigen::Index n_i = t.dimension / rows;
-  const std::int64_t panel_count = (begin.back() / 3 + kPanelRows - 1) / kPanelRows;
-  if (begin.back() * std::int64_t(sizeof(float)) <= kSharedConstantsBytes &&
-      panel_count * kPanelRows * n_i * std::int64_t(sizeof(float)) <= kPanelBytes) {
-    constant_begin_ = std::move(begin);
-    panels_.assign(std::size_t(panel_count * kPanelRows * n_i), 0.f);  // zero rows pad the last
-    tbb::parallel_for(Eigen::Index(0), clusters, [&](Eigen::Index k) {
-      const std::int64_t first = constant_begin_[std::size_t(k)] / 3;  // the cluster's first row
-      const std::int64_t count =
-          (constant_begin_[std::size_t(k) + 1] - constant_begin_[std::size_t(k)]) / 3;
-      for (std::int64_t r = 0; r < count; ++r) {
-        const float* row = r < rows ? t.means.row(k).data() + r * n_i
-                                    : t.representatives[std::size_t(k)].data() + (r - rows) * n_i;
-        float* panel = panels_.data() + (first + r) / kPanelRows * kPanelRows * n_i;
-        for (Eigen::Index d = 0; d < n_i; ++d)
-          panel[d * kPanelRows + (first + r) % kPanelRows] = row[d];
-      }
-    });
-  }
+    begin_[std::size_t(k) + 1] =
+        begin_[std::size_t(k)] + std::int64_t(t.components_of(k) + 1) * 3 * rows;
+  const std::int64_t panel_count = (begin_.back() / 3 + kPanelRows - 1) / kPanelRows;
+  panels_.assign(std::size_t(panel_count * kPanelRows * n_i_), 0.f);  // zero rows pad the last
+  tbb::parallel_for(Eigen::Index(0), clusters, [&](Eigen::Index k) {
+    const std::int64_t first = begin_[std::size_t(k)] / 3;  // the cluster's first stored row
+    const std::int64_t count = (begin_[std::size_t(k) + 1] - begin_[std::size_t(k)]) / 3;
+    for (std::int64_t r = 0; r < count; ++r) {
+      const float* row = r < rows ? t.means.row(k).data() + r * n_i_
+                                  : t.representatives[std::size_t(k)].data() + (r - rows) * n_i_;
+      float* panel = panels_.data() + (first + r) / kPanelRows * kPanelRows * n_i_;
+      for (Eigen::Index d = 0; d < n_i_; ++d)
+        panel[d * kPanelRows + (first + r) % kPanelRows] = row[d];
+    }
+  });
+}
+
+void ClusterConstants::compute(const Eigen::MatrixX3f& light, std::vector<float>& out) const {
+  if (light.rows() != n_i_)
+    throw Error("cluster constants: the light has " + std::to_string(light.rows()) +
+                " coefficients, the clusters' stored rows " + std::to_string(n_i_));
+  const Eigen::Index stride = n_i_ * kPanelRows, panels = Eigen::Index(panels_.size()) / stride;
+  out.resize(std::size_t(panels * 3 * kPanelRows));  // whole panels: past begin_.back() unused
+  const float *red = light.col(0).data(), *green = light.col(1).data(), *blue = light.col(2).data();
+  tbb::parallel_for(
+      tbb::blocked_range<Eigen::Index>(0, panels),
+      [&](const auto& range) {
+        panel_dots(panels_.data() + range.begin() * stride, range.size(), n_i_, red, green, blue,
+                   out.data() + 3 * kPanelRows * range.begin());
+      },
+      tbb::static_partitioner());
 }
 
 template <class Sums>
@@ -297,16 +330,13 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
                                      const Sums& sums) const {
   const CompressedTransfer& t = *transfer_;
   const int width = 3 * rows_;  // floats of one stored vector's constant
-  const bool shared = !constant_begin_.empty();
+  const bool shared = shared_.has_value();
   // The kernel's own buffer when free; a caller relighting the same kernel
   // concurrently (or re-entrantly, from a task) gets a fresh one.
   std::unique_lock lock(scratch_->mutex, std::defer_lock);
   std::vector<float> fresh;
   std::vector<float>* constants = &fresh;
-  if (shared) {
-    if (lock.try_lock()) constants = &scratch_->constants;
-    constants->resize(panels_.size() / std::size_t(l.rows()) * 3);  // 3 per panel row
-  }
+  if (shared && lock.try_lock()) constants = &scratch_->constants;
   // Shared constants: two parallel passes, every cluster's constants (16
   // stored rows at a time) split over the cores, then a task per part for
   // the sums. (Each part
@@ -315,17 +345,7 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
   // a thread waiting here must not pick up an outer task that relights this
   // kernel again.
   tbb::this_task_arena::isolate([&] {
-    if (shared) {
-      const Eigen::Index n_i = l.rows(), stride = n_i * kPanelRows;
-      const float *red = l.col(0).data(), *green = l.col(1).data(), *blue = l.col(2).data();
-      tbb::parallel_for(
-          tbb::blocked_range<Eigen::Index>(0, Eigen::Index(panels_.size()) / stride),
-          [&](const auto& range) {
-            panel_dots(panels_.data() + range.begin() * stride, range.size(), n_i, red, green, blue,
-                       constants->data() + 3 * kPanelRows * range.begin());
-          },
-          tbb::static_partitioner());
-    }
+    if (shared) shared_->compute(l, *constants);
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, parts_.size(), 1),
         [&](const auto& range) {
@@ -337,7 +357,7 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
             for (const Run& run : part.runs) {
               const float* c = constants->data();
               if (shared) {
-                c += constant_begin_[run.cluster];
+                c += shared_->begin(run.cluster);
               } else {
                 cluster_constants_into(t, run.cluster, rows_, l, own.data());
                 c = own.data();

@@ -16,11 +16,40 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "prt/transfer.hpp"
 
 namespace prt {
+
+// Every cluster's constants C_ki = M_ki l for a light l (N_i x 3): its mean
+// and its n'_k representatives, each read as a `rows` x N_i matrix, times l,
+// 3 floats per stored row. The cluster data is copied once into panels of 16
+// stored rows laid out for 16 rows' dots at once (relight.cpp); each
+// compute() splits the panels over the cores and allocates nothing once its
+// buffer has its size. `transfer` need not outlive it.
+class ClusterConstants {
+ public:
+  ClusterConstants(const CompressedTransfer& transfer, int rows);
+
+  // Floats of every cluster's constants, and bytes of the panels' copy, for
+  // a transfer read with `rows` exit rows: what a caller weighs before
+  // making one.
+  static std::int64_t floats_for(const CompressedTransfer& transfer, int rows);
+  static std::int64_t bytes_for(const CompressedTransfer& transfer, int rows);
+
+  // Where cluster k's constants start in compute()'s buffer: stored vector
+  // i's row r, channel c at begin(k) + 3 (rows i + r) + c.
+  std::int64_t begin(Eigen::Index k) const { return begin_[std::size_t(k)]; }
+  // Every cluster's constants into `out` (resized to whole panels).
+  void compute(const Eigen::MatrixX3f& light, std::vector<float>& out) const;
+
+ private:
+  Eigen::Index n_i_ = 0;
+  std::vector<std::int64_t> begin_;                             // clusters + 1
+  std::vector<float, Eigen::aligned_allocator<float>> panels_;  // 64-byte aligned: whole packets
+};
 
 class RelightKernel {
  public:
@@ -72,13 +101,11 @@ class RelightKernel {
   const CompressedTransfer* transfer_;
   int rows_;
   std::vector<Part> parts_;
-  // When every cluster's constants fit a small shared buffer: where each
-  // cluster's go (clusters + 1 offsets; 3 floats per stored row of N_i), and
-  // the stored rows of every cluster in that order, copied into panels of
-  // 16 rows (relight.cpp). Empty otherwise (each part computes its own runs'
-  // constants from the transfer).
-  std::vector<std::int64_t> constant_begin_;
-  std::vector<float, Eigen::aligned_allocator<float>> panels_;  // 64-byte aligned: whole packets
+  // When every cluster's constants fit a small shared buffer (and their
+  // panels a moderate one): computed in one pass for the parts to share.
+  // Empty otherwise (each part computes its own runs' constants from the
+  // transfer).
+  std::optional<ClusterConstants> shared_;
   // The constants of the last frame's clusters, reused by the next (a fresh
   // buffer per frame would cost page faults for glossy transfer).
   struct Scratch {
