@@ -167,3 +167,23 @@ TEST_CASE("the relight kernel's per-part constants agree with its shared ones", 
     CHECK((radiance - expected).cwiseAbs().maxCoeff() < 1e-5f);
   }
 }
+
+TEST_CASE("cluster constants from panels match the per-cluster constants", "[relight]") {
+  const int rows = 3, n_i = 7;  // 21 coefficients: 3 exit rows of 7
+  const CompressedTransfer c = mixed_clusters(rows * n_i, 300);
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(n_i, 3);
+  const ClusterConstants constants(c, rows);
+  std::vector<float> values;
+  constants.compute(light.cast<float>(), values);
+  const std::vector<MatrixXfRow> expected = cluster_constants(c, light, rows);
+  for (Eigen::Index k = 0; k < c.clusters(); ++k) {
+    INFO("cluster " << k);
+    const Eigen::Map<const MatrixXfRow> got(values.data() + constants.begin(k),
+                                            c.components_of(k) + 1, 3 * rows);
+    CHECK((got - expected[std::size_t(k)]).cwiseAbs().maxCoeff() < 1e-5f);
+  }
+  CHECK(ClusterConstants::floats_for(c, rows) == constants.begin(c.clusters() - 1) + 3 * rows);
+  CHECK_THROWS_WITH(constants.compute(Eigen::MatrixX3f::Ones(n_i + 1, 3), values),
+                    Catch::Contains("light has 8 coefficients"));
+  CHECK_THROWS_WITH(ClusterConstants(c, 4), Catch::Contains("no clusters of 4 exit rows"));
+}
