@@ -5,12 +5,14 @@
 // range, vertices are visited in cluster order, so a cluster's constants
 // C_ki = M_ki l stay in registers while its vertices' weights stream past;
 // weights are stored compactly in that order (n'_k per vertex); the
-// constants of every cluster are computed first, into one buffer kept by the
-// kernel, from a copy of the cluster data laid out for 16 rows' dots at once
-// (or, when there are very many clusters, per part into a buffer per task); the sums use kernels of
-// fixed n' for the common sizes and are written straight to mesh order. Glossy transfer is fused:
-// each vertex's exit-basis values toward the camera are dotted with its exit vector without writing
-// the v x 3 N_r exit coefficients.
+// constants of every cluster are computed first, into one buffer kept by
+// the kernel, from a copy of the cluster data laid out for 16 rows' dots at
+// once (ClusterConstants; when there are very many clusters, per part into a
+// buffer per task instead); the sums use kernels of fixed n' for the common
+// sizes, one call per cluster's run, and are written straight to mesh order.
+// Glossy transfer is fused: each vertex's exit-basis values toward the
+// camera are dotted with its exit vector without writing the v x 3 N_r exit
+// coefficients.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
