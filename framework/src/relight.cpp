@@ -98,8 +98,8 @@ void light_dots(const float* stored, Eigen::Index count, Eigen::Index n_i, const
 // row-major dots above read each row in packets and reduce 3 sums per row).
 constexpr int kPanelRows = kLanes;
 
-// into[48 q + 3 j + c] = row j of panel q . light channel c, for `count`
-// panels from `panel`, `Group` at a time (3 Group sums in registers).
+// into[48 q + 3 j + c] = row j of panel q . light channel c, for the
+// `Group` panels from `panel` (3 Group sums in registers).
 template <int Group>
 void panel_dots_group(const float* panel, Eigen::Index n_i, const float* red, const float* green,
                       const float* blue, float* into) {
@@ -271,7 +271,25 @@ RelightKernel::RelightKernel(const CompressedTransfer& t, int rows) : transfer_(
     shared_.emplace(t, rows);
 }
 
+namespace {
+
+// Refuses what the panels would read out of bounds.
+void check_cluster_data(const CompressedTransfer& t, int rows) {
+  if (rows < 1 || t.dimension % rows != 0 || t.sparse())
+    throw Error("cluster constants: the transfer has no clusters of " + std::to_string(rows) +
+                " exit rows");
+  bool consistent = t.means.cols() == t.dimension &&
+                    static_cast<Eigen::Index>(t.representatives.size()) == t.clusters();
+  for (std::size_t k = 0; consistent && k < t.representatives.size(); ++k)
+    consistent = t.representatives[k].cols() == t.dimension;
+  if (!consistent)
+    throw Error("cluster constants: the transfer's cluster data has inconsistent sizes");
+}
+
+}  // namespace
+
 std::int64_t ClusterConstants::floats_for(const CompressedTransfer& t, int rows) {
+  check_cluster_data(t, rows);
   std::int64_t floats = 0;
   for (Eigen::Index k = 0; k < t.clusters(); ++k)
     floats += std::int64_t(t.components_of(k) + 1) * 3 * rows;
@@ -284,18 +302,15 @@ std::int64_t ClusterConstants::bytes_for(const CompressedTransfer& t, int rows) 
 }
 
 ClusterConstants::ClusterConstants(const CompressedTransfer& t, int rows) {
-  if (rows < 1 || t.dimension % rows != 0 || t.sparse() ||
-      static_cast<Eigen::Index>(t.representatives.size()) != t.clusters())
-    throw Error("cluster constants: the transfer has no clusters of " + std::to_string(rows) +
-                " exit rows");
+  check_cluster_data(t, rows);
   n_i_ = t.dimension / rows;
   const Eigen::Index clusters = t.clusters();
   begin_.assign(std::size_t(clusters) + 1, 0);
   for (Eigen::Index k = 0; k < clusters; ++k)
     begin_[std::size_t(k) + 1] =
         begin_[std::size_t(k)] + std::int64_t(t.components_of(k) + 1) * 3 * rows;
-  const std::int64_t panel_count = (begin_.back() / 3 + kPanelRows - 1) / kPanelRows;
-  panels_.assign(std::size_t(panel_count * kPanelRows * n_i_), 0.f);  // zero rows pad the last
+  panel_count_ = (begin_.back() / 3 + kPanelRows - 1) / kPanelRows;
+  panels_.assign(std::size_t(panel_count_ * kPanelRows * n_i_), 0.f);  // zero rows pad the last
   tbb::parallel_for(Eigen::Index(0), clusters, [&](Eigen::Index k) {
     const std::int64_t first = begin_[std::size_t(k)] / 3;  // the cluster's first stored row
     const std::int64_t count = (begin_[std::size_t(k) + 1] - begin_[std::size_t(k)]) / 3;
@@ -313,11 +328,12 @@ void ClusterConstants::compute(const Eigen::MatrixX3f& light, std::vector<float>
   if (light.rows() != n_i_)
     throw Error("cluster constants: the light has " + std::to_string(light.rows()) +
                 " coefficients, the clusters' stored rows " + std::to_string(n_i_));
-  const Eigen::Index stride = n_i_ * kPanelRows, panels = Eigen::Index(panels_.size()) / stride;
-  out.resize(std::size_t(panels * 3 * kPanelRows));  // whole panels: past begin_.back() unused
+  const Eigen::Index stride = n_i_ * kPanelRows;
+  out.resize(
+      std::size_t(panel_count_ * 3 * kPanelRows));  // whole panels: past begin_.back() unused
   const float *red = light.col(0).data(), *green = light.col(1).data(), *blue = light.col(2).data();
   tbb::parallel_for(
-      tbb::blocked_range<Eigen::Index>(0, panels),
+      tbb::blocked_range<Eigen::Index>(0, panel_count_),
       [&](const auto& range) {
         panel_dots(panels_.data() + range.begin() * stride, range.size(), n_i_, red, green, blue,
                    out.data() + 3 * kPanelRows * range.begin());

@@ -1,5 +1,6 @@
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <memory>
 
@@ -159,12 +160,13 @@ TEST_CASE("the relight kernel's per-part constants agree with its shared ones", 
     return c;
   };
   const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(21, 3);
-  for (const int vertices : {20000, 360000}) {
+  for (const int vertices : {20001, 360000}) {  // 20,001: a last panel of one row
     const CompressedTransfer c = exact_like(vertices);
     const Eigen::MatrixX3f expected = (c.means.cast<double>() * light).cast<float>();
-    const Eigen::MatrixX3f radiance = RelightKernel(c, 1).radiance(light);
+    const RelightKernel kernel(c, 1);
     INFO(vertices << " clusters");
-    CHECK((radiance - expected).cwiseAbs().maxCoeff() < 1e-5f);
+    CHECK(kernel.shares_constants() == (vertices < 360000));
+    CHECK((kernel.radiance(light) - expected).cwiseAbs().maxCoeff() < 1e-5f);
   }
 }
 
@@ -186,4 +188,19 @@ TEST_CASE("cluster constants from panels match the per-cluster constants", "[rel
   CHECK_THROWS_WITH(constants.compute(Eigen::MatrixX3f::Ones(n_i + 1, 3), values),
                     Catch::Contains("light has 8 coefficients"));
   CHECK_THROWS_WITH(ClusterConstants(c, 4), Catch::Contains("no clusters of 4 exit rows"));
+  CHECK_THROWS_WITH(ClusterConstants::bytes_for(c, 0), Catch::Contains("no clusters of 0"));
+  CompressedTransfer short_representative = c;
+  short_representative.representatives[3] = MatrixXfRow::Zero(3, rows * n_i - 1);
+  CHECK_THROWS_WITH(ClusterConstants(short_representative, rows),
+                    Catch::Contains("inconsistent sizes"));
+  CompressedTransfer missing_cluster = c;
+  missing_cluster.representatives.pop_back();
+  CHECK_THROWS_WITH(ClusterConstants::floats_for(missing_cluster, rows),
+                    Catch::Contains("inconsistent sizes"));
+  // No coefficients: every constant is an empty sum.
+  CompressedTransfer empty = mixed_clusters(0, 40);
+  const ClusterConstants none(empty, 1);
+  none.compute(Eigen::MatrixX3f(0, 3), values);
+  CHECK(std::all_of(values.begin(), values.end(), [](float v) { return v == 0.f; }));
+  CHECK(RelightKernel(empty, 1).radiance(Eigen::MatrixX3d(0, 3)).isZero());
 }

@@ -37,7 +37,8 @@ class ClusterConstants {
 
   // Floats of every cluster's constants, and bytes of the panels' copy, for
   // a transfer read with `rows` exit rows: what a caller weighs before
-  // making one.
+  // making one. Like the constructor, they refuse a transfer whose cluster
+  // data does not have the sizes it claims.
   static std::int64_t floats_for(const CompressedTransfer& transfer, int rows);
   static std::int64_t bytes_for(const CompressedTransfer& transfer, int rows);
 
@@ -49,6 +50,7 @@ class ClusterConstants {
 
  private:
   Eigen::Index n_i_ = 0;
+  std::int64_t panel_count_ = 0;
   std::vector<std::int64_t> begin_;                             // clusters + 1
   std::vector<float, Eigen::aligned_allocator<float>> panels_;  // 64-byte aligned: whole packets
 };
@@ -60,6 +62,9 @@ class RelightKernel {
   RelightKernel(const CompressedTransfer& transfer, int rows);
 
   int rows() const { return rows_; }
+  // Whether one pass computes every cluster's constants for the parts to
+  // share (from panels), or each part its own runs' (very many clusters).
+  bool shares_constants() const { return shared_.has_value(); }
   const CompressedTransfer& transfer() const { return *transfer_; }
 
   // v x 3 radiance in mesh order: e_p . l for diffuse transfer (exit_values

@@ -7,7 +7,6 @@
 // overdraw is counted.
 #include <array>
 #include <chrono>
-#include <optional>
 
 #include "gl_context.hpp"
 #include "prt/plugin.hpp"
@@ -135,7 +134,6 @@ class OpenGLRenderer final : public Renderer {
                   t ? t->components : 0,
                   t ? t->clusters() : 0,
                   t ? t->weights.data() : nullptr,
-                  t ? t->means.data() : nullptr,
                   t ? t->supercluster_of_cluster.size() : 0,
                   t && t->sparse(),
                   rows,
@@ -143,12 +141,6 @@ class OpenGLRenderer final : public Renderer {
     if (program_ && key == key_) return;
     release();
     key_ = key;
-    // The cluster data laid out once for every frame's constants, unless that
-    // copy would be large (the exact form of a large mesh: a cluster per
-    // vertex); then each frame computes them cluster by cluster.
-    cluster_constants_.reset();
-    if (t && !t->sparse() && ClusterConstants::bytes_for(*t, rows) <= kMostConstantPanelBytes)
-      cluster_constants_.emplace(*t, rows);
     glGenVertexArrays(1, &vao_);
     glBindVertexArray(vao_);
     const std::size_t v = mesh.vertex_count();
@@ -302,13 +294,16 @@ class OpenGLRenderer final : public Renderer {
       for (int c = 0; c < 3; ++c) texels[c] = base[c];
       for (Eigen::Index j = 0; j < in.light.rows(); ++j)
         for (int c = 0; c < 3; ++c) texels[4 * (j + 1) + c] = float(in.light(j, c));
-    } else if (cluster_constants_) {
+    } else if (ClusterConstants::bytes_for(t, rows) <= kMostConstantPanelBytes) {
       // Per cluster (n' + 1) x rows RGB texels, padded with zeros past n'_k.
-      cluster_constants_->compute(in.light.cast<float>(), constant_values_);
+      // The cluster data is laid out every frame, not kept: a transfer of the
+      // same shape may come back at the same addresses with other values.
+      const ClusterConstants laid_out(t, rows);
+      laid_out.compute(in.light.cast<float>(), constant_values_);
       const std::size_t per_cluster = std::size_t(t.components + 1) * rows;
       texels.assign(4 * per_cluster * std::size_t(t.clusters()), 0.f);
       for (Eigen::Index k = 0; k < t.clusters(); ++k) {
-        const float* constants = constant_values_.data() + cluster_constants_->begin(k);
+        const float* constants = constant_values_.data() + laid_out.begin(k);
         for (std::size_t j = 0; j < std::size_t(t.components_of(k) + 1) * rows; ++j)
           for (int c = 0; c < 3; ++c)
             texels[4 * (std::size_t(k) * per_cluster + j) + c] = constants[3 * j + c];
@@ -440,7 +435,6 @@ class OpenGLRenderer final : public Renderer {
     int components = 0;
     Eigen::Index clusters = 0;
     const float* weights = nullptr;
-    const float* means = nullptr;  // the cluster data copied for the constants
     std::size_t superclusters = 0;
     bool sparse = false;
     int rows = 0;
@@ -471,10 +465,9 @@ class OpenGLRenderer final : public Renderer {
   std::vector<Group> groups_;
   Key key_;
   std::map<std::string, double> stats_;
-  // Beyond this copy of the cluster data, constants are computed cluster by
-  // cluster instead.
+  // Beyond this copy of the cluster data (the exact form of a large mesh: a
+  // cluster per vertex), constants are computed cluster by cluster instead.
   static constexpr std::int64_t kMostConstantPanelBytes = std::int64_t(64) << 20;
-  std::optional<ClusterConstants> cluster_constants_;
   std::vector<float> constant_values_;  // kept from frame to frame
 };
 
