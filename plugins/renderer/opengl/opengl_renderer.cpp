@@ -294,21 +294,8 @@ class OpenGLRenderer final : public Renderer {
       for (int c = 0; c < 3; ++c) texels[c] = base[c];
       for (Eigen::Index j = 0; j < in.light.rows(); ++j)
         for (int c = 0; c < 3; ++c) texels[4 * (j + 1) + c] = float(in.light(j, c));
-    } else if (ClusterConstants::bytes_for(t, rows) <= kMostConstantPanelBytes) {
-      // Per cluster (n' + 1) x rows RGB texels, padded with zeros past n'_k.
-      // The cluster data is laid out every frame, not kept: a transfer of the
-      // same shape may come back at the same addresses with other values.
-      const ClusterConstants laid_out(t, rows);
-      laid_out.compute(in.light.cast<float>(), constant_values_);
-      const std::size_t per_cluster = std::size_t(t.components + 1) * rows;
-      texels.assign(4 * per_cluster * std::size_t(t.clusters()), 0.f);
-      for (Eigen::Index k = 0; k < t.clusters(); ++k) {
-        const float* constants = constant_values_.data() + laid_out.begin(k);
-        for (std::size_t j = 0; j < std::size_t(t.components_of(k) + 1) * rows; ++j)
-          for (int c = 0; c < 3; ++c)
-            texels[4 * (std::size_t(k) * per_cluster + j) + c] = constants[3 * j + c];
-      }
     } else {
+      // Per cluster (n' + 1) x rows RGB texels, padded with zeros past n'_k.
       const std::vector<MatrixXfRow> constants = cluster_constants(t, in.light, rows);
       const std::size_t per_cluster = std::size_t(t.components + 1) * rows;
       texels.assign(4 * per_cluster * constants.size(), 0.f);
@@ -465,10 +452,6 @@ class OpenGLRenderer final : public Renderer {
   std::vector<Group> groups_;
   Key key_;
   std::map<std::string, double> stats_;
-  // Beyond this copy of the cluster data (the exact form of a large mesh: a
-  // cluster per vertex), constants are computed cluster by cluster instead.
-  static constexpr std::int64_t kMostConstantPanelBytes = std::int64_t(64) << 20;
-  std::vector<float> constant_values_;  // kept from frame to frame
 };
 
 }  // namespace prt
