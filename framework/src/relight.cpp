@@ -355,11 +355,10 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
   if (shared && lock.try_lock()) constants = &scratch_->constants;
   // Shared constants: two parallel passes, every cluster's constants (16
   // stored rows at a time) split over the cores, then a task per part for
-  // the sums. (Each part
-  // computing the constants of its own clusters repeated them on every core
-  // for the bunny's CPCA: 0.15-0.18 ms a frame against 0.105 ms.) Isolated:
-  // a thread waiting here must not pick up an outer task that relights this
-  // kernel again.
+  // the sums. (Each part computing the constants of its own clusters
+  // repeated them on every core for the bunny's CPCA: 0.15-0.18 ms a frame
+  // against 0.105 ms.) Isolated: a thread waiting here must not pick up an
+  // outer task that relights this kernel again.
   tbb::this_task_arena::isolate([&] {
     if (shared) shared_->compute(l, *constants);
     tbb::parallel_for(
