@@ -61,25 +61,29 @@ TEST_CASE("visible products of many rows equal each row's own, bit for bit", "[v
   // A row's sums must not depend on which rows share its call (a kernel that
   // shares a tile's loads between neighbouring rows, or blocks them, must
   // still give each row exactly its own bits, where a partner's bits are
-  // clear too). Column counts around the packet (8) and two packets' panels.
+  // clear too). Column counts around the packet (8), the width where rows go
+  // in pairs (9 packets) and the pairs' panels (7 packets: 100 columns make
+  // 7 + 6, 129 make 7 + 7 + 3); all rows and all but the last (one of the
+  // two counts is odd).
   const Mesh scene = test::sphere_over_plane();
   const DirectionSet set = DirectionSet::cubemap(6);
   const TransportResult traced = test::trace_visibility_only(scene, set);
-  const std::size_t count = scene.vertex_count();
-  std::vector<std::uint32_t> vertices(count);
-  for (std::size_t v = 0; v < count; ++v) vertices[v] = static_cast<std::uint32_t>(v);
-  for (const Eigen::Index columns : {1, 8, 20, 58, 64, 65}) {
-    CAPTURE(columns);
-    const PaddedRows right(Eigen::MatrixXd::Random(set.size(), columns));
-    PaddedRows together, alone;
-    visible_times(scene, set, vertices.data(), count, traced.visibility.words(0), right, together);
-    Eigen::Index differing = 0;
-    for (std::size_t v = 0; v < count; ++v) {
-      visible_times(scene, set, &vertices[v], 1, traced.visibility.words(v), right, alone);
-      differing += (together.block(Eigen::Index(v), 1) != alone.block(0, 1)) ? 1 : 0;
+  std::vector<std::uint32_t> vertices(scene.vertex_count());
+  for (std::size_t v = 0; v < vertices.size(); ++v) vertices[v] = static_cast<std::uint32_t>(v);
+  for (const Eigen::Index columns : {1, 8, 20, 58, 64, 65, 72, 100, 129})
+    for (const std::size_t count : {vertices.size(), vertices.size() - 1}) {
+      CAPTURE(columns, count);
+      const PaddedRows right(Eigen::MatrixXd::Random(set.size(), columns));
+      PaddedRows together, alone;
+      visible_times(scene, set, vertices.data(), count, traced.visibility.words(0), right,
+                    together);
+      Eigen::Index differing = 0;
+      for (std::size_t v = 0; v < count; ++v) {
+        visible_times(scene, set, &vertices[v], 1, traced.visibility.words(v), right, alone);
+        differing += (together.block(Eigen::Index(v), 1) != alone.block(0, 1)) ? 1 : 0;
+      }
+      CHECK(differing == 0);
     }
-    CHECK(differing == 0);
-  }
 }
 
 TEST_CASE("visible products over shards: rows of the whole, sums the same bits on any ranks",
