@@ -187,9 +187,9 @@ struct TilePairKernel {
 // 8 packets (32 KB) stay in L1, wider ones are read from L2 (53 KB at order
 // 10). Two rows' sums stay in registers in panels of 7 packets (13 at order
 // 10: 7 + 6, faster than 8 + 5). For the bunny's bake the projection took
-// 34 ms against 49 (1,024 directions) and 165 against 253 (4,096); the
-// eigentransport products (8 packets) were slower in pairs (2.80-2.95x
-// their GEMM against 2.65-2.69x).
+// 34 ms against 49 (1,024 directions) and 127 against 190 (4,096). At
+// order 8 (8 packets) pairs took 24 ms against 18 single; at order 6
+// (5 packets) 12.9 against 13.3, not worth a second threshold.
 constexpr int kPairPanel = 7;
 constexpr Eigen::Index kPairedPackets = 9;  // the narrowest rows that go in pairs
 
