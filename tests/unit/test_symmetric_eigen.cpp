@@ -32,6 +32,23 @@ void check_pairs(const Eigen::MatrixXd& a, const Eigenpairs& pairs, double toler
   for (Eigen::Index i = 1; i < pairs.values.size(); ++i)
     CHECK(pairs.values[i] <= pairs.values[i - 1]);
 }
+
+// Eigenvalues 3, 3(1 + 1e-13), 3(1 - 1e-13), 3 and the rest spread in
+// [0, 1]; q's first four columns span the cluster's space.
+struct Clustered {
+  Eigen::MatrixXd a, q;
+};
+Clustered clustered(Eigen::Index n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd random(n, n);
+  for (auto& v : random.reshaped()) v = g(rng);
+  const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(random).householderQ();
+  Eigen::VectorXd spectrum = Eigen::VectorXd::LinSpaced(n, 0.0, 1.0);
+  spectrum.head(4) << 3, 3 * (1 + 1e-13), 3 * (1 - 1e-13), 3;
+  const Eigen::MatrixXd a = q * spectrum.asDiagonal() * q.transpose();
+  return {0.5 * (a + a.transpose()), q};
+}
 }  // namespace
 
 TEST_CASE("largest eigenpairs equal the full solver's", "[eigen][extremes]") {
@@ -120,17 +137,10 @@ TEST_CASE("largest eigenpairs with clustered eigenvalues, on either tridiagonal 
   // Eigenvalues equal to 1e-13 apart: inverse iteration must reorthogonalise
   // within the cluster, MRRR must separate it. n <= 16 count takes the first
   // (many pairs of a small matrix), n > 16 count the second.
-  std::mt19937_64 rng(5);
-  std::normal_distribution<double> g;
   for (const auto& [n, count] : {std::pair<Eigen::Index, Eigen::Index>{40, 8}, {200, 3}}) {
     INFO("n " << n << ", count " << count);
-    Eigen::MatrixXd random(n, n);
-    for (auto& v : random.reshaped()) v = g(rng);
-    const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(random).householderQ();
-    Eigen::VectorXd spectrum = Eigen::VectorXd::LinSpaced(n, 0.0, 1.0);
-    spectrum.head(4) << 3, 3 * (1 + 1e-13), 3 * (1 - 1e-13), 3;
-    const Eigen::MatrixXd a = q * spectrum.asDiagonal() * q.transpose();
-    const Eigenpairs pairs = largest_eigenpairs(0.5 * (a + a.transpose()), count);
+    const auto [a, q] = clustered(n, std::uint64_t(5 + n));
+    const Eigenpairs pairs = largest_eigenpairs(a, count);
     REQUIRE(pairs.values.size() == count);
     check_pairs(a, pairs, 1e-12);
     for (Eigen::Index i = 0; i < std::min<Eigen::Index>(count, 4); ++i)
@@ -140,4 +150,62 @@ TEST_CASE("largest eigenpairs with clustered eigenvalues, on either tridiagonal 
         q.leftCols(4).transpose() * pairs.vectors.leftCols(std::min<Eigen::Index>(count, 4));
     CHECK((in_space.colwise().norm().array() - 1).abs().maxCoeff() < 1e-10);
   }
+}
+
+TEST_CASE("batched largest eigenpairs agree with the single solver's", "[eigen][extremes]") {
+  std::vector<Eigen::MatrixXd> matrices;
+  for (Eigen::Index n : {3, 9, 17, 60, 100, 101, 150, 192, 240})
+    matrices.push_back(random_psd(n, n + 3, std::uint64_t(100 + n)));
+  matrices.push_back(random_psd(60, 4, 7));  // rank 4
+  matrices.push_back(Eigen::MatrixXd::Identity(30, 30));
+  matrices.push_back(clustered(40, 5).a);
+  Eigen::MatrixXd indefinite = Eigen::MatrixXd::Zero(3, 3);
+  indefinite.diagonal() << -5, 1, 3;
+  matrices.push_back(indefinite);
+  for (double scale : {1e-300, 1e300}) {
+    const Eigen::MatrixXd base = random_psd(40, 40, 11);
+    matrices.push_back(base * (scale / base.cwiseAbs().maxCoeff()));
+  }
+  matrices.push_back(Eigen::MatrixXd::Zero(12, 12));
+  Eigen::MatrixXd bad = random_psd(12, 12, 2);
+  bad(2, 3) = bad(3, 2) = std::numeric_limits<double>::quiet_NaN();
+  matrices.push_back(bad);
+  std::vector<const Eigen::MatrixXd*> pointers;
+  for (const auto& m : matrices) pointers.push_back(&m);
+  for (Eigen::Index count : {1, 3, 9}) {
+    const std::vector<Eigenpairs> batch = prt::largest_eigenpairs_batch(pointers, count);
+    REQUIRE(batch.size() == matrices.size());
+    for (std::size_t i = 0; i < matrices.size(); ++i) {
+      INFO("matrix " << i << " (" << matrices[i].rows() << " rows), count " << count);
+      const Eigenpairs single = largest_eigenpairs(matrices[i], count);
+      REQUIRE(batch[i].values.size() == single.values.size());
+      if (single.values.size() == 0) continue;  // not finite: none, as the single solver
+      REQUIRE(batch[i].vectors.rows() == matrices[i].rows());
+      const double top = std::max(std::abs(single.values[0]), 1e-300);
+      CHECK((batch[i].values - single.values).cwiseAbs().maxCoeff() <= 1e-12 * top);
+      if (single.values[0] != 0) check_pairs(matrices[i], batch[i], 1e-12);
+      CHECK(batch[i].vectors.allFinite());
+    }
+  }
+}
+
+TEST_CASE("a batched matrix's pairs do not depend on its batch", "[eigen]") {
+  // Alone, among larger matrices (padded to their size), and in another
+  // order: the same bits.
+  const Eigen::MatrixXd own = random_psd(57, 80, 3);
+  const Eigen::MatrixXd larger = random_psd(100, 120, 4), other = clustered(90, 6).a;
+  const Eigenpairs alone = prt::largest_eigenpairs_batch({&own}, 9).front();
+  const std::vector<Eigenpairs> mixed =
+      prt::largest_eigenpairs_batch({&larger, &own, &other, &larger, &own}, 9);
+  const std::vector<Eigenpairs> reversed =
+      prt::largest_eigenpairs_batch({&own, &larger, &other, &own, &larger}, 9);
+  for (const Eigenpairs* p : {&mixed[1], &mixed[4], &reversed[0], &reversed[3]}) {
+    CHECK(p->values == alone.values);
+    CHECK(p->vectors == alone.vectors);
+  }
+  CHECK(mixed[0].values == reversed[1].values);
+  CHECK(mixed[0].vectors == reversed[1].vectors);
+  check_pairs(own, alone, 1e-12);
+  const Eigen::MatrixXd wide = Eigen::MatrixXd::Zero(3, 4);
+  CHECK_THROWS_WITH(prt::largest_eigenpairs_batch({&wide}, 1), Catch::Contains("not square"));
 }

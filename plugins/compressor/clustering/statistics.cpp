@@ -4,7 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cstring>
+#include <tuple>
 
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
@@ -200,10 +202,21 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
         rows.shard,
         [&](Eigen::Index s) {
           const auto [begin, end] = rows.segment_rows(s);
-          std::map<std::int32_t, std::vector<Eigen::Index>> members;
+          // The segment's rows of each wanted cluster, in row order (a
+          // counting sort: a map of vectors per segment was most of the
+          // serial time of the scatter).
+          const std::size_t k = wanted.size();
+          std::vector<std::size_t> start(k + 1, 0);
           for (Eigen::Index p = begin; p < end; ++p) {
             const std::int32_t l = labels[std::size_t(p)];
-            if (l >= 0 && wanted[std::size_t(l)]) members[l].push_back(p);
+            if (l >= 0 && wanted[std::size_t(l)]) ++start[std::size_t(l) + 1];
+          }
+          for (std::size_t j = 0; j < k; ++j) start[j + 1] += start[j];
+          std::vector<Eigen::Index> sorted(start[k]);
+          std::vector<std::size_t> next(start.begin(), start.end() - 1);
+          for (Eigen::Index p = begin; p < end; ++p) {
+            const std::int32_t l = labels[std::size_t(p)];
+            if (l >= 0 && wanted[std::size_t(l)]) sorted[next[std::size_t(l)]++] = p;
           }
           // A cluster's block is one rank update of its members in row order
           // (the same bits on any thread); the clusters of a segment run on
@@ -212,18 +225,22 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
           Blocks out;
           struct Task {
             std::int32_t cluster;
-            const std::vector<Eigen::Index>* members;
+            const Eigen::Index* members;
+            std::size_t count;
             std::vector<double>* block;
           };
           std::vector<Task> tasks;
-          for (const auto& [cluster, list] : members)
-            tasks.push_back({cluster, &list, &out[cluster]});
+          for (std::size_t j = 0; j < k; ++j)
+            if (start[j + 1] > start[j])
+              tasks.push_back({std::int32_t(j), &sorted[start[j]], start[j + 1] - start[j],
+                               &out[std::int64_t(j)]});
           tbb::parallel_for(std::size_t(0), tasks.size(), [&](std::size_t i) {
             const std::int32_t cluster = tasks[i].cluster;
-            const std::vector<Eigen::Index>& list = *tasks[i].members;
+            const Eigen::Index* list = tasks[i].members;
+            const std::size_t count = tasks[i].count;
             ScatterScratch& scratch = scatter_scratch.local();
-            scratch.centred.resize(n, static_cast<Eigen::Index>(list.size()));
-            for (std::size_t j = 0; j < list.size(); ++j)
+            scratch.centred.resize(n, static_cast<Eigen::Index>(count));
+            for (std::size_t j = 0; j < count; ++j)
               scratch.centred.col(Eigen::Index(j)) =
                   (rows.x.row(list[j]).cast<double>() - means.row(cluster)).transpose();
             scratch.sum.setZero(n, n);
@@ -271,29 +288,32 @@ void keep_directions(const Eigen::VectorXd& values, const Eigen::MatrixXd& direc
   }
 }
 
-// The principal directions of one cluster from its n x n scatter.
-void directions_from_scatter(const Eigen::MatrixXd& scatter, ClusterModel& model) {
-  const Eigenpairs pairs = largest_eigenpairs(scatter, model.basis.rows());
-  keep_directions(pairs.values, pairs.vectors, model);
-}
+using CentredRows = Eigen::Map<RowMatrixXd>;
 
-// Rows `members` of x less the mean, in double, into `centred` (its storage
-// reused from cluster to cluster: a fresh matrix per cluster cost page faults).
-void centred_rows(RowsRef x, const std::vector<std::uint32_t>& members,
-                  const Eigen::RowVectorXd& mean, RowMatrixXd& centred) {
-  centred.resize(static_cast<Eigen::Index>(members.size()), x.cols());
+// Rows `members` of x less the mean, in double, into `storage` (kept from
+// batch to batch: fresh matrices per cluster cost page faults).
+CentredRows centred_rows(RowsRef x, const std::vector<std::uint32_t>& members,
+                         const Eigen::RowVectorXd& mean, std::vector<double>& storage) {
+  storage.resize(members.size() * std::size_t(x.cols()));
+  CentredRows centred(storage.data(), static_cast<Eigen::Index>(members.size()), x.cols());
   for (std::size_t q = 0; q < members.size(); ++q)
     centred.row(Eigen::Index(q)) = x.row(members[q]).cast<double>() - mean;
+  return centred;
 }
 
-// The same from the m x m Gram matrix of its m < n centred members Y: the
+// The m x m Gram matrix Y Y^T of a cluster's m < n centred members Y: the
 // scatter Y^T Y and Y Y^T share their nonzero eigenvalues, and Y^T w is the
 // scatter's eigenvector for the Gram's eigenvector w. m^3 instead of n^3.
-void directions_from_gram(const RowMatrixXd& centred, ClusterModel& model) {
+Eigen::MatrixXd gram_matrix(const CentredRows& centred) {
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(centred.rows(), centred.rows());
   gram.selfadjointView<Eigen::Lower>().rankUpdate(centred);
   gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
-  const Eigenpairs pairs = largest_eigenpairs(gram, model.basis.rows());
+  return gram;
+}
+
+// The directions Y^T w from the Gram matrix's pairs.
+void directions_from_gram(const CentredRows& centred, const Eigenpairs& pairs,
+                          ClusterModel& model) {
   if (pairs.values.size() == 0) return;  // not finite: the model keeps zero rows
   // Y^T w_i loses orthogonality as eps lambda_max / lambda_i: one modified
   // Gram-Schmidt pass, largest first (a rounding-level change for the others).
@@ -305,6 +325,38 @@ void directions_from_gram(const RowMatrixXd& centred, ClusterModel& model) {
     if (norm > 0 && std::isfinite(norm)) directions.col(i) /= norm;
   }
   keep_directions(pairs.values, directions, model);
+}
+
+// Batches of up to eight of `solved` (indices into which) with one component
+// count and one kind (Gram or scatter), sizes close together:
+// largest_eigenpairs_batch pads a batch to its largest. Matrices too large
+// to batch are solved one per task, on every core.
+std::vector<std::vector<std::size_t>> solve_batches(std::vector<std::size_t> solved,
+                                                    const std::vector<int>& which,
+                                                    const std::vector<bool>& gram,
+                                                    const std::vector<double>& counts,
+                                                    const std::vector<ClusterModel>& models,
+                                                    Eigen::Index dimension) {
+  constexpr std::size_t kBatch = 8;
+  const auto size = [&](std::size_t i) {
+    return gram[i] ? counts[std::size_t(which[i])] : double(dimension);
+  };
+  const auto key = [&](std::size_t i) {
+    return std::tuple(models[std::size_t(which[i])].basis.rows(), bool(gram[i]), size(i));
+  };
+  std::stable_sort(solved.begin(), solved.end(),
+                   [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
+  std::vector<std::vector<std::size_t>> batches;
+  for (std::size_t i : solved) {
+    if (batches.empty() || batches.back().size() == kBatch ||
+        size(i) > double(kLargestBatchedEigen) ||
+        size(batches.back().front()) > double(kLargestBatchedEigen) ||
+        std::get<0>(key(batches.back().front())) != std::get<0>(key(i)) ||
+        std::get<1>(key(batches.back().front())) != std::get<1>(key(i)))
+      batches.emplace_back();
+    batches.back().push_back(i);
+  }
+  return batches;
 }
 
 }  // namespace
@@ -346,21 +398,53 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   // Each rank solves every size-th cluster and the ranks share the results
   // (the same solver on the same matrix gives the same bits anywhere).
   const int rank = rows.comm.rank(), ranks = rows.comm.size();
-  tbb::enumerable_thread_specific<RowMatrixXd> centred;
-  tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) {
-    Progress::check_interrupt();  // one eigen-solve may take a while (glossy rows)
-    if (int(i % std::size_t(ranks)) != rank) return;
-    ClusterModel& model = models[std::size_t(which[i])];
-    if (!gram[i]) return directions_from_scatter(scatter.at(int(i)), model);
-    RowMatrixXd& y = centred.local();
-    if (rows.distributed())
-      y = gram_members.at(int(i)).cast<double>().rowwise() - model.mean;
-    else {
-      centred_rows(rows.x, members[std::size_t(which[i])], model.mean, y);
-      // Its members' pages go at once (most clusters are small for wide rows).
-      for (std::uint32_t p : members[std::size_t(which[i])]) rows.release(p, p + 1);
+  // Eight clusters per solve (largest_eigenpairs_batch: a cluster's result
+  // does not depend on which clusters share its batch), the batches on every
+  // core.
+  std::vector<std::size_t> mine;
+  for (std::size_t i = std::size_t(rank); i < which.size(); i += std::size_t(ranks))
+    mine.push_back(i);
+  const std::vector<std::vector<std::size_t>> batches =
+      solve_batches(std::move(mine), which, gram, sums.counts, models, n);
+  tbb::enumerable_thread_specific<std::vector<std::vector<double>>> centred_storage;
+  tbb::parallel_for(std::size_t(0), batches.size(), [&](std::size_t b) {
+    Progress::check_interrupt();  // eight eigen-solves may take a while (glossy rows)
+    const std::vector<std::size_t>& batch = batches[b];
+    const Eigen::Index count = models[std::size_t(which[batch.front()])].basis.rows();
+    std::vector<const Eigen::MatrixXd*> matrices;
+    if (!gram[batch.front()]) {
+      for (std::size_t i : batch) matrices.push_back(&scatter.at(int(i)));
+      const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
+      for (std::size_t q = 0; q < batch.size(); ++q) {
+        ClusterModel& model = models[std::size_t(which[batch[q]])];
+        keep_directions(pairs[q].values, pairs[q].vectors, model);
+      }
+      return;
     }
-    directions_from_gram(y, model);
+    std::vector<std::vector<double>>& storage = centred_storage.local();
+    storage.resize(std::max(storage.size(), batch.size()));
+    std::vector<CentredRows> centred;
+    std::vector<Eigen::MatrixXd> grams(batch.size());
+    for (std::size_t q = 0; q < batch.size(); ++q) {
+      const std::size_t i = batch[q];
+      const ClusterModel& model = models[std::size_t(which[i])];
+      if (rows.distributed()) {
+        const MatrixXfRow& y = gram_members.at(int(i));
+        storage[q].resize(std::size_t(y.size()));
+        centred.emplace_back(storage[q].data(), y.rows(), y.cols());
+        centred.back() = y.cast<double>().rowwise() - model.mean;
+      } else {
+        centred.push_back(
+            centred_rows(rows.x, members[std::size_t(which[i])], model.mean, storage[q]));
+        // Its members' pages go at once (most clusters are small for wide rows).
+        for (std::uint32_t p : members[std::size_t(which[i])]) rows.release(p, p + 1);
+      }
+      grams[q] = gram_matrix(centred[q]);
+      matrices.push_back(&grams[q]);
+    }
+    const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
+    for (std::size_t q = 0; q < batch.size(); ++q)
+      directions_from_gram(centred[q], pairs[q], models[std::size_t(which[batch[q]])]);
   });
   rows.release_all();  // the Gram clusters' members, read where they lie
   if (ranks > 1) {
