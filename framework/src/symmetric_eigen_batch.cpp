@@ -1,11 +1,11 @@
-// The largest eigenpairs of many symmetric matrices of one size, eight at a
-// time: each matrix in one lane of a 512-bit vector. Every step is a
-// vertical operation on eight independent problems (no sum across lanes), so
-// a matrix's result does not depend on which matrices share its batch, and
-// the latency-bound parts of a single solve (one division per step of a
-// Sturm count, one reflector at a time) overlap eight ways. Per matrix at
-// n = 100: ~60 us against ~150-240 us for largest_eigenpairs (see
-// docs/performance.md, "Clustering").
+// The largest eigenpairs of many symmetric matrices, eight at a time: each
+// matrix in one lane of a 512-bit vector, the smaller ones padded with zeros.
+// Every step is a vertical operation on eight independent problems (no sum
+// across lanes), so a matrix's result does not depend on which matrices
+// share its batch, and the latency-bound parts of a single solve (one
+// division per step of a Sturm count, one reflector at a time) overlap eight
+// ways. Per matrix at n = 100: 60-105 us for 2-9 pairs against 135-246 us
+// for largest_eigenpairs (docs/performance.md, "Clustering").
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
