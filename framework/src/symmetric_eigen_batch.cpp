@@ -42,9 +42,6 @@ Lanes lane_sqrt(Lanes x) {
 }
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
-// Larger matrices (kLargestBatchedEigen) go to the single solver: eight of
-// them no longer fit in L2 (8 n^2 doubles), and the batch's reduction reads
-// them from L3.
 
 // Householder reduction of each lane's lower triangle (column-major n x n in
 // `a`) to a tridiagonal (d, e), as LAPACK's dsytd2 'L': reflector k acts on
@@ -403,7 +400,8 @@ std::vector<Eigenpairs> largest_eigenpairs_batch(
     const Eigen::Index n = a.rows();
     const double scale = a.allFinite() ? a.cwiseAbs().maxCoeff() : 0.0;
     // Small, large, zero or non-finite matrices, and counts beyond the size:
-    // the single solver's answers.
+    // the single solver's answers. Over kLargestBatchedEigen, eight matrices
+    // no longer fit in L2 (8 n^2 doubles) and the batch gains little.
     if (n <= 2 || n > kLargestBatchedEigen || count <= 0 || count > n || !(scale > 0) ||
         !std::isfinite(scale)) {
       out[i] = largest_eigenpairs(a, count);
