@@ -1,3 +1,4 @@
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <catch2/catch.hpp>
 #include <limits>
@@ -108,6 +109,44 @@ TEST_CASE("cluster PCA: orthonormal, exact at full rank, safe when degenerate",
   CHECK(flat.basis.cwiseAbs().maxCoeff() == 0.0);
   CHECK(flat.mean.isApprox(Eigen::RowVectorXd::Ones(4)));
   CHECK(fit_cluster(same, {}, 3).mean.allFinite());
+}
+
+// The direct PCA of rows `members` of x: the scatter about the mean in double,
+// all its eigenpairs, largest first.
+std::pair<Eigen::VectorXd, Eigen::MatrixXd> direct_pca(const MatrixXfRow& x,
+                                                       const std::vector<std::uint32_t>& members) {
+  Eigen::RowVectorXd mean = Eigen::RowVectorXd::Zero(x.cols());
+  for (auto p : members) mean += x.row(p).cast<double>();
+  mean /= double(members.size());
+  Eigen::MatrixXd scatter = Eigen::MatrixXd::Zero(x.cols(), x.cols());
+  for (auto p : members) {
+    const Eigen::RowVectorXd d = x.row(p).cast<double>() - mean;
+    scatter += d.transpose() * d;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(scatter);
+  return {solver.eigenvalues().reverse(), solver.eigenvectors().rowwise().reverse()};
+}
+
+TEST_CASE("a cluster's PCA is the direct one whether its members are gathered or not",
+          "[clustering]") {
+  // 6 dimensions: a cluster of fewer than 6 points is fitted from its Gram
+  // matrix, one of at most kGatheredPointsPerDimension * 6 from its scatter,
+  // both of its gathered members; a larger one has its scatter summed over
+  // segments.
+  constexpr int n = 6;
+  const MatrixXfRow x = blobs(3000, n, 1, 11, 0.2f);
+  REQUIRE(kGatheredPointsPerDimension * n < 3000);
+  for (int points : {5, kGatheredPointsPerDimension * n, 3000}) {
+    INFO(points << " points");
+    std::vector<std::uint32_t> members(static_cast<std::size_t>(points));
+    std::iota(members.begin(), members.end(), 0u);
+    const ClusterModel model = fit_cluster(x, members, n - 1);
+    const auto [values, vectors] = direct_pca(x, members);
+    for (int i = 0; i < std::min(n, points) - 1; ++i) {  // 5 points: rank 4
+      CHECK(std::abs(model.eigenvalues[i] - values[i]) <= 1e-9 * values[0]);
+      CHECK(std::abs(model.basis.row(i).dot(vectors.col(i))) == Approx(1.0).epsilon(1e-9));
+    }
+  }
 }
 
 TEST_CASE("iterative CPCA beats static, adaptive beats iterative at equal storage",

@@ -2,6 +2,7 @@
 // are simulated by threads sharing an in-process Communicator, each holding a
 // shard of whole segments, and LBG, iterative and adaptive CPCA and the
 // segment sums are compared with one process on the whole signal.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <condition_variable>
 #include <filesystem>
@@ -172,11 +173,17 @@ TEST_CASE("compressed rows gather on rank 0 in vertex order", "[distributed]") {
 TEST_CASE("small clusters (Gram matrices) and large ones (scatter) fit alike on any rank count",
           "[distributed][clustering]") {
   // Clusters 0-39 have 25 members in 30 dimensions (fitted from their Gram
-  // matrix, members gathered across ranks); 40-42 have thousands (scatter).
+  // matrix) and 41-42 ~155 (from their scatter), members gathered across
+  // ranks; 40 has too many to gather (its scatter summed over segments).
   const MatrixXfRow x = clustered_rows(2 * kSegmentRows + 77, 30, 5);
   std::vector<std::int32_t> labels(std::size_t(x.rows()));
   for (std::size_t p = 0; p < labels.size(); ++p)
-    labels[p] = std::int32_t(p < 1000 ? p % 40 : 40 + p % 3);
+    labels[p] = std::int32_t(p < 1000 ? p % 40 : p % 100 < 2 ? 41 + p % 100 : 40);
+  const auto points = [&](int k) { return std::count(labels.begin(), labels.end(), k); };
+  const auto gathered = clustering::kGatheredPointsPerDimension * 30;
+  REQUIRE(points(41) > 30);
+  REQUIRE(points(41) <= gathered);
+  REQUIRE(points(40) > gathered);
   // Members of small clusters on every rank: spread them over the shards.
   std::swap_ranges(labels.begin() + 500, labels.begin() + 1000, labels.end() - 500);
   const std::vector<int> components(43, 4);

@@ -115,21 +115,22 @@ std::vector<double> cluster_counts(const Rows& rows, const std::vector<std::int3
 namespace {
 
 // In a distributed run, the member rows of the clusters this rank fits from
-// their Gram matrix, in global row order, sent by the ranks that hold them
-// (rank r's rows all precede rank r + 1's).
-std::map<int, MatrixXfRow> gram_rows(const Rows& rows,
-                                     const std::vector<std::vector<std::uint32_t>>& members,
-                                     const std::vector<int>& which, const std::vector<bool>& gram,
-                                     const std::vector<double>& counts) {
+// their members (`gathered`), in global row order, sent by the ranks that hold
+// them (rank r's rows all precede rank r + 1's).
+std::map<int, MatrixXfRow> gathered_rows(const Rows& rows,
+                                         const std::vector<std::vector<std::uint32_t>>& members,
+                                         const std::vector<int>& which,
+                                         const std::vector<bool>& gathered,
+                                         const std::vector<double>& counts) {
   const Eigen::Index n = rows.cols();
   const int rank = rows.comm.rank(), ranks = rows.comm.size();
   std::map<int, MatrixXfRow> out;
-  // Per root: every rank sends, for each Gram cluster the root solves, its
-  // local member count and rows.
+  // Per root: every rank sends, for each gathered cluster the root solves,
+  // its local member count and rows.
   for (int root = 0; root < ranks; ++root) {
     std::vector<char> mine;
     for (std::size_t i = std::size_t(root); i < which.size(); i += std::size_t(ranks)) {
-      if (!gram[i]) continue;
+      if (!gathered[i]) continue;
       const int cluster = which[i];
       const std::vector<std::uint32_t>& local = members[std::size_t(cluster)];
       const std::int64_t count = static_cast<std::int64_t>(local.size());
@@ -144,7 +145,7 @@ std::map<int, MatrixXfRow> gram_rows(const Rows& rows,
     if (root != rank) continue;
     std::vector<std::size_t> read(std::size_t(ranks), 0);
     for (std::size_t i = std::size_t(root); i < which.size(); i += std::size_t(ranks)) {
-      if (!gram[i]) continue;
+      if (!gathered[i]) continue;
       MatrixXfRow& y = out[int(i)];
       y.resize(Eigen::Index(counts[std::size_t(which[i])]), n);
       Eigen::Index at = 0;
@@ -169,8 +170,8 @@ std::map<int, MatrixXfRow> gram_rows(const Rows& rows,
   return out;
 }
 
-// Scatter sum_p (x_p - m)(x_p - m)^T of each cluster in `which` that is not
-// fitted from its Gram matrix: a block per cluster, only for the clusters a
+// Scatter sum_p (x_p - m)(x_p - m)^T of each cluster in `which` too large to
+// gather (`gathered` false): a block per cluster, only for the clusters a
 // segment touches, in passes over groups of clusters whose blocks stay within
 // kGroupBytes (the tree holds a few partials per thread at once).
 constexpr std::size_t kGroupBytes = std::size_t(64) << 20;
@@ -179,7 +180,7 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
                                                const std::vector<std::int32_t>& labels,
                                                const RowMatrixXd& means,
                                                const std::vector<int>& which,
-                                               const std::vector<bool>& gram) {
+                                               const std::vector<bool>& gathered) {
   const Eigen::Index n = rows.cols();
   // Every rank receives every rank's subtree roots: the bound is shared.
   const std::size_t group =
@@ -187,7 +188,7 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
                                    (sizeof(double) * std::size_t(n) * std::size_t(n)));
   std::vector<int> scattered;
   for (std::size_t i = 0; i < which.size(); ++i)
-    if (!gram[i]) scattered.push_back(int(i));
+    if (!gathered[i]) scattered.push_back(int(i));
   Blocks total;
   std::vector<bool> wanted(static_cast<std::size_t>(means.rows()), false);
   struct ScatterScratch {
@@ -304,11 +305,18 @@ CentredRows centred_rows(RowsRef x, const std::vector<std::uint32_t>& members,
 // The m x m Gram matrix Y Y^T of a cluster's m < n centred members Y: the
 // scatter Y^T Y and Y Y^T share their nonzero eigenvalues, and Y^T w is the
 // scatter's eigenvector for the Gram's eigenvector w. m^3 instead of n^3.
-Eigen::MatrixXd gram_matrix(const CentredRows& centred) {
-  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(centred.rows(), centred.rows());
+void gram_matrix(const CentredRows& centred, Eigen::MatrixXd& gram) {
+  gram.setZero(centred.rows(), centred.rows());
   gram.selfadjointView<Eigen::Lower>().rankUpdate(centred);
   gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
-  return gram;
+}
+
+// The n x n scatter Y^T Y of a cluster's gathered centred members Y: one rank
+// update in global row order, so the same bits on any number of ranks.
+void scatter_matrix(const CentredRows& centred, Eigen::MatrixXd& scatter) {
+  scatter.setZero(centred.cols(), centred.cols());
+  scatter.selfadjointView<Eigen::Lower>().rankUpdate(centred.transpose());
+  scatter.triangularView<Eigen::StrictlyUpper>() = scatter.transpose();
 }
 
 // The directions Y^T w from the Gram matrix's pairs.
@@ -383,18 +391,24 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     models[std::size_t(j)].mean = means.row(j);
     if (c > 0) which.push_back(j);
   }
-  // Small clusters from their Gram matrix (members gathered where they are
-  // solved), the others from their scatter summed over segments. The choice
-  // depends on the global count only, so every rank makes it alike.
-  std::vector<bool> gram(which.size());
-  for (std::size_t i = 0; i < which.size(); ++i)
-    gram[i] = sums.counts[std::size_t(which[i])] < double(n);
+  // Small clusters from their Gram matrix, the others from their scatter;
+  // both from the members gathered where the cluster is solved, in global
+  // row order, except clusters too large to gather, whose scatter is summed
+  // over segments. The choices depend on the global count only, so every
+  // rank makes them alike.
+  std::vector<bool> gram(which.size()), gathered(which.size());
+  for (std::size_t i = 0; i < which.size(); ++i) {
+    const double count = sums.counts[std::size_t(which[i])];
+    gram[i] = count < double(n);
+    gathered[i] = count <= double(kGatheredPointsPerDimension) * double(n);
+  }
   const auto members = members_of(labels, k);
   // A single process reads members where they are; ranks gather them.
-  const std::map<int, MatrixXfRow> gram_members =
-      rows.distributed() ? gram_rows(rows, members, which, gram, sums.counts)
+  const std::map<int, MatrixXfRow> gathered_members =
+      rows.distributed() ? gathered_rows(rows, members, which, gathered, sums.counts)
                          : std::map<int, MatrixXfRow>();
-  const std::map<int, Eigen::MatrixXd> scatter = cluster_scatter(rows, labels, means, which, gram);
+  const std::map<int, Eigen::MatrixXd> summed =
+      cluster_scatter(rows, labels, means, which, gathered);
   // Each rank solves every size-th cluster and the ranks share the results
   // (the same solver on the same matrix gives the same bits anywhere).
   const int rank = rows.comm.rank(), ranks = rows.comm.size();
@@ -406,47 +420,57 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     mine.push_back(i);
   const std::vector<std::vector<std::size_t>> batches =
       solve_batches(std::move(mine), which, gram, sums.counts, models, n);
-  tbb::enumerable_thread_specific<std::vector<std::vector<double>>> centred_storage;
+  // Per thread, kept from batch to batch (fresh matrices per cluster cost
+  // page faults): the batch's centred members and their matrices.
+  struct BatchScratch {
+    std::vector<std::vector<double>> centred;
+    std::vector<Eigen::MatrixXd> matrices;
+  };
+  tbb::enumerable_thread_specific<BatchScratch> batch_scratch;
   tbb::parallel_for(std::size_t(0), batches.size(), [&](std::size_t b) {
     Progress::check_interrupt();  // eight eigen-solves may take a while (glossy rows)
     const std::vector<std::size_t>& batch = batches[b];
     const Eigen::Index count = models[std::size_t(which[batch.front()])].basis.rows();
-    std::vector<const Eigen::MatrixXd*> matrices;
-    if (!gram[batch.front()]) {
-      for (std::size_t i : batch) matrices.push_back(&scatter.at(int(i)));
-      const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
-      for (std::size_t q = 0; q < batch.size(); ++q) {
-        ClusterModel& model = models[std::size_t(which[batch[q]])];
-        keep_directions(pairs[q].values, pairs[q].vectors, model);
-      }
-      return;
-    }
-    std::vector<std::vector<double>>& storage = centred_storage.local();
-    storage.resize(std::max(storage.size(), batch.size()));
+    BatchScratch& scratch = batch_scratch.local();
+    scratch.centred.resize(std::max(scratch.centred.size(), batch.size()));
+    scratch.matrices.resize(std::max(scratch.matrices.size(), batch.size()));
     std::vector<CentredRows> centred;
-    std::vector<Eigen::MatrixXd> grams(batch.size());
+    std::vector<const Eigen::MatrixXd*> matrices;
     for (std::size_t q = 0; q < batch.size(); ++q) {
       const std::size_t i = batch[q];
+      if (!gathered[i]) {
+        matrices.push_back(&summed.at(int(i)));
+        centred.emplace_back(nullptr, 0, n);
+        continue;
+      }
       const ClusterModel& model = models[std::size_t(which[i])];
       if (rows.distributed()) {
-        const MatrixXfRow& y = gram_members.at(int(i));
-        storage[q].resize(std::size_t(y.size()));
-        centred.emplace_back(storage[q].data(), y.rows(), y.cols());
+        const MatrixXfRow& y = gathered_members.at(int(i));
+        scratch.centred[q].resize(std::size_t(y.size()));
+        centred.emplace_back(scratch.centred[q].data(), y.rows(), y.cols());
         centred.back() = y.cast<double>().rowwise() - model.mean;
       } else {
         centred.push_back(
-            centred_rows(rows.x, members[std::size_t(which[i])], model.mean, storage[q]));
+            centred_rows(rows.x, members[std::size_t(which[i])], model.mean, scratch.centred[q]));
         // Its members' pages go at once (most clusters are small for wide rows).
         for (std::uint32_t p : members[std::size_t(which[i])]) rows.release(p, p + 1);
       }
-      grams[q] = gram_matrix(centred[q]);
-      matrices.push_back(&grams[q]);
+      if (gram[i])
+        gram_matrix(centred[q], scratch.matrices[q]);
+      else
+        scatter_matrix(centred[q], scratch.matrices[q]);
+      matrices.push_back(&scratch.matrices[q]);
     }
     const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
-    for (std::size_t q = 0; q < batch.size(); ++q)
-      directions_from_gram(centred[q], pairs[q], models[std::size_t(which[batch[q]])]);
+    for (std::size_t q = 0; q < batch.size(); ++q) {
+      ClusterModel& model = models[std::size_t(which[batch[q]])];
+      if (gram[batch[q]])
+        directions_from_gram(centred[q], pairs[q], model);
+      else
+        keep_directions(pairs[q].values, pairs[q].vectors, model);
+    }
   });
-  rows.release_all();  // the Gram clusters' members, read where they lie
+  rows.release_all();  // the gathered clusters' members, read where they lie
   if (ranks > 1) {
     std::vector<double> mine;
     for (std::size_t i = std::size_t(rank); i < which.size(); i += std::size_t(ranks)) {

@@ -136,11 +136,21 @@ struct FitReuse {
   int minimum = 0;
 };
 
+// A cluster of at most this many points per dimension (8n points of n
+// values) has its members gathered, where it is solved, to make its scatter
+// or Gram matrix: at most 8n^2 values per cluster, as in the Gram path (n^2).
+// A larger cluster's scatter is summed over segments instead, whose partials
+// are n x n whatever its size, so that an out-of-core or distributed fit never
+// holds a large cluster's rows.
+inline constexpr int kGatheredPointsPerDimension = 8;
+
 // Mean and PCA of every cluster: the largest eigenpairs of each cluster's
-// n x n scatter about its mean (summed over segments), or for clusters with
-// fewer than n points of their Gram matrix. Clusters with fewer points than
-// components, single points and identical points give zero rows, never NaN.
-// `counts` gets each cluster's size.
+// n x n scatter about its mean, or for clusters with fewer than n points of
+// their Gram matrix, both from its members in vertex order (one product, the
+// same bits on any number of ranks); the scatter of a cluster of more than
+// kGatheredPointsPerDimension * n points is summed over segments. Clusters
+// with fewer points than components, single points and identical points give
+// zero rows, never NaN. `counts` gets each cluster's size.
 std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::int32_t>& labels,
                                      int clusters, const std::vector<int>& components,
                                      std::vector<double>* counts = nullptr,
