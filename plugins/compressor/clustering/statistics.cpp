@@ -302,21 +302,17 @@ CentredRows centred_rows(RowsRef x, const std::vector<std::uint32_t>& members,
   return centred;
 }
 
-// The m x m Gram matrix Y Y^T of a cluster's m < n centred members Y: the
-// scatter Y^T Y and Y Y^T share their nonzero eigenvalues, and Y^T w is the
-// scatter's eigenvector for the Gram's eigenvector w. m^3 instead of n^3.
-void gram_matrix(const CentredRows& centred, Eigen::MatrixXd& gram) {
-  gram.setZero(centred.rows(), centred.rows());
-  gram.selfadjointView<Eigen::Lower>().rankUpdate(centred);
-  gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
-}
-
-// The n x n scatter Y^T Y of a cluster's gathered centred members Y: one rank
-// update in global row order, so the same bits on any number of ranks.
-void scatter_matrix(const CentredRows& centred, Eigen::MatrixXd& scatter) {
-  scatter.setZero(centred.cols(), centred.cols());
-  scatter.selfadjointView<Eigen::Lower>().rankUpdate(centred.transpose());
-  scatter.triangularView<Eigen::StrictlyUpper>() = scatter.transpose();
+// F F^T into `product`, both triangles, from one rank update of the lower.
+// For a cluster's centred members Y (rows in global row order, so the same
+// bits on any number of ranks): F = Y^T gives the n x n scatter Y^T Y, and
+// F = Y the m x m Gram matrix Y Y^T of a cluster of m < n points, which shares
+// the scatter's nonzero eigenvalues (Y^T w is the scatter's eigenvector for
+// the Gram's eigenvector w): m^3 instead of n^3.
+template <class Factor>
+void symmetric_product(const Factor& factor, Eigen::MatrixXd& product) {
+  product.setZero(factor.rows(), factor.rows());
+  product.selfadjointView<Eigen::Lower>().rankUpdate(factor);
+  product.triangularView<Eigen::StrictlyUpper>() = product.transpose();
 }
 
 // The directions Y^T w from the Gram matrix's pairs.
@@ -420,8 +416,9 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     mine.push_back(i);
   const std::vector<std::vector<std::size_t>> batches =
       solve_batches(std::move(mine), which, gram, sums.counts, models, n);
-  // Per thread, kept from batch to batch (fresh matrices per cluster cost
-  // page faults): the batch's centred members and their matrices.
+  // Per thread, kept from batch to batch: the batch's centred members and
+  // their matrices (a scatter of the last batch's size is reused without a
+  // new allocation; a Gram matrix of another size is reallocated).
   struct BatchScratch {
     std::vector<std::vector<double>> centred;
     std::vector<Eigen::MatrixXd> matrices;
@@ -456,9 +453,9 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
         for (std::uint32_t p : members[std::size_t(which[i])]) rows.release(p, p + 1);
       }
       if (gram[i])
-        gram_matrix(centred[q], scratch.matrices[q]);
+        symmetric_product(centred[q], scratch.matrices[q]);
       else
-        scatter_matrix(centred[q], scratch.matrices[q]);
+        symmetric_product(centred[q].transpose(), scratch.matrices[q]);
       matrices.push_back(&scratch.matrices[q]);
     }
     const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
