@@ -7,6 +7,7 @@
 #include <random>
 #include <set>
 
+#include "../../plugins/compressor/clustering/classify_kernel.hpp"
 #include "../../plugins/compressor/clustering/first_minimum.hpp"
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
@@ -286,4 +287,62 @@ TEST_CASE("first_minimum: the first smallest, as a scalar scan with <", "[cluste
   v[3] = nan;
   v[19] = -1.f;  // lane 3 of the second packet
   CHECK(first_minimum(v.data(), 40) == 19);
+}
+
+TEST_CASE("the packed classification picks the cluster of least approximation error",
+          "[clustering][extremes]") {
+  // Sizes that leave partial groups of 16 clusters, partial tiles of 4 rows
+  // and one to three passes over the component panels; some clusters have
+  // fewer directions than asked, some none.
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g;
+  for (const int n : {3, 100})
+    for (const int k : {1, 16, 37})
+      for (const int asked : {0, 1, 8, 13}) {
+        const int points = 23;
+        std::vector<ClusterModel> models(static_cast<std::size_t>(k));
+        for (int j = 0; j < k; ++j) {
+          const int count = std::min(n, j % 3 == 2 ? asked / 2 : asked);
+          Eigen::MatrixXd q = Eigen::MatrixXd::NullaryExpr(n, n, [&] { return g(rng); });
+          q = Eigen::HouseholderQR<Eigen::MatrixXd>(q).householderQ();
+          models[std::size_t(j)] = {
+              Eigen::RowVectorXd::NullaryExpr(n, [&] { return 0.3 * g(rng); }),
+              q.leftCols(count).transpose(), Eigen::VectorXd::Ones(count)};
+        }
+        MatrixXfRow x(points, n);
+        for (int p = 0; p < points; ++p) {  // along one cluster's directions
+          const ClusterModel& m = models[std::size_t(p % k)];
+          // Most of it along the last directions, which the last pass adds.
+          Eigen::VectorXd along(m.basis.rows());
+          for (Eigen::Index t = 0; t < along.size(); ++t) along[t] = double(1 + t) * g(rng);
+          x.row(p) = (m.mean + along.transpose() * m.basis +
+                      0.05 * Eigen::RowVectorXd::NullaryExpr(n, [&] {
+                        return g(rng);
+                      })).cast<float>();
+        }
+        const PackedClassifier packed = pack_classifier(models, asked);
+        std::vector<std::int32_t> labels(points, -1), split(points, -1);
+        std::vector<float> scratch;
+        classify_rows(x, 0, points, packed, labels.data(), scratch);
+        // A row's label does not depend on the block it is classified in.
+        classify_rows(x, 0, 5, packed, split.data(), scratch);
+        classify_rows(x, 5, points, packed, split.data() + 5, scratch);
+        CHECK(split == labels);
+        for (int p = 0; p < points; ++p) {
+          std::vector<double> error(static_cast<std::size_t>(k));
+          for (int j = 0; j < k; ++j) {
+            const ClusterModel& m = models[std::size_t(j)];
+            const Eigen::RowVectorXd d = x.row(p).cast<double>() - m.mean;
+            const Eigen::Index used = std::min<Eigen::Index>(asked, m.basis.rows());
+            error[std::size_t(j)] =
+                d.squaredNorm() - (m.basis.topRows(used) * d.transpose()).squaredNorm();
+          }
+          const double best = *std::min_element(error.begin(), error.end());
+          INFO("n " << n << ", k " << k << ", components " << asked << ", row " << p);
+          REQUIRE(labels[std::size_t(p)] >= 0);
+          REQUIRE(labels[std::size_t(p)] < k);
+          // Float rounding of |x|^2 - 2 x.m + |m|^2 (|x|^2 ~ 4n) may swap near ties only.
+          CHECK(error[std::size_t(labels[std::size_t(p)])] <= best + 1e-4 * (1 + 4 * n));
+        }
+      }
 }

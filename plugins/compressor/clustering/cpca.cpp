@@ -10,8 +10,8 @@
 #include <numeric>
 #include <optional>
 
+#include "classify_kernel.hpp"
 #include "cpca_state.hpp"
-#include "first_minimum.hpp"
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
 #include "prt/log.hpp"
@@ -22,103 +22,23 @@ namespace prt::clustering {
 
 namespace {
 
-// The classification's float operands, as the columns of one matrix: every
-// mean, then component t of every cluster that has one (clusters[t] lists
-// them, from column start[t]).
-struct Classifier {
-  Eigen::MatrixXf columns;                 // n x (k + components)
-  Eigen::RowVectorXf mean_norms;           // k
-  Eigen::RowVectorXf mean_projections;     // per column: u . mean (0 for means)
-  std::vector<Eigen::Index> start;         // per component t
-  std::vector<std::vector<int>> clusters;  // per component t
-};
-
-Classifier classifier(const std::vector<ClusterModel>& models, int components) {
-  const int k = static_cast<int>(models.size());
-  const Eigen::Index n = models.empty() ? 0 : models.front().mean.size();
-  Classifier c;
-  Eigen::Index width = k;
-  for (int t = 0; t < components; ++t) {
-    std::vector<int> with;
-    for (int j = 0; j < k; ++j)
-      if (models[j].basis.rows() > t) with.push_back(j);
-    if (with.empty()) break;
-    c.start.push_back(width);
-    width += Eigen::Index(with.size());
-    c.clusters.push_back(std::move(with));
-  }
-  c.columns.resize(n, width);
-  c.mean_norms.resize(k);
-  c.mean_projections = Eigen::RowVectorXf::Zero(width);
-  for (int j = 0; j < k; ++j) {
-    c.columns.col(j) = models[j].mean.transpose().cast<float>();
-    c.mean_norms[j] = static_cast<float>(models[j].mean.squaredNorm());
-  }
-  for (std::size_t t = 0; t < c.clusters.size(); ++t)
-    for (std::size_t q = 0; q < c.clusters[t].size(); ++q) {
-      const ClusterModel& m = models[std::size_t(c.clusters[t][q])];
-      const Eigen::Index column = c.start[t] + Eigen::Index(q);
-      c.columns.col(column) = m.basis.row(Eigen::Index(t)).transpose().cast<float>();
-      c.mean_projections[column] = static_cast<float>(m.basis.row(Eigen::Index(t)).dot(m.mean));
-    }
-  return c;
-}
-
 // Assigns every row to the cluster of least approximation error under the
 // first `components` directions of each model:
-// |x - m_j|^2 - sum_i ((x - m_j) . u_ji)^2, from one float GEMM per row
-// block; the sums over components vectorise over clusters. Returns the total
-// error and fills each row's error.
+// |x - m_j|^2 - sum_i ((x - m_j) . u_ji)^2 in float (classify_kernel.hpp).
+// Returns the total error and fills each row's error, in double.
 double classify(const Rows& rows, const std::vector<ClusterModel>& models, int components,
                 std::vector<std::int32_t>& labels, std::vector<double>& errors) {
   const auto& x = rows.x;
-  const int k = static_cast<int>(models.size());
-  const Classifier c = classifier(models, components);
-  // Per thread: the block's products and the per-cluster sums and errors,
-  // kept across blocks (no 2 MB allocation per block of 256 rows).
-  struct Scratch {
-    MatrixXfRow products;
-    std::vector<float> sum, error;
-  };
-  tbb::enumerable_thread_specific<Scratch> scratch;
-  for_each_row_block(
-      Eigen::Index(0), x.rows(), Eigen::Index(256), [&](Eigen::Index begin, Eigen::Index end) {
-        const Eigen::Index height = end - begin;
-        const auto block = x.middleRows(begin, height);
-        Scratch& local = scratch.local();
-        MatrixXfRow& products = local.products;
-        products.resize(height, c.columns.cols());
-        products.noalias() = block * c.columns;
-        std::vector<float>& sum = local.sum;
-        std::vector<float>& error = local.error;
-        sum.resize(std::size_t(k));
-        error.resize(std::size_t(k));
-        for (Eigen::Index i = 0; i < height; ++i) {
-          const float* p = products.row(i).data();
-          std::fill(sum.begin(), sum.end(), 0.f);
-          for (std::size_t t = 0; t < c.clusters.size(); ++t) {
-            const std::vector<int>& with = c.clusters[t];
-            const float* projection = p + c.start[t];
-            const float* offset = c.mean_projections.data() + c.start[t];
-            if (Eigen::Index(with.size()) == k) {
-              for (int j = 0; j < k; ++j) {
-                const float d = projection[j] - offset[j];
-                sum[std::size_t(j)] += d * d;
-              }
-            } else {
-              for (std::size_t q = 0; q < with.size(); ++q) {
-                const float d = projection[q] - offset[q];
-                sum[std::size_t(with[q])] += d * d;
-              }
-            }
-          }
-          const float row_norm = block.row(i).squaredNorm();
-          for (int j = 0; j < k; ++j)
-            error[std::size_t(j)] = row_norm - 2.f * p[j] + c.mean_norms[j] - sum[std::size_t(j)];
-          labels[std::size_t(begin + i)] = first_minimum(error.data(), k);
-        }
-        rows.release(begin, end);
-      });
+  const PackedClassifier c = pack_classifier(models, components);
+  // Per thread: each block's errors per row and cluster, kept across blocks.
+  tbb::enumerable_thread_specific<std::vector<float>> scratch;
+  // Blocks of ~256 KB of rows, so that a block stays in L2 beside a panel.
+  const Eigen::Index block = std::clamp<Eigen::Index>(65536 / std::max<Eigen::Index>(1, x.cols()),
+                                                      Eigen::Index(16), Eigen::Index(256));
+  for_each_row_block(Eigen::Index(0), x.rows(), block, [&](Eigen::Index begin, Eigen::Index end) {
+    classify_rows(x, begin, end, c, labels.data() + begin, scratch.local());
+    rows.release(begin, end);
+  });
   // Errors in double on every core; their sum through segments (the same
   // figure whatever the number of cores or ranks).
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, x.rows(), 1024), [&](const auto& r) {

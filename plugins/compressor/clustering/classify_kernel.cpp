@@ -1,0 +1,162 @@
+#include "classify_kernel.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <utility>
+
+#include "first_minimum.hpp"
+
+namespace prt::clustering {
+
+namespace {
+
+typedef float Lanes __attribute__((vector_size(64)));
+static_assert(sizeof(Lanes) == kClassifyLanes * sizeof(float));
+
+// A tile is kRows rows by up to kTypes of a group's panel columns: 24
+// accumulators, each register's panel values used by four rows.
+constexpr int kRows = 4;
+constexpr int kTypes = 6;
+
+Lanes load(const float* p) {
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+void store(float* p, const Lanes& v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+// The dots of R rows with types [first, first + C) of one group (`panel` and
+// `offset` point at type `first`), folded into each row's base
+// (|x|^2 - 2 x . m + |m|^2, when the mean is among them) and sum of squared
+// projections. Unrolled for registers: R x C accumulators.
+template <int R, int C>
+void tile(const float* const* rows, Eigen::Index n, const float* panel, int types,
+          const float* offset, bool mean, const float* row_norms, const float* mean_norms,
+          Lanes* base, Lanes* sum) {
+  Lanes dot[R][C] = {};
+  const std::size_t stride = std::size_t(types) * kClassifyLanes;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const float* p = panel + std::size_t(i) * stride;
+    Lanes column[C];
+    for (int c = 0; c < C; ++c) {
+      column[c] = load(p + c * kClassifyLanes);
+      // In a register, read once for all R rows: folded into each
+      // multiply-add as a memory operand, the loads outnumbered the FMAs.
+      asm("" : "+v"(column[c]));
+    }
+    for (int r = 0; r < R; ++r) {
+      const float value = rows[r][i];
+      for (int c = 0; c < C; ++c) dot[r][c] += value * column[c];
+    }
+  }
+  int c = 0;
+  if (mean) {
+    const Lanes norms = load(mean_norms);
+    for (int r = 0; r < R; ++r) base[r] = row_norms[r] - 2.f * dot[r][0] + norms;
+    c = 1;
+  }
+  for (; c < C; ++c) {
+    const Lanes projection_of_mean = load(offset + c * kClassifyLanes);
+    for (int r = 0; r < R; ++r) {
+      const Lanes d = dot[r][c] - projection_of_mean;
+      sum[r] += d * d;
+    }
+  }
+}
+
+using Tile = void (*)(const float* const*, Eigen::Index, const float*, int, const float*, bool,
+                      const float*, const float*, Lanes*, Lanes*);
+
+template <int R, int... C>
+constexpr std::array<Tile, sizeof...(C)> tiles_of_rows(std::integer_sequence<int, C...>) {
+  return {&tile<R, C + 1>...};
+}
+
+template <int... R>
+constexpr std::array<std::array<Tile, kTypes>, sizeof...(R)> tiles(
+    std::integer_sequence<int, R...>) {
+  return {tiles_of_rows<R + 1>(std::make_integer_sequence<int, kTypes>())...};
+}
+
+// tile<R, C> for R in 1..kRows, C in 1..kTypes.
+constexpr auto kTiles = tiles(std::make_integer_sequence<int, kRows>());
+
+}  // namespace
+
+PackedClassifier pack_classifier(const std::vector<ClusterModel>& models, int components) {
+  PackedClassifier c;
+  c.clusters = static_cast<int>(models.size());
+  c.dimension = models.empty() ? 0 : models.front().mean.size();
+  c.groups = (c.clusters + kClassifyLanes - 1) / kClassifyLanes;
+  // Components up to the first that no cluster has.
+  int used = 0;
+  while (used < components && std::any_of(models.begin(), models.end(), [&](const ClusterModel& m) {
+           return m.basis.rows() > used;
+         }))
+    ++used;
+  c.types = 1 + used;
+  const std::size_t n = std::size_t(c.dimension), types = std::size_t(c.types);
+  const std::size_t lanes = std::size_t(c.groups) * kClassifyLanes;
+  c.panels.assign(lanes * n * types, 0.f);
+  c.offsets.assign(lanes * types, 0.f);
+  c.mean_norms.assign(lanes, 0.f);
+  for (std::size_t j = 0; j < models.size(); ++j) {
+    const ClusterModel& m = models[j];
+    const std::size_t g = j / kClassifyLanes, lane = j % kClassifyLanes;
+    const auto at = [&](std::size_t i, std::size_t type) {
+      return ((g * n + i) * types + type) * kClassifyLanes + lane;
+    };
+    for (std::size_t i = 0; i < n; ++i) c.panels[at(i, 0)] = float(m.mean[Eigen::Index(i)]);
+    for (std::size_t t = 0; t < std::size_t(used) && Eigen::Index(t) < m.basis.rows(); ++t) {
+      for (std::size_t i = 0; i < n; ++i)
+        c.panels[at(i, t + 1)] = float(m.basis(Eigen::Index(t), Eigen::Index(i)));
+      c.offsets[(g * types + t + 1) * kClassifyLanes + lane] =
+          float(m.basis.row(Eigen::Index(t)).dot(m.mean));
+    }
+    c.mean_norms[j] = float(m.mean.squaredNorm());
+  }
+  return c;
+}
+
+void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
+                   std::int32_t* labels, std::vector<float>& errors) {
+  const Eigen::Index n = c.dimension, height = end - begin;
+  const std::size_t width = std::size_t(c.groups) * kClassifyLanes;
+  errors.resize(std::size_t(height) * width + std::size_t(height));
+  float* row_norms = errors.data() + std::size_t(height) * width;
+  for (Eigen::Index r = 0; r < height; ++r) row_norms[r] = x.row(begin + r).squaredNorm();
+  // The types in passes of at most kTypes, as even as they go.
+  const int passes = (c.types + kTypes - 1) / kTypes;
+  const std::size_t group_panel = std::size_t(n) * std::size_t(c.types) * kClassifyLanes;
+  for (int g = 0; g < c.groups; ++g) {
+    const float* panel = c.panels.data() + std::size_t(g) * group_panel;
+    const float* offsets =
+        c.offsets.data() + std::size_t(g) * std::size_t(c.types) * kClassifyLanes;
+    const float* mean_norms = c.mean_norms.data() + std::size_t(g) * kClassifyLanes;
+    for (Eigen::Index r0 = 0; r0 < height; r0 += kRows) {
+      const int rows = int(std::min<Eigen::Index>(kRows, height - r0));
+      const float* row[kRows];
+      for (int r = 0; r < rows; ++r) row[r] = x.row(begin + r0 + r).data();
+      Lanes base[kRows] = {}, sum[kRows] = {};
+      for (int pass = 0, first = 0; pass < passes; ++pass) {
+        const int count = c.types / passes + (pass < c.types % passes ? 1 : 0);
+        kTiles[std::size_t(rows - 1)][std::size_t(count - 1)](
+            row, n, panel + std::size_t(first) * kClassifyLanes, c.types,
+            offsets + std::size_t(first) * kClassifyLanes, first == 0, row_norms + r0, mean_norms,
+            base, sum);
+        first += count;
+      }
+      for (int r = 0; r < rows; ++r)
+        store(&errors[std::size_t(r0 + r) * width + std::size_t(g) * kClassifyLanes],
+              base[r] - sum[r]);
+    }
+  }
+  for (Eigen::Index r = 0; r < height; ++r)
+    labels[r] = first_minimum(&errors[std::size_t(r) * width], c.clusters);
+}
+
+}  // namespace prt::clustering
