@@ -9,6 +9,7 @@
 
 #include "../../plugins/compressor/clustering/classify_kernel.hpp"
 #include "../../plugins/compressor/clustering/first_minimum.hpp"
+#include "../../plugins/compressor/clustering/lower_product.hpp"
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
 
@@ -345,4 +346,28 @@ TEST_CASE("the packed classification picks the cluster of least approximation er
           CHECK(error[std::size_t(labels[std::size_t(p)])] <= best + 1e-4 * (1 + 4 * n));
         }
       }
+}
+
+TEST_CASE("lower_product is A^T A, exactly symmetric, for any width and depth",
+          "[clustering][extremes]") {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g;
+  for (const Eigen::Index width : {0, 1, 7, 8, 9, 23, 24, 25, 150})
+    for (const Eigen::Index depth : {0, 1, 5, 600}) {
+      const Eigen::Index stride = (width + 7) / 8 * 8;
+      std::vector<double> a(std::size_t(depth * stride), 0.0);
+      Eigen::MatrixXd dense(depth, width);
+      for (Eigen::Index i = 0; i < depth; ++i)
+        for (Eigen::Index j = 0; j < width; ++j)
+          a[std::size_t(i * stride + j)] = dense(i, j) = g(rng);
+      Eigen::MatrixXd out = Eigen::MatrixXd::Constant(3, 3, 7.0);  // resized, overwritten
+      lower_product(a.data(), depth, width, stride, out);
+      INFO("width " << width << ", depth " << depth);
+      REQUIRE(out.rows() == width);
+      REQUIRE(out.cols() == width);
+      if (width == 0) continue;
+      const Eigen::MatrixXd direct = dense.transpose() * dense;
+      CHECK((out - direct).cwiseAbs().maxCoeff() <= 1e-12 * (1.0 + double(depth)));
+      CHECK(out == out.transpose());
+    }
 }

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <tuple>
 
+#include "lower_product.hpp"
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
 #include "prt/error.hpp"
@@ -289,39 +290,58 @@ void keep_directions(const Eigen::VectorXd& values, const Eigen::MatrixXd& direc
   }
 }
 
-using CentredRows = Eigen::Map<RowMatrixXd>;
+// A cluster's centred members Y (m x n, rows in global row order, so the
+// same bits on any number of ranks), laid out for lower_product: Y itself
+// for the n x n scatter Y^T Y, or Y^T for the m x m Gram matrix Y Y^T of a
+// cluster of m < n points, which shares the scatter's nonzero eigenvalues
+// (Y^T w is the scatter's eigenvector for the Gram's eigenvector w): m^3
+// instead of n^3.
+struct CentredMembers {
+  const double* a = nullptr;
+  Eigen::Index depth = 0, width = 0, stride = 0;
+};
 
-// Rows `members` of x less the mean, in double, into `storage` (kept from
-// batch to batch: fresh matrices per cluster cost page faults).
-CentredRows centred_rows(RowsRef x, const std::vector<std::uint32_t>& members,
-                         const Eigen::RowVectorXd& mean, std::vector<double>& storage) {
-  storage.resize(members.size() * std::size_t(x.cols()));
-  CentredRows centred(storage.data(), static_cast<Eigen::Index>(members.size()), x.cols());
-  for (std::size_t q = 0; q < members.size(); ++q)
-    centred.row(Eigen::Index(q)) = x.row(members[q]).cast<double>() - mean;
-  return centred;
-}
-
-// F F^T into `product`, both triangles, from one rank update of the lower.
-// For a cluster's centred members Y (rows in global row order, so the same
-// bits on any number of ranks): F = Y^T gives the n x n scatter Y^T Y, and
-// F = Y the m x m Gram matrix Y Y^T of a cluster of m < n points, which shares
-// the scatter's nonzero eigenvalues (Y^T w is the scatter's eigenvector for
-// the Gram's eigenvector w): m^3 instead of n^3.
-template <class Factor>
-void symmetric_product(const Factor& factor, Eigen::MatrixXd& product) {
-  product.setZero(factor.rows(), factor.rows());
-  product.selfadjointView<Eigen::Lower>().rankUpdate(factor);
-  product.triangularView<Eigen::StrictlyUpper>() = product.transpose();
+// Y from member q's float row `row(q)` less the mean, in double, into
+// `storage` (kept from batch to batch: fresh matrices per cluster cost page
+// faults), its rows padded with zeros.
+template <class Row>
+CentredMembers centre_members(Eigen::Index m, const Row& row, const Eigen::RowVectorXd& mean,
+                              bool gram, std::vector<double>& storage) {
+  const Eigen::Index n = mean.size();
+  CentredMembers y;
+  y.depth = gram ? n : m;
+  y.width = gram ? m : n;
+  y.stride = (y.width + kLowerProductLanes - 1) / kLowerProductLanes * kLowerProductLanes;
+  storage.assign(std::size_t(y.depth * y.stride), 0.0);
+  if (!gram) {
+    for (Eigen::Index q = 0; q < m; ++q) {
+      const auto x = row(q);
+      for (Eigen::Index i = 0; i < n; ++i)
+        storage[std::size_t(q * y.stride + i)] = double(x[i]) - mean[i];
+    }
+  } else {
+    // Eight members at a time: whole cache lines of Y^T per dimension.
+    for (Eigen::Index q0 = 0; q0 < m; q0 += kLowerProductLanes) {
+      const Eigen::Index count = std::min(kLowerProductLanes, m - q0);
+      const float* source[kLowerProductLanes];
+      for (Eigen::Index r = 0; r < count; ++r) source[r] = row(q0 + r).data();
+      for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index r = 0; r < count; ++r)
+          storage[std::size_t(i * y.stride + q0 + r)] = double(source[r][i]) - mean[i];
+    }
+  }
+  y.a = storage.data();
+  return y;
 }
 
 // The directions Y^T w from the Gram matrix's pairs.
-void directions_from_gram(const CentredRows& centred, const Eigenpairs& pairs,
-                          ClusterModel& model) {
+void directions_from_gram(const CentredMembers& y, const Eigenpairs& pairs, ClusterModel& model) {
   if (pairs.values.size() == 0) return;  // not finite: the model keeps zero rows
   // Y^T w_i loses orthogonality as eps lambda_max / lambda_i: one modified
   // Gram-Schmidt pass, largest first (a rounding-level change for the others).
-  Eigen::MatrixXd directions = centred.transpose() * pairs.vectors;
+  const Eigen::Map<const RowMatrixXd, 0, Eigen::OuterStride<>> transposed(
+      y.a, y.depth, y.width, Eigen::OuterStride<>(y.stride));
+  Eigen::MatrixXd directions = transposed * pairs.vectors;
   for (Eigen::Index i = 0; i < directions.cols(); ++i) {
     for (Eigen::Index j = 0; j < i; ++j)
       directions.col(i) -= directions.col(j).dot(directions.col(i)) * directions.col(j);
@@ -431,31 +451,31 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     BatchScratch& scratch = batch_scratch.local();
     scratch.centred.resize(std::max(scratch.centred.size(), batch.size()));
     scratch.matrices.resize(std::max(scratch.matrices.size(), batch.size()));
-    std::vector<CentredRows> centred;
+    std::vector<CentredMembers> centred(batch.size());
     std::vector<const Eigen::MatrixXd*> matrices;
     for (std::size_t q = 0; q < batch.size(); ++q) {
       const std::size_t i = batch[q];
       if (!gathered[i]) {
         matrices.push_back(&summed.at(int(i)));
-        centred.emplace_back(nullptr, 0, n);
         continue;
       }
       const ClusterModel& model = models[std::size_t(which[i])];
       if (rows.distributed()) {
         const MatrixXfRow& y = gathered_members.at(int(i));
-        scratch.centred[q].resize(std::size_t(y.size()));
-        centred.emplace_back(scratch.centred[q].data(), y.rows(), y.cols());
-        centred.back() = y.cast<double>().rowwise() - model.mean;
+        centred[q] = centre_members(
+            y.rows(), [&](Eigen::Index p) { return y.row(p); }, model.mean, gram[i],
+            scratch.centred[q]);
       } else {
-        centred.push_back(
-            centred_rows(rows.x, members[std::size_t(which[i])], model.mean, scratch.centred[q]));
+        const std::vector<std::uint32_t>& list = members[std::size_t(which[i])];
+        centred[q] = centre_members(
+            Eigen::Index(list.size()),
+            [&](Eigen::Index p) { return rows.x.row(list[std::size_t(p)]); }, model.mean, gram[i],
+            scratch.centred[q]);
         // Its members' pages go at once (most clusters are small for wide rows).
-        for (std::uint32_t p : members[std::size_t(which[i])]) rows.release(p, p + 1);
+        for (std::uint32_t p : list) rows.release(p, p + 1);
       }
-      if (gram[i])
-        symmetric_product(centred[q], scratch.matrices[q]);
-      else
-        symmetric_product(centred[q].transpose(), scratch.matrices[q]);
+      lower_product(centred[q].a, centred[q].depth, centred[q].width, centred[q].stride,
+                    scratch.matrices[q]);
       matrices.push_back(&scratch.matrices[q]);
     }
     const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
