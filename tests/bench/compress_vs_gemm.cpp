@@ -5,7 +5,8 @@
 // For every iteration of LBG and of iterative/adaptive CPCA it prints the
 // iteration's wall time next to the time of one float GEMM of the same shape
 // (rows x inner x cols: the data times all means and representatives), and
-// the ratio. The GEMM is the lower limit of an iteration's classification.
+// the ratio. The GEMM does the multiply-adds of an iteration's
+// classification (LBG's is one; CPCA's packed pass does them faster).
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -25,7 +26,7 @@
 namespace {
 // Best of three float GEMMs of the shape, on all cores (row blocks over TBB,
 // as Eigen alone runs one thread without OpenMP). Each thread writes into a
-// buffer of its own, kept across blocks and runs, as the classification
+// buffer of its own, kept across blocks and runs, as LBG's classification
 // keeps its products: a fresh result per block would add allocation and page
 // faults to the bound.
 double gemm_seconds(Eigen::Index rows, Eigen::Index inner, Eigen::Index cols) {

@@ -299,11 +299,14 @@ TEST_CASE("the packed classification picks the cluster of least approximation er
   std::normal_distribution<double> g;
   for (const int n : {3, 100})
     for (const int k : {1, 16, 37})
-      for (const int asked : {0, 1, 8, 13}) {
+      for (const int asked : {0, 1, 5, 6, 8, 11, 13}) {
         const int points = 23;
         std::vector<ClusterModel> models(static_cast<std::size_t>(k));
         for (int j = 0; j < k; ++j) {
-          const int count = std::min(n, j % 3 == 2 ? asked / 2 : asked);
+          // One direction more than asked where there is room (as a refit
+          // fits), fewer for some, and a last group of narrow clusters.
+          const int count =
+              std::min(n, j % 3 == 2 ? asked / 2 + 1 : (j >= 32 ? std::min(asked, 1) : asked + 1));
           Eigen::MatrixXd q = Eigen::MatrixXd::NullaryExpr(n, n, [&] { return g(rng); });
           q = Eigen::HouseholderQR<Eigen::MatrixXd>(q).householderQ();
           models[std::size_t(j)] = {
@@ -342,7 +345,7 @@ TEST_CASE("the packed classification picks the cluster of least approximation er
           INFO("n " << n << ", k " << k << ", components " << asked << ", row " << p);
           REQUIRE(labels[std::size_t(p)] >= 0);
           REQUIRE(labels[std::size_t(p)] < k);
-          // Float rounding of |x|^2 - 2 x.m + |m|^2 (|x|^2 ~ 4n) may swap near ties only.
+          // Float rounding of |x|^2 - 2 x.m + |m|^2 may swap near ties only.
           CHECK(error[std::size_t(labels[std::size_t(p)])] <= best + 1e-4 * (1 + 4 * n));
         }
       }
@@ -370,4 +373,27 @@ TEST_CASE("lower_product is A^T A, exactly symmetric, for any width and depth",
       CHECK((out - direct).cwiseAbs().maxCoeff() <= 1e-12 * (1.0 + double(depth)));
       CHECK(out == out.transpose());
     }
+}
+
+TEST_CASE("the packed classification keeps the first of equal clusters and checks the dimension",
+          "[clustering][extremes]") {
+  // Clusters 3 and 19 (lane 3 of the first and second groups) are the same
+  // model: the first wins, as a scalar scan with < keeps it.
+  std::vector<ClusterModel> models(20);
+  for (int j = 0; j < 20; ++j)
+    models[std::size_t(j)] = {Eigen::RowVectorXd::Constant(5, 10.0 + j), RowMatrixXd::Zero(1, 5),
+                              Eigen::VectorXd::Ones(1)};
+  models[19] = models[3];
+  models[3].basis(0, 0) = models[19].basis(0, 0) = 1;
+  MatrixXfRow x = MatrixXfRow::Constant(6, 5, 13.f);
+  const PackedClassifier packed = pack_classifier(models, 1);
+  std::vector<std::int32_t> labels(6, -1);
+  std::vector<float> scratch;
+  classify_rows(x, 0, 6, packed, labels.data(), scratch);
+  CHECK(labels == std::vector<std::int32_t>(6, 3));
+  classify_rows(x, 2, 2, packed, labels.data(), scratch);  // no rows: nothing written
+  CHECK(labels == std::vector<std::int32_t>(6, 3));
+  const MatrixXfRow wrong = MatrixXfRow::Zero(2, 4);
+  CHECK_THROWS_WITH(classify_rows(wrong, 0, 2, packed, labels.data(), scratch),
+                    Catch::Contains("rows of 4 values") && Catch::Contains("models of 5"));
 }

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <string>
 #include <utility>
 
 #include "first_minimum.hpp"
+#include "prt/error.hpp"
 
 namespace prt::clustering {
 
@@ -46,7 +48,9 @@ void tile(const float* const* rows, Eigen::Index n, const float* panel, int type
       column[c] = load(p + c * kClassifyLanes);
       // In a register, read once for all R rows: folded into each
       // multiply-add as a memory operand, the loads outnumbered the FMAs.
+#ifdef __AVX512F__
       asm("" : "+v"(column[c]));
+#endif
     }
     for (int r = 0; r < R; ++r) {
       const float value = rows[r][i];
@@ -92,29 +96,34 @@ PackedClassifier pack_classifier(const std::vector<ClusterModel>& models, int co
   c.clusters = static_cast<int>(models.size());
   c.dimension = models.empty() ? 0 : models.front().mean.size();
   c.groups = (c.clusters + kClassifyLanes - 1) / kClassifyLanes;
-  // Components up to the first that no cluster has.
-  int used = 0;
-  while (used < components && std::any_of(models.begin(), models.end(), [&](const ClusterModel& m) {
-           return m.basis.rows() > used;
-         }))
-    ++used;
-  c.types = 1 + used;
-  const std::size_t n = std::size_t(c.dimension), types = std::size_t(c.types);
-  const std::size_t lanes = std::size_t(c.groups) * kClassifyLanes;
-  c.panels.assign(lanes * n * types, 0.f);
-  c.offsets.assign(lanes * types, 0.f);
-  c.mean_norms.assign(lanes, 0.f);
+  // Per group, the mean and its clusters' components up to the widest of
+  // them (adaptive CPCA gives clusters uneven counts: one cluster of 24
+  // directions must not make every group 25 types wide).
+  const auto used = [&](std::size_t j) {
+    return int(std::min<Eigen::Index>(components, models[j].basis.rows()));
+  };
+  c.types.assign(std::size_t(c.groups), 1);
+  for (std::size_t j = 0; j < models.size(); ++j)
+    c.types[j / kClassifyLanes] = std::max(c.types[j / kClassifyLanes], 1 + used(j));
+  const std::size_t n = std::size_t(c.dimension);
+  c.panel_start.assign(std::size_t(c.groups) + 1, 0);
+  for (std::size_t g = 0; g < std::size_t(c.groups); ++g)
+    c.panel_start[g + 1] = c.panel_start[g] + std::size_t(c.types[g]) * kClassifyLanes;
+  c.panels.assign(c.panel_start.back() * n, 0.f);
+  c.offsets.assign(c.panel_start.back(), 0.f);
+  c.mean_norms.assign(std::size_t(c.groups) * kClassifyLanes, 0.f);
   for (std::size_t j = 0; j < models.size(); ++j) {
     const ClusterModel& m = models[j];
     const std::size_t g = j / kClassifyLanes, lane = j % kClassifyLanes;
+    const std::size_t types = std::size_t(c.types[g]);
     const auto at = [&](std::size_t i, std::size_t type) {
-      return ((g * n + i) * types + type) * kClassifyLanes + lane;
+      return c.panel_start[g] * n + (i * types + type) * kClassifyLanes + lane;
     };
     for (std::size_t i = 0; i < n; ++i) c.panels[at(i, 0)] = float(m.mean[Eigen::Index(i)]);
-    for (std::size_t t = 0; t < std::size_t(used) && Eigen::Index(t) < m.basis.rows(); ++t) {
+    for (std::size_t t = 0; t < std::size_t(used(j)); ++t) {
       for (std::size_t i = 0; i < n; ++i)
         c.panels[at(i, t + 1)] = float(m.basis(Eigen::Index(t), Eigen::Index(i)));
-      c.offsets[(g * types + t + 1) * kClassifyLanes + lane] =
+      c.offsets[c.panel_start[g] + (t + 1) * kClassifyLanes + lane] =
           float(m.basis.row(Eigen::Index(t)).dot(m.mean));
     }
     c.mean_norms[j] = float(m.mean.squaredNorm());
@@ -125,27 +134,29 @@ PackedClassifier pack_classifier(const std::vector<ClusterModel>& models, int co
 void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
                    std::int32_t* labels, std::vector<float>& errors) {
   const Eigen::Index n = c.dimension, height = end - begin;
+  if (x.cols() != n)
+    throw Error("clustering: rows of " + std::to_string(x.cols()) +
+                " values classified against models of " + std::to_string(n));
   const std::size_t width = std::size_t(c.groups) * kClassifyLanes;
   errors.resize(std::size_t(height) * width + std::size_t(height));
   float* row_norms = errors.data() + std::size_t(height) * width;
   for (Eigen::Index r = 0; r < height; ++r) row_norms[r] = x.row(begin + r).squaredNorm();
-  // The types in passes of at most kTypes, as even as they go.
-  const int passes = (c.types + kTypes - 1) / kTypes;
-  const std::size_t group_panel = std::size_t(n) * std::size_t(c.types) * kClassifyLanes;
   for (int g = 0; g < c.groups; ++g) {
-    const float* panel = c.panels.data() + std::size_t(g) * group_panel;
-    const float* offsets =
-        c.offsets.data() + std::size_t(g) * std::size_t(c.types) * kClassifyLanes;
+    const int types = c.types[std::size_t(g)];
+    const float* panel = c.panels.data() + c.panel_start[std::size_t(g)] * std::size_t(n);
+    const float* offsets = c.offsets.data() + c.panel_start[std::size_t(g)];
     const float* mean_norms = c.mean_norms.data() + std::size_t(g) * kClassifyLanes;
+    // The types in passes of at most kTypes, as even as they go.
+    const int passes = (types + kTypes - 1) / kTypes;
     for (Eigen::Index r0 = 0; r0 < height; r0 += kRows) {
       const int rows = int(std::min<Eigen::Index>(kRows, height - r0));
       const float* row[kRows];
       for (int r = 0; r < rows; ++r) row[r] = x.row(begin + r0 + r).data();
       Lanes base[kRows] = {}, sum[kRows] = {};
       for (int pass = 0, first = 0; pass < passes; ++pass) {
-        const int count = c.types / passes + (pass < c.types % passes ? 1 : 0);
+        const int count = types / passes + (pass < types % passes ? 1 : 0);
         kTiles[std::size_t(rows - 1)][std::size_t(count - 1)](
-            row, n, panel + std::size_t(first) * kClassifyLanes, c.types,
+            row, n, panel + std::size_t(first) * kClassifyLanes, types,
             offsets + std::size_t(first) * kClassifyLanes, first == 0, row_norms + r0, mean_norms,
             base, sum);
         first += count;

@@ -15,6 +15,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "prt/clustering.hpp"
@@ -28,12 +29,18 @@ struct PackedClassifier {
   Eigen::Index dimension = 0;  // n
   int clusters = 0;            // k
   int groups = 0;              // ceil(k / 16)
-  int types = 0;               // the mean, then each component: 1 + components
-  // panels[((g * n + i) * types + c) * 16 + lane]: dimension i of the mean
-  // (c = 0) or of component c - 1 of cluster 16 g + lane; zero where the
-  // cluster has no such component, so it adds an exact zero to its sum.
+  // Per group: the mean, then each component up to the group's widest
+  // cluster (1 + its component count).
+  std::vector<int> types;
+  // Per group, where its offsets start (in floats; its panel starts at n
+  // times that): the sum of the earlier groups' types x 16.
+  std::vector<std::size_t> panel_start;
+  // Group g's panel at panels[panel_start[g] n ...]: [i][type][lane], the
+  // dimension i of the mean (type 0) or of component type - 1 of cluster
+  // 16 g + lane; zero where the cluster has no such component, so it adds an
+  // exact zero to its sum.
   std::vector<float, Eigen::aligned_allocator<float>> panels;
-  // offsets[(g * types + c) * 16 + lane]: u . m for components, 0 for the mean.
+  // offsets[panel_start[g] + type 16 + lane]: u . m for components, 0 for the mean.
   std::vector<float, Eigen::aligned_allocator<float>> offsets;
   // |m|^2 per cluster, padded to whole groups.
   std::vector<float, Eigen::aligned_allocator<float>> mean_norms;
@@ -45,7 +52,8 @@ PackedClassifier pack_classifier(const std::vector<ClusterModel>& models, int co
 // Labels rows [begin, end) of x: the first cluster of least
 // |x - m_j|^2 - sum_t ((x - m_j) . u_jt)^2, in float as
 // ((|x|^2 - 2 x . m_j) + |m_j|^2) - sum_t (x . u_jt - u_jt . m_j)^2.
-// `errors` is scratch, resized as needed.
+// `errors` is scratch, resized as needed. Throws when x's rows are not of
+// the models' dimension.
 void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
                    std::int32_t* labels, std::vector<float>& errors);
 

@@ -24,7 +24,9 @@ void tile(const double* a, Eigen::Index depth, Eigen::Index stride, Eigen::Index
     Lanes rows[V];
     for (int v = 0; v < V; ++v) {
       std::memcpy(&rows[v], row + p + v * kLowerProductLanes, sizeof(Lanes));
+#ifdef __AVX512F__
       asm("" : "+v"(rows[v]));  // in a register for all 8 columns
+#endif
     }
     for (int c = 0; c < kColumns; ++c) {
       const double column = row[q + c];

@@ -1,8 +1,8 @@
 // A^T A for the CPCA refit: a cluster's scatter (A = its centred members,
 // one per row) or Gram matrix (A = their transpose, one dimension per row).
 //
-// Eigen's symmetric rank update ran at 7-12 G multiply-adds/s on one core at
-// these sizes (60-256 members of 600 dimensions; a micro-benchmark): its
+// Eigen's symmetric rank update ran at 10.5-15 G multiply-adds/s on one core
+// at these sizes (147-256 members, 100-600 dimensions; a micro-benchmark): its
 // blocking and packing are made for larger products. Here a tile of 24
 // result rows by 8 columns keeps its sums in registers over the whole depth.
 #pragma once

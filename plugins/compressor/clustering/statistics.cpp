@@ -301,12 +301,15 @@ struct CentredMembers {
   Eigen::Index depth = 0, width = 0, stride = 0;
 };
 
+// 64-byte aligned: a tile's vectors are whole cache lines.
+using AlignedDoubles = std::vector<double, Eigen::aligned_allocator<double>>;
+
 // Y from member q's float row `row(q)` less the mean, in double, into
 // `storage` (kept from batch to batch: fresh matrices per cluster cost page
 // faults), its rows padded with zeros.
 template <class Row>
 CentredMembers centre_members(Eigen::Index m, const Row& row, const Eigen::RowVectorXd& mean,
-                              bool gram, std::vector<double>& storage) {
+                              bool gram, AlignedDoubles& storage) {
   const Eigen::Index n = mean.size();
   CentredMembers y;
   y.depth = gram ? n : m;
@@ -440,7 +443,7 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
   // their matrices (a scatter of the last batch's size is reused without a
   // new allocation; a Gram matrix of another size is reallocated).
   struct BatchScratch {
-    std::vector<std::vector<double>> centred;
+    std::vector<AlignedDoubles> centred;
     std::vector<Eigen::MatrixXd> matrices;
   };
   tbb::enumerable_thread_specific<BatchScratch> batch_scratch;
