@@ -131,6 +131,12 @@ PackedClassifier pack_classifier(const std::vector<ClusterModel>& models, int co
   return c;
 }
 
+Eigen::Index classify_block_rows(Eigen::Index dimension) {
+  // 109 rows of 600 values left a one-row tile in every block.
+  const Eigen::Index rows = 65536 / std::max<Eigen::Index>(1, dimension) / kRows * kRows;
+  return std::clamp<Eigen::Index>(rows, 4 * kRows, 256);
+}
+
 void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
                    std::int32_t* labels, std::vector<float>& errors) {
   const Eigen::Index n = c.dimension, height = end - begin;

@@ -49,6 +49,10 @@ struct PackedClassifier {
 // The first `components` directions of each model and its mean, in float.
 PackedClassifier pack_classifier(const std::vector<ClusterModel>& models, int components);
 
+// Rows per block for classify_rows: ~256 KB of rows, so that a block stays
+// in L2 beside a group's panel, in whole tiles of rows.
+Eigen::Index classify_block_rows(Eigen::Index dimension);
+
 // Labels rows [begin, end) of x: the first cluster of least
 // |x - m_j|^2 - sum_t ((x - m_j) . u_jt)^2, in float as
 // ((|x|^2 - 2 x . m_j) + |m_j|^2) - sum_t (x . u_jt - u_jt . m_j)^2.

@@ -32,10 +32,7 @@ double classify(const Rows& rows, const std::vector<ClusterModel>& models, int c
   const PackedClassifier c = pack_classifier(models, components);
   // Per thread: each block's errors per row and cluster, kept across blocks.
   tbb::enumerable_thread_specific<std::vector<float>> scratch;
-  // Blocks of ~256 KB of rows, so that a block stays in L2 beside a panel,
-  // in whole tiles of four rows (109 rows of 600 left a one-row tile).
-  const Eigen::Index block = std::clamp<Eigen::Index>(
-      65536 / std::max<Eigen::Index>(1, x.cols()) / 4 * 4, Eigen::Index(16), Eigen::Index(256));
+  const Eigen::Index block = classify_block_rows(x.cols());
   for_each_row_block(Eigen::Index(0), x.rows(), block, [&](Eigen::Index begin, Eigen::Index end) {
     classify_rows(x, begin, end, c, labels.data() + begin, scratch.local());
     rows.release(begin, end);
