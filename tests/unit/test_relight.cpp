@@ -170,6 +170,37 @@ TEST_CASE("the relight kernel's per-part constants agree with its shared ones", 
   }
 }
 
+TEST_CASE("cluster constants are each row's own, whatever panels share a call", "[relight]") {
+  // One core walks all panels in one call: groups of six, three, then
+  // single panels (1 to 14 panels reach every mix); all cores split them.
+  // Each row must be its own dot with the light, on any split, with every
+  // lane and channel in its place.
+  const Eigen::Index n_i = 21;  // one packet and a tail of the per-cluster row dots
+  const Eigen::MatrixX3f light = Eigen::MatrixX3f::Random(n_i, 3);
+  for (int panels = 1; panels <= 14; ++panels) {
+    CompressedTransfer c;
+    const int clusters = 16 * panels - 3;  // one stored row each: a short last panel
+    c.dimension = n_i;
+    c.means = MatrixXfRow::Random(clusters, n_i);
+    c.representatives.assign(std::size_t(clusters), MatrixXfRow(0, n_i));
+    c.weights = MatrixXfRow::Zero(clusters, 0);
+    for (int p = 0; p < clusters; ++p) c.cluster_of_vertex.push_back(p);
+    const ClusterConstants constants(c, 1);
+    std::vector<float> one_core, all_cores;
+    tbb::task_arena(1).execute([&] { constants.compute(light, one_core); });
+    constants.compute(light, all_cores);
+    INFO(panels << " panels");
+    CHECK(one_core == all_cores);
+    const MatrixXfRow expected = (c.means.cast<double>() * light.cast<double>()).cast<float>();
+    float worst = 0;
+    for (int k = 0; k < clusters; ++k)
+      for (int channel = 0; channel < 3; ++channel)
+        worst = std::max(worst, std::abs(one_core[std::size_t(constants.begin(k) + channel)] -
+                                         expected(k, channel)));
+    CHECK(worst < 1e-5f);
+  }
+}
+
 TEST_CASE("cluster constants from panels match the per-cluster constants", "[relight]") {
   const int rows = 3, n_i = 7;  // 21 coefficients: 3 exit rows of 7
   const CompressedTransfer c = mixed_clusters(rows * n_i, 300);
