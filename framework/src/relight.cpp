@@ -178,6 +178,24 @@ inline void store_lanes(const Lanes rgb[3], const std::int32_t* vertices, float*
    ...);
 }
 
+// The first `count` lanes of a packet's sums to mesh order: a full packet
+// with store_lanes, a run's last partial one lane by lane.
+inline void store_packet(const Lanes rgb[3], const std::int32_t* vertices, int count, float* red,
+                         float* green, float* blue) {
+  if (count == kLanes) {
+    store_lanes(rgb, vertices, red, green, blue, std::make_integer_sequence<int, kLanes>());
+    return;
+  }
+  alignas(64) float lanes[3][kLanes];
+  std::memcpy(lanes, rgb, sizeof lanes);
+  for (int q = 0; q < count; ++q) {
+    const std::int32_t p = vertices[q];
+    red[p] = lanes[0][q];
+    green[p] = lanes[1][q];
+    blue[p] = lanes[2][q];
+  }
+}
+
 // red[v] = C_0r + sum_i w_i(v) C_ir (and green, blue) for the `size`
 // vertices of one run, whose weights are stored component-major (w_i at
 // weights + i * size): 16 vertices' three sums stay in registers over all n'
@@ -199,19 +217,8 @@ void diffuse_run(const float* constants, const float* weights, std::int64_t size
       sums[1] += w * c[1];
       sums[2] += w * c[2];
     }
-    const int count = static_cast<int>(std::min<std::int64_t>(kLanes, size - j));
-    if (count == kLanes) {
-      store_lanes(sums, vertices + j, red, green, blue, std::make_integer_sequence<int, kLanes>());
-      continue;
-    }
-    alignas(64) float rgb[3][kLanes];
-    std::memcpy(rgb, sums, sizeof rgb);
-    for (int q = 0; q < count; ++q) {
-      const std::int32_t p = vertices[j + q];
-      red[p] = rgb[0][q];
-      green[p] = rgb[1][q];
-      blue[p] = rgb[2][q];
-    }
+    store_packet(sums, vertices + j, static_cast<int>(std::min<std::int64_t>(kLanes, size - j)),
+                 red, green, blue);
   }
 }
 
@@ -520,17 +527,7 @@ void RelightKernel::radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* e
             const Lanes w = load_lanes(weights + i * size + j0);
             for (int c = 0; c < 3; ++c) rgb[c] += w * load_lanes(dots + (3 * (i + 1) + c) * kLanes);
           }
-          if (count == kLanes) {
-            store_lanes(rgb, vertices + j0, red, green, blue,
-                        std::make_integer_sequence<int, kLanes>());
-            continue;
-          }
-          for (int j = 0; j < count; ++j) {
-            const std::int32_t p = vertices[j0 + j];
-            red[p] = rgb[0][j];
-            green[p] = rgb[1][j];
-            blue[p] = rgb[2][j];
-          }
+          store_packet(rgb, vertices + j0, count, red, green, blue);
         }
       });
 }
