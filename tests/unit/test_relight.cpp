@@ -80,6 +80,18 @@ CompressedTransfer mixed_clusters(Eigen::Index dimension, int vertices) {
   return c;
 }
 
+// A cluster per vertex, each its mean alone (as the exact form): one
+// stored row per cluster, of 21 coefficients (one packet and a tail of the
+// row-by-row dots).
+CompressedTransfer exact_like(int vertices) {
+  CompressedTransfer c;
+  c.dimension = 21;
+  c.means = MatrixXfRow::Random(vertices, c.dimension);
+  c.representatives.assign(std::size_t(vertices), MatrixXfRow(0, c.dimension));
+  c.weights = MatrixXfRow::Zero(vertices, 0);
+  for (int p = 0; p < vertices; ++p) c.cluster_of_vertex.push_back(p);
+  return c;
+}
 }  // namespace
 
 TEST_CASE("the relight kernel matches the decoded transfer for every cluster shape", "[relight]") {
@@ -150,15 +162,6 @@ TEST_CASE("the relight kernel's per-part constants agree with its shared ones", 
   // A cluster per vertex, as the exact form: up to 4 MB of constants the
   // parts share, computed 16 stored rows at a time from panels; past that
   // (360,000 clusters) each part computes its own runs' constants row by row.
-  const auto exact_like = [](int vertices) {
-    CompressedTransfer c;
-    c.dimension = 21;  // one packet and a tail of the row-by-row dots
-    c.means = MatrixXfRow::Random(vertices, c.dimension);
-    c.representatives.assign(std::size_t(vertices), MatrixXfRow(0, c.dimension));
-    c.weights = MatrixXfRow::Zero(vertices, 0);
-    for (int p = 0; p < vertices; ++p) c.cluster_of_vertex.push_back(p);
-    return c;
-  };
   const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(21, 3);
   for (const int vertices : {20001, 360000}) {  // 20,001: a last panel of one row
     const CompressedTransfer c = exact_like(vertices);
@@ -175,16 +178,10 @@ TEST_CASE("cluster constants are each row's own, whatever panels share a call", 
   // single panels (1 to 14 panels reach every mix); all cores split them.
   // Each row must be its own dot with the light, on any split, with every
   // lane and channel in its place.
-  const Eigen::Index n_i = 21;  // one packet and a tail of the per-cluster row dots
-  const Eigen::MatrixX3f light = Eigen::MatrixX3f::Random(n_i, 3);
+  const Eigen::MatrixX3f light = Eigen::MatrixX3f::Random(21, 3);
   for (int panels = 1; panels <= 14; ++panels) {
-    CompressedTransfer c;
     const int clusters = 16 * panels - 3;  // one stored row each: a short last panel
-    c.dimension = n_i;
-    c.means = MatrixXfRow::Random(clusters, n_i);
-    c.representatives.assign(std::size_t(clusters), MatrixXfRow(0, n_i));
-    c.weights = MatrixXfRow::Zero(clusters, 0);
-    for (int p = 0; p < clusters; ++p) c.cluster_of_vertex.push_back(p);
+    const CompressedTransfer c = exact_like(clusters);
     const ClusterConstants constants(c, 1);
     std::vector<float> one_core, all_cores;
     tbb::task_arena(1).execute([&] { constants.compute(light, one_core); });
