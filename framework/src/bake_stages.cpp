@@ -86,7 +86,7 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
                                 std::uint64_t& rays_cast, std::size_t first, std::size_t last,
                                 bool on_disk) {
   const CheckpointStore& store = *options.checkpoint;
-  const auto slabs = slabs_of(first, last, std::max<std::size_t>(1, options.slab_vertices));
+  const auto slabs = transfer_slabs(first, last, options.slab_vertices);
   const std::size_t kept = say_kept_slabs(
       store, slabs, [&](const SlabRange& slab) { return slab_kept(store, slab); }, "vertices",
       [&](const std::string& text) { options.message(text); });
@@ -245,7 +245,7 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
   if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
   const CheckpointStore& store = *options.checkpoint;
   const std::size_t v = mesh.vertex_count();
-  const auto slabs = slabs_of(0, v, std::max<std::size_t>(1, options.slab_vertices));
+  const auto slabs = transfer_slabs(0, v, options.slab_vertices);
   // Ranks take slabs as they come free (a slab's cost depends on its part
   // of the mesh), by creating its claim file. Claims carry this run's id, so
   // those of a killed run do not hold a slab back.
@@ -495,8 +495,7 @@ BakeData::StreamedRows kept_parts(const BakePlan& plan, const CheckpointStore& s
 BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
                                      std::size_t vertices, std::size_t slab,
                                      std::shared_ptr<const TransferSignal> own) {
-  return kept_parts(plan, store, vertices, slabs_of(0, vertices, std::max<std::size_t>(1, slab)),
-                    std::move(own));
+  return kept_parts(plan, store, vertices, transfer_slabs(0, vertices, slab), std::move(own));
 }
 
 BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const CheckpointStore& store,

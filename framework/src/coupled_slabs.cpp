@@ -94,7 +94,7 @@ TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const Dire
   const CheckpointStore& store = *options.checkpoint;
   const std::size_t v = mesh.vertex_count(), s = std::size_t(set.size());
   const std::size_t words = VisibilityBits::words_for(s);
-  const auto slabs = slabs_of(0, v, std::max<std::size_t>(1, options.slab_vertices));
+  const auto slabs = transfer_slabs(0, v, options.slab_vertices);
   say_kept_slabs(
       store, slabs, [&](const SlabRange& slab) { return store.has(rows_name(kRays, slab)); },
       "the trace", [&](const std::string& text) { options.message(text); });

@@ -118,8 +118,9 @@ std::string gigabytes(double bytes) {
 
 // Refuses, before any ray, a bake whose largest arrays cannot fit: the
 // transfer (twice: exact and decoded; not at all when it is kept on disk),
-// kept visibility bits and bounce hits, and the basis evaluated at every
-// direction (unless it projects by a fast transform).
+// visibility bits (kept, or held for the projection) and bounce hits, and
+// the basis evaluated at every direction (unless it projects by a fast
+// transform).
 void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& mesh,
                     const DirectionSet& set, bool keep_visibility, bool on_disk) {
   const double v = double(mesh.vertex_count()), d = double(set.size()),
@@ -130,15 +131,18 @@ void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& me
   const double dimension = rows * n * groups;
   // The basis at every direction: the projection matrix (unless a fast
   // transform projects), and glossy transfer's weighted light values.
-  const double projection = plan.basis->has_fast_projection(set) ? 0 : d * n * sizeof(double);
+  const bool fast = plan.basis->has_fast_projection(set);
+  const double projection = fast ? 0 : d * n * sizeof(double);
   const double glossy_light = plan.glossy ? d * n * sizeof(double) : 0;
   // The transfer twice: exact, and its compressed (or exact) form; channel
   // transfers also hold their parts and direct parts while they are stacked.
   const double copies = on_disk ? 0 : groups > 1 ? 4 : 2;
-  const double bytes = copies * v * dimension * sizeof(float) + projection + glossy_light +
-                       // Channel transfers each work on a copy of the rays' results.
-                       (groups > 1 ? 2 : 1) *
-                           ((keep_visibility ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0));
+  const double bytes =
+      copies * v * dimension * sizeof(float) + projection + glossy_light +
+      // Channel transfers each work on a copy of the rays' results.
+      (groups > 1 ? 2 : 1) *
+          // The bits are held for the projection after the trace.
+          ((keep_visibility || !fast ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0));
   const double available = available_memory();
   if (bytes > available) {
     char message[400];

@@ -2,6 +2,7 @@
 // parts and the checked loading of each (rows of a transfer, visibility
 // bits, counts). Shared by the per-vertex, fitted and coupled paths.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -10,6 +11,7 @@
 #include "prt/checkpoint.hpp"
 #include "prt/error.hpp"
 #include "prt/transport.hpp"
+#include "prt/visible_products.hpp"
 
 namespace prt {
 
@@ -21,6 +23,16 @@ struct SlabRange {
 
 // The slabs of a grid of `slab` vertices that meet [first, last), cut to it.
 std::vector<SlabRange> slabs_of(std::size_t first, std::size_t last, std::size_t slab);
+
+// The slabs of a per-vertex transfer: `slab_vertices` rounded up to whole
+// blocks of the bake's projection (kProjectionBlock), so that slabs change
+// no bit of the rows.
+inline std::vector<SlabRange> transfer_slabs(std::size_t first, std::size_t last,
+                                             std::size_t slab_vertices) {
+  const std::size_t blocks =
+      (std::max<std::size_t>(1, slab_vertices) + kProjectionBlock - 1) / kProjectionBlock;
+  return slabs_of(first, last, blocks * kProjectionBlock);
+}
 
 // "what.rows-FIRST-LAST": the part `what` of vertices [first, last).
 std::string rows_name(const char* what, std::size_t first, std::size_t last);

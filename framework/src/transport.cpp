@@ -10,7 +10,6 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
-#include <numeric>
 #include <optional>
 #include <random>
 #include <utility>
@@ -253,8 +252,12 @@ void upper_hemisphere_bits(const Mesh& mesh, const std::uint32_t* vertices, std:
 using BlockProjection = std::function<Eigen::MatrixXf(
     const std::uint32_t* vertices, std::size_t count, const std::vector<std::uint64_t>& bits)>;
 
+// Traces the options' vertices in tasks of kBlock along their Morton curve;
+// each task projects its block's bits with `project` into the result's rows
+// (v x n). Without `project` the rows are left for the caller, and the bits
+// are kept whatever the options say.
 TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eigen::Index n,
-                                  const BlockProjection& project, const TransportOptions& options,
+                                  const BlockProjection* project, const TransportOptions& options,
                                   Progress* progress) {
   const std::size_t last = std::min(options.last_vertex, mesh.vertex_count());
   const std::size_t first = std::min(options.first_vertex, last);
@@ -263,7 +266,8 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
   const std::size_t words = VisibilityBits::words_for(s);
   TransportResult result;
   result.transfer.coefficients.resize(static_cast<Eigen::Index>(v_count), n);
-  if (options.keep_visibility) result.visibility = VisibilityBits(v_count, s);
+  const bool keep_bits = options.keep_visibility || !project;
+  if (keep_bits) result.visibility = VisibilityBits(v_count, s);
   if (options.keep_hits) result.hits.resize(v_count);
   Stopwatch clock;
   std::optional<RayCaster> own_caster;
@@ -289,12 +293,12 @@ TransportResult trace_and_project(const Mesh& mesh, const DirectionSet& set, Eig
       upper_hemisphere_bits(mesh, vertices, count, dirs_f.data(), s, bits.data());
       if (progress) progress->add(double(count));
     }
-    const Eigen::MatrixXf block = project(vertices, count, bits);
+    const Eigen::MatrixXf block = project ? (*project)(vertices, count, bits) : Eigen::MatrixXf();
     for (std::size_t slot = 0; slot < count; ++slot) {
       const std::size_t row = vertices[slot] - first;
-      result.transfer.coefficients.row(static_cast<Eigen::Index>(row)) = block.row(slot);
-      if (options.keep_visibility)
-        std::copy_n(&bits[slot * words], words, result.visibility.words(row));
+      if (project)
+        result.transfer.coefficients.row(static_cast<Eigen::Index>(row)) = block.row(slot);
+      if (keep_bits) std::copy_n(&bits[slot * words], words, result.visibility.words(row));
       if (!hits.empty()) result.hits[row] = std::move(hits[slot]);
     }
   });
@@ -332,17 +336,22 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
   if (projection.rows() != set.size())
     throw Error("projection matrix has " + std::to_string(projection.rows()) + " rows for " +
                 std::to_string(set.size()) + " directions");
-  const PaddedRows rows(projection);
-  auto project = [&](const std::uint32_t* vertices, std::size_t count,
-                     const std::vector<std::uint64_t>& bits) -> Eigen::MatrixXf {
-    // Per vertex, the sum over its visible directions of (n . d_k / pi) P_k:
-    // only the rays that escaped cost flops (a dense block product would
-    // also multiply the zeros of occluded and below-horizon directions).
-    PaddedRows sums;
-    visible_times(mesh, set, vertices, count, bits.data(), rows, sums);
-    return sums.block(0, static_cast<Eigen::Index>(count)).cast<float>();
-  };
-  return trace_and_project(mesh, set, projection.cols(), project, options, progress);
+  // The rays first, then per vertex the sum over its visible directions of
+  // (n . d_k / pi) P_k, shared along trees of neighbours in fixed blocks of
+  // the mesh (visible_times_in_blocks): only the directions where a vertex's
+  // bits differ from its neighbour's cost flops.
+  Stopwatch clock;
+  TransportResult result =
+      trace_and_project(mesh, set, projection.cols(), nullptr, options, progress);
+  const std::size_t last = std::min(options.last_vertex, mesh.vertex_count());
+  const std::size_t first = std::min(options.first_vertex, last);
+  if (projection.cols() > 0 && last > first)
+    visible_times_in_blocks(mesh, set, first, last, result.visibility.words(0),
+                            PaddedRows(projection), result.transfer.coefficients.data(),
+                            std::size_t(projection.cols()));
+  if (!options.keep_visibility) result.visibility = VisibilityBits();
+  result.trace_seconds = clock.seconds();
+  return result;
 }
 
 TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set, const Basis& basis,
@@ -355,7 +364,8 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set, cons
     return basis.project(rows_from_bits(mesh, set, count, vertex_of, bits.data()), set)
         .cast<float>();
   };
-  return trace_and_project(mesh, set, basis.size(), project, options, progress);
+  const BlockProjection projection = project;
+  return trace_and_project(mesh, set, basis.size(), &projection, options, progress);
 }
 
 void transport_rows(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
@@ -379,19 +389,11 @@ TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
   // Blocks are counted from vertex 0 of the mesh, so a shard's rows are
   // those of the whole mesh's projection.
   if (!basis.has_fast_projection(set)) {
-    // T P over the visible pairs only, as the bake's own projection, a block
-    // of rows at a time (double sums for a block, float for the whole mesh).
-    const PaddedRows projection(basis.projection_matrix(set));
-    for_each_row_block(
-        first_vertex, last, std::size_t(1024), [&](std::size_t begin, std::size_t end) {
-          std::vector<std::uint32_t> vertices(end - begin);
-          std::iota(vertices.begin(), vertices.end(), static_cast<std::uint32_t>(begin));
-          PaddedRows sums;
-          visible_times(mesh, set, vertices.data(), vertices.size(),
-                        visibility.words(begin - first_vertex), projection, sums);
-          out.coefficients.middleRows(begin - first_vertex, end - begin) =
-              sums.block(0, Eigen::Index(end - begin)).cast<float>();
-        });
+    // T P over the visible pairs only: the bake's own projection.
+    if (count > 0 && basis.size() > 0)
+      visible_times_in_blocks(mesh, set, first_vertex, last, visibility.words(0),
+                              PaddedRows(basis.projection_matrix(set)), out.coefficients.data(),
+                              std::size_t(basis.size()));
     return out;
   }
   // Fixed blocks: a GEMM's rows depend on the block's shape (row_blocks.hpp).

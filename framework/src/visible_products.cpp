@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "prt/error.hpp"
+#include "prt/row_blocks.hpp"
 #include "prt/segment_sum.hpp"
 #include "prt/transport.hpp"
 
@@ -301,6 +302,119 @@ void chained_sums(const MaskedSums& m, const std::uint32_t* chain, std::size_t l
                               m, chain, length, first_word, std::min(last_word, m.words), out);
 }
 
+// Products along trees of output rows, for the bake: as the chains above,
+// N_r = sum over r's set bits j of b_j (x) rows.row(j), but each row's sums
+// are carried from the one of the kTreeWindow rows before it (in the
+// block's order) whose bits differ least, or summed directly when that is
+// cheaper (a root). The parents depend on the block's rows and bits alone.
+// Sums of the last kTreeWindow rows are kept in a ring of slots.
+constexpr std::size_t kTreeWindow = 32;
+
+struct TreeRing {
+  std::vector<double> sums;  // (kTreeWindow + 1) slots of 3 padded rows
+  std::size_t slot_doubles = 0;
+  explicit TreeRing(Eigen::Index stride)
+      : sums((kTreeWindow + 1) * 3 * std::size_t(stride)), slot_doubles(3 * std::size_t(stride)) {}
+  double* slot(std::size_t position) {
+    return sums.data() + position % (kTreeWindow + 1) * slot_doubles;
+  }
+};
+
+// A row's changes from its parent: the directions to add, then those to
+// remove (for a root, all of its set bits), listed once for all panels.
+struct TreeChanges {
+  std::vector<std::uint32_t> directions;
+  std::size_t added = 0;  // directions[0, added) are added, [added, count) removed
+  std::size_t count = 0;
+};
+
+void list_changes(const MaskedSums& m, std::size_t r, std::ptrdiff_t parent, std::size_t parent_row,
+                  TreeChanges& changes) {
+  const std::uint64_t* bits = m.bits + r * m.words;
+  const std::uint64_t* before = m.bits + parent_row * m.words;
+  changes.directions.resize(64 * m.words);  // at most every direction once
+  std::uint32_t* to = changes.directions.data();
+  const auto list = [&](std::uint64_t tile, std::size_t word) {
+    for (; tile; tile &= tile - 1)
+      *to++ = std::uint32_t(64 * word) + std::uint32_t(std::countr_zero(tile));
+  };
+  for (std::size_t w = 0; w < m.words; ++w) list(parent < 0 ? bits[w] : bits[w] & ~before[w], w);
+  changes.added = std::size_t(to - changes.directions.data());
+  if (parent >= 0)
+    for (std::size_t w = 0; w < m.words; ++w) list(before[w] & ~bits[w], w);
+  changes.count = std::size_t(to - changes.directions.data());
+}
+
+template <int Packets>
+struct TreeKernel {
+  // Row `r` (at `position` in its block's order), from the sums of `parent`
+  // (a position, or -1 for a root) and its changes: its sums into the ring
+  // and a_r . N_r into `out_row`.
+  static void run(int first_packet, const MaskedSums& m, std::size_t r, std::size_t position,
+                  std::ptrdiff_t parent, const TreeChanges& changes, TreeRing& ring,
+                  double* out_row) {
+    const auto stride = static_cast<std::size_t>(m.rows->stride());
+    const double* base = m.rows->row(0) + 8 * first_packet;
+    Packet n[3][Packets];
+    if (parent < 0) {
+      for (int c = 0; c < 3; ++c)
+        for (int p = 0; p < Packets; ++p) n[c][p] = Packet{};
+    } else {
+      const double* from = ring.slot(std::size_t(parent)) + 8 * first_packet;
+      for (int c = 0; c < 3; ++c)
+        for (int p = 0; p < Packets; ++p) n[c][p] = load(from + c * stride + 8 * p);
+    }
+    const std::uint32_t* directions = changes.directions.data();
+    for (std::size_t i = 0; i < changes.added; ++i) {
+      const std::size_t j = directions[i];
+      const double* row = base + j * stride;
+      const double bx = m.b[3 * j], by = m.b[3 * j + 1], bz = m.b[3 * j + 2];
+      for (int p = 0; p < Packets; ++p) {
+        const Packet x = load(row + 8 * p);
+        n[0][p] += bx * x;
+        n[1][p] += by * x;
+        n[2][p] += bz * x;
+      }
+    }
+    for (std::size_t i = changes.added; i < changes.count; ++i) {
+      const std::size_t j = directions[i];
+      const double* row = base + j * stride;
+      const double bx = m.b[3 * j], by = m.b[3 * j + 1], bz = m.b[3 * j + 2];
+      for (int p = 0; p < Packets; ++p) {
+        const Packet x = load(row + 8 * p);
+        n[0][p] -= bx * x;
+        n[1][p] -= by * x;
+        n[2][p] -= bz * x;
+      }
+    }
+    double* to = ring.slot(position) + 8 * first_packet;
+    for (int c = 0; c < 3; ++c)
+      for (int p = 0; p < Packets; ++p) store(to + c * stride + 8 * p, n[c][p]);
+    const double* a = m.a + 3 * r;
+    double* target = out_row + 8 * first_packet;
+    for (int p = 0; p < Packets; ++p)
+      store(target + 8 * p, a[0] * n[0][p] + a[1] * n[1][p] + a[2] * n[2][p]);
+  }
+};
+
+// The position of row order[i]'s parent among the kTreeWindow before it
+// (the first of those whose bits differ least), or -1 when no parent
+// differs in fewer bits than the row has set.
+std::ptrdiff_t tree_parent(const MaskedSums& m, const std::uint32_t* order, std::size_t i) {
+  const std::uint64_t* bits = m.bits + std::size_t(order[i]) * m.words;
+  std::size_t least = 0;
+  for (std::size_t w = 0; w < m.words; ++w) least += std::size_t(std::popcount(bits[w]));
+  std::ptrdiff_t parent = -1;
+  for (std::size_t k = i > kTreeWindow ? i - kTreeWindow : 0; k < i; ++k) {
+    const std::uint64_t* other = m.bits + std::size_t(order[k]) * m.words;
+    std::size_t differ = 0;
+    for (std::size_t w = 0; w < m.words; ++w)  // no early exit: vector popcounts
+      differ += std::size_t(std::popcount(bits[w] ^ other[w]));
+    if (differ < least) least = differ, parent = std::ptrdiff_t(k);
+  }
+  return parent;
+}
+
 // Rows of x, y, z of `count` vectors (the mesh's normals are floats), scaled.
 std::vector<double> coordinates(const auto& vectors, std::size_t count, double scale) {
   std::vector<double> xyz(3 * count);
@@ -335,6 +449,42 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_
   const std::vector<double> a = coordinates(normal, count, 1 / M_PI);
   out = PaddedRows(static_cast<Eigen::Index>(count), right.cols());
   masked_sums({bits, words, a.data(), set.directions.data(), &right}, 0, count, out, 0);
+}
+
+void visible_times_in_blocks(const Mesh& mesh, const DirectionSet& set, std::size_t first,
+                             std::size_t last, const std::uint64_t* bits, const PaddedRows& right,
+                             float* out, std::size_t out_stride) {
+  const auto s = static_cast<std::size_t>(set.size());
+  check_rows(right.rows(), s, "visible_times_in_blocks: the right-hand matrix", "directions");
+  check_range(mesh, first, last >= first ? last - first : 0, "visible_times_in_blocks");
+  if (last <= first) return;
+  const auto normal = [&](std::size_t i, int c) { return mesh.normals[first + i][c]; };
+  const std::vector<double> a = coordinates(normal, last - first, 1 / M_PI);
+  const MaskedSums m{bits, VisibilityBits::words_for(s), a.data(), set.directions.data(), &right};
+  const Eigen::Index packets = right.stride() / 8, cols = right.cols();
+  // The range's rows along the whole mesh's Morton curve, then by block,
+  // each block's in curve order (a stable sort): the curve of each block.
+  std::vector<std::uint32_t> curve = morton_order(mesh, first, last);
+  for (std::uint32_t& v : curve) v -= std::uint32_t(first);  // rows of `bits`
+  const auto block_of = [&](std::uint32_t r) { return (first + r) / kProjectionBlock; };
+  std::stable_sort(curve.begin(), curve.end(),
+                   [&](std::uint32_t x, std::uint32_t y) { return block_of(x) < block_of(y); });
+  for_each_row_block(first, last, kProjectionBlock, [&](std::size_t begin, std::size_t end) {
+    const std::uint32_t* order = curve.data() + (begin - first);  // the block's rows
+    const std::size_t count = end - begin;
+    TreeRing ring(right.stride());
+    TreeChanges changes;
+    std::vector<double> row(std::size_t(right.stride()));
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::size_t r = order[i];
+      const std::ptrdiff_t parent = tree_parent(m, order, i);
+      list_changes(m, r, parent, parent < 0 ? r : std::size_t(order[std::size_t(parent)]), changes);
+      for_each_panel<TreeKernel>(std::make_integer_sequence<int, kChainPanel>(), packets, m, r, i,
+                                 parent, changes, ring, row.data());
+      float* target = out + r * out_stride;
+      for (Eigen::Index c = 0; c < cols; ++c) target[c] = static_cast<float>(row[std::size_t(c)]);
+    }
+  });
 }
 
 void visible_times(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,

@@ -3,6 +3,7 @@
 // were lost) equals the bake without one, bit for bit.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -11,6 +12,7 @@
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/registry.hpp"
+#include "prt/visible_products.hpp"
 
 using namespace prt;
 namespace fs = std::filesystem;
@@ -22,6 +24,13 @@ fs::path fresh_folder(const std::string& name) {
   fs::remove_all(folder);
   fs::create_directories(folder);
   return folder;
+}
+
+// "what.rows-FIRST-LAST": the name of a slab's part.
+std::string part_name(const char* what, std::size_t first, std::size_t last) {
+  char name[96];
+  std::snprintf(name, sizeof name, "%s.rows-%012zu-%012zu", what, first, last);
+  return name;
 }
 
 // How many of a checkpoint's parts have names that start with `prefix`.
@@ -125,8 +134,12 @@ TEST_CASE("a bake in slabs through a checkpoint equals the bake without one", "[
     const CheckpointStore store(output, bake_key(s, plan), "test");
     RunOptions options{true};
     options.checkpoint = &store;
-    options.slab_vertices = 100;  // several slabs, the last one short
-    REQUIRE(reference.mesh.vertex_count() > 300);
+    // 100 vertices, rounded up to a block of the projection: several slabs,
+    // the last one short.
+    options.slab_vertices = 100;
+    const std::size_t v = reference.mesh.vertex_count();
+    REQUIRE(v > kProjectionBlock);
+    REQUIRE(v % kProjectionBlock != 0);
     const BakeData slabbed = bake(s, registry, options, times);
     CHECK(slabbed.transfer.coefficients == reference.transfer.coefficients);
     CHECK(slabbed.transfer.kind == reference.transfer.kind);
@@ -135,8 +148,9 @@ TEST_CASE("a bake in slabs through a checkpoint equals the bake without one", "[
     CHECK(slabbed.metrics == reference.metrics);
     // Lose two slabs (as a kill would have left them never written): the
     // rerun computes them again and gets the same result.
-    REQUIRE(fs::remove(store.folder() / "transfer.rows-000000000100-000000000200"));
-    REQUIRE(fs::remove(store.folder() / "rays.rows-000000000200-000000000300"));
+    REQUIRE(fs::remove(store.folder() / part_name("transfer", 0, kProjectionBlock)));
+    REQUIRE(
+        fs::remove(store.folder() / part_name("rays", v / kProjectionBlock * kProjectionBlock, v)));
     const BakeData resumed = bake(s, registry, options, times);
     CHECK(resumed.transfer.coefficients == reference.transfer.coefficients);
     CHECK(resumed.metrics == reference.metrics);
@@ -234,12 +248,13 @@ constant = [1.0, 0.7, 0.4]
     const CheckpointStore store(output, bake_key(s, plan), "test");
     RunOptions options{true};
     options.checkpoint = &store;
-    options.slab_vertices = 100;
+    options.slab_vertices = 100;  // the trace's slabs: rounded up to a block of the projection
     const BakeData first = bake(s, registry, options, times);
     const auto parts = store.parts();
     const auto count = [&](const std::string& prefix) { return parts_named(parts, prefix); };
-    const auto slabs = (reference.mesh.vertex_count() + 99) / 100;
-    REQUIRE(slabs > 2);
+    const std::size_t v = reference.mesh.vertex_count();
+    const auto slabs = (v + kProjectionBlock - 1) / kProjectionBlock;
+    REQUIRE(slabs > 1);
     CHECK(count("trace-rays.rows-") == long(slabs));
     CHECK(count("trace-hits.rows-") == long(slabs));
     const long channels = long(plan.channels.groups.size());
@@ -255,7 +270,7 @@ constant = [1.0, 0.7, 0.4]
     // trace was: the rerun traces that slab and computes that channel again.
     const std::string last = "channel-" + std::to_string(channels) + ".transfer";
     for (const std::string& lost :
-         {std::string("transfer"), last, std::string("trace-rays.rows-000000000100-000000000200")})
+         {std::string("transfer"), last, part_name("trace-rays", kProjectionBlock, v)})
       REQUIRE(fs::remove(store.folder() / lost));
     const BakeData resumed = bake(s, registry, options, times);
     for (const BakeData* data : {&first, &resumed}) {
@@ -265,14 +280,14 @@ constant = [1.0, 0.7, 0.4]
       CHECK(data->metrics == reference.metrics);
     }
     // Damaged hits (a triangle the mesh does not have) are refused.
-    std::vector<std::int32_t> hits(100, 0);
+    std::vector<std::int32_t> hits(kProjectionBlock, 0);
     hits[0] = 1;
     hits.insert(hits.end(), {0, 1 << 30, 0, 0});
     REQUIRE(fs::remove(store.folder() / "transfer"));
-    store.save("trace-hits.rows-000000000000-000000000100", hits);
+    const std::string damaged = part_name("trace-hits", 0, kProjectionBlock);
+    store.save(damaged, hits);
     CHECK_THROWS_WITH(bake(s, registry, options, times),
-                      Catch::Contains("trace-hits.rows-000000000000-000000000100") &&
-                          Catch::Contains("--restart"));
+                      Catch::Contains(damaged) && Catch::Contains("--restart"));
     store.remove();
   }
 }

@@ -5,6 +5,7 @@
 
 #include "../common/scenes.hpp"
 #include "../common/thread_communicator.hpp"
+#include "prt/transfer.hpp"
 #include "prt/transport.hpp"
 #include "prt/visible_products.hpp"
 
@@ -124,6 +125,75 @@ TEST_CASE("visible products over shards: rows of the whole, sums the same bits o
     }
     CHECK(at == all.total);
   }
+}
+
+TEST_CASE("the bake's projection in blocks equals dense products, the same bits on any cores",
+          "[visible]") {
+  // Several blocks of the projection, the last short; 6 x 6 x 6 directions
+  // (a partial last word). Rows are carried from neighbours' sums, so a
+  // wrong parent, a change left out or a sign would break the dense product.
+  const Mesh scene = test::sphere_over_plane(3, 12);
+  const std::size_t v = scene.vertex_count();
+  REQUIRE(v > 3 * kProjectionBlock);
+  REQUIRE(v % kProjectionBlock != 0);
+  const DirectionSet set = DirectionSet::cubemap(6);
+  const TransportResult traced = test::trace_visibility_only(scene, set);
+  Eigen::MatrixXd t;
+  transport_rows(scene, set, traced.visibility, 0, v, t);
+  REQUIRE((t.array() == 0).count() > t.size() / 4);
+  // Columns around the packet (8) and panel (8 packets) sizes.
+  for (const Eigen::Index columns : {1, 8, 9, 64, 65, 100, 129}) {
+    CAPTURE(columns);
+    const Eigen::MatrixXd right = Eigen::MatrixXd::Random(set.size(), columns);
+    const PaddedRows padded(right);
+    const auto product = [&](std::size_t first, std::size_t last) {
+      MatrixXfRow out(Eigen::Index(last - first), columns);
+      visible_times_in_blocks(scene, set, first, last, traced.visibility.words(first), padded,
+                              out.data(), std::size_t(columns));
+      return out;
+    };
+    const MatrixXfRow all = product(0, v);
+    const Eigen::MatrixXd dense = t * right;
+    CHECK((all.cast<double>() - dense).cwiseAbs().maxCoeff() <
+          1e-6 * std::max(1.0, dense.cwiseAbs().maxCoeff()));
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      CHECK(product(0, v) == all);
+    }
+    // Ranges of whole blocks (a slab, a shard) get the whole range's rows.
+    const std::size_t b = kProjectionBlock;
+    CHECK(product(b, v) == all.bottomRows(Eigen::Index(v - b)));
+    CHECK(product(b, 3 * b) == all.middleRows(Eigen::Index(b), Eigen::Index(2 * b)));
+  }
+}
+
+TEST_CASE("the bake's projection in blocks: vertices that see nothing, no columns, bad shapes",
+          "[visible]") {
+  const Mesh scene = test::sphere_over_plane();
+  const std::size_t v = scene.vertex_count();
+  const DirectionSet set = DirectionSet::fibonacci(100);
+  // Every other vertex sees nothing: roots and parents with no bits.
+  VisibilityBits bits = test::trace_visibility_only(scene, set).visibility;
+  const std::size_t words = VisibilityBits::words_for(100);
+  for (std::size_t i = 0; i < v; i += 2) std::fill_n(bits.words(i), words, 0);
+  const Eigen::MatrixXd right = Eigen::MatrixXd::Random(100, 20);
+  MatrixXfRow out(Eigen::Index(v), 20);
+  visible_times_in_blocks(scene, set, 0, v, bits.words(0), PaddedRows(right), out.data(), 20);
+  Eigen::MatrixXd t;
+  transport_rows(scene, set, bits, 0, v, t);
+  CHECK((out.cast<double>() - t * right).cwiseAbs().maxCoeff() < 1e-5);
+  for (std::size_t i = 0; i < v; i += 2) CHECK(out.row(Eigen::Index(i)).isZero(0));
+  CHECK(out.allFinite());
+  // No columns and no vertices write nothing.
+  visible_times_in_blocks(scene, set, 0, v, bits.words(0), PaddedRows(Eigen::MatrixXd(100, 0)),
+                          nullptr, 0);
+  visible_times_in_blocks(scene, set, 5, 5, bits.words(0), PaddedRows(right), nullptr, 20);
+  CHECK_THROWS_WITH(visible_times_in_blocks(scene, set, 0, v, bits.words(0),
+                                            PaddedRows(Eigen::MatrixXd(99, 3)), out.data(), 3),
+                    Catch::Contains("99 rows for 100"));
+  CHECK_THROWS_WITH(visible_times_in_blocks(scene, set, 0, v + 1, bits.words(0), PaddedRows(right),
+                                            out.data(), 20),
+                    Catch::Contains("for a mesh of"));
 }
 
 TEST_CASE("visible products of no vertices are empty", "[visible]") {

@@ -46,7 +46,9 @@ struct RunOptions {
   // info only when not quiet.
   std::function<void(const std::string&)> log;
   // Finished parts are kept here and found again by a rerun (prt/checkpoint.hpp);
-  // transfers each vertex gets alone are then computed in slabs of vertices.
+  // transfers each vertex gets alone are then computed in slabs of vertices
+  // (slab_vertices rounded up to whole blocks of the projection,
+  // kProjectionBlock, so that slabs change no bit of the rows).
   const CheckpointStore* checkpoint = nullptr;
   std::size_t slab_vertices = 65536;
   // Before the names of the parts a stage keeps: a bake of several channel
