@@ -138,8 +138,8 @@ int main(int argc, char** argv) {
                      "discard the checkpoint an interrupted run left (default: resume from it)");
   bake_cmd
       ->add_option("--slab-vertices", args.slab_vertices,
-                   "vertices traced per checkpointed slab (a multiple of 256 for the transfer; a "
-                   "killed bake loses at most one)")
+                   "vertices traced per checkpointed slab, rounded up to a multiple of 256 for a "
+                   "per-vertex transfer (a killed bake loses at most one)")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
   bake_cmd

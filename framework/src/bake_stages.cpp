@@ -512,6 +512,9 @@ BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const Checkpoin
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {
   Digest digest;
   digest.add("prt bake format " + std::to_string(kBakeFormatVersion));
+  // How rows are summed: a checkpoint kept by another projection would mix
+  // its rows' rounding with this one's.
+  digest.add("projection along trees in blocks of " + std::to_string(kProjectionBlock));
   digest.add(scene.text);
   for (const PluginRecord* record :
        {&plan.basis_record, &plan.exit_record, &plan.compressor_record})

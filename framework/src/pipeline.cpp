@@ -137,12 +137,14 @@ void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& me
   // The transfer twice: exact, and its compressed (or exact) form; channel
   // transfers also hold their parts and direct parts while they are stacked.
   const double copies = on_disk ? 0 : groups > 1 ? 4 : 2;
-  const double bytes =
-      copies * v * dimension * sizeof(float) + projection + glossy_light +
-      // Channel transfers each work on a copy of the rays' results.
-      (groups > 1 ? 2 : 1) *
-          // The bits are held for the projection after the trace.
-          ((keep_visibility || !fast ? v * d / 8 : 0) + (plan.bounces > 0 ? v * d * 8 : 0));
+  // Bits not kept are held a window at a time for the projection.
+  const double held_bits = std::min(v, double(kBitsWindow)) * d / 8;
+  const double bytes = copies * v * dimension * sizeof(float) + projection + glossy_light +
+                       // Channel transfers each work on a copy of the rays' results.
+                       (groups > 1 ? 2 : 1) * ((keep_visibility ? v * d / 8
+                                                : fast          ? 0
+                                                                : held_bits) +
+                                               (plan.bounces > 0 ? v * d * 8 : 0));
   const double available = available_memory();
   if (bytes > available) {
     char message[400];

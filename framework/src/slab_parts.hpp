@@ -29,8 +29,10 @@ std::vector<SlabRange> slabs_of(std::size_t first, std::size_t last, std::size_t
 // no bit of the rows.
 inline std::vector<SlabRange> transfer_slabs(std::size_t first, std::size_t last,
                                              std::size_t slab_vertices) {
+  // Capped first: a size past any mesh is one slab, and cannot overflow.
+  const std::size_t slab = std::min<std::size_t>(slab_vertices, std::size_t(1) << 48);
   const std::size_t blocks =
-      (std::max<std::size_t>(1, slab_vertices) + kProjectionBlock - 1) / kProjectionBlock;
+      std::max<std::size_t>(1, (slab + kProjectionBlock - 1) / kProjectionBlock);
   return slabs_of(first, last, blocks * kProjectionBlock);
 }
 

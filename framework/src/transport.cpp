@@ -226,6 +226,16 @@ namespace {
 
 constexpr std::size_t kBlock = 32;  // vertices per task (tracing, then projecting their rays)
 
+// A plug-in's matrix with an inf or NaN would spread it along the
+// projection's trees to vertices that never see its direction.
+void require_finite(const Eigen::MatrixXd& matrix, const char* what) {
+  for (Eigen::Index c = 0; c < matrix.cols(); ++c)
+    for (Eigen::Index r = 0; r < matrix.rows(); ++r)
+      if (!std::isfinite(matrix(r, c)))
+        throw Error(std::string(what) + " has a non-finite value (" + std::to_string(matrix(r, c)) +
+                    ") at direction " + std::to_string(r) + ", coefficient " + std::to_string(c));
+}
+
 std::vector<float> to_float(const DirectionSet& set) {
   std::vector<float> out(3 * set.size());
   for (Eigen::Index k = 0; k < set.size(); ++k)
@@ -336,20 +346,39 @@ TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& set,
   if (projection.rows() != set.size())
     throw Error("projection matrix has " + std::to_string(projection.rows()) + " rows for " +
                 std::to_string(set.size()) + " directions");
+  require_finite(projection, "the projection matrix");
   // The rays first, then per vertex the sum over its visible directions of
   // (n . d_k / pi) P_k, shared along trees of neighbours in fixed blocks of
   // the mesh (visible_times_in_blocks): only the directions where a vertex's
-  // bits differ from its neighbour's cost flops.
+  // bits differ from its neighbour's cost flops. Unless the bits are kept,
+  // a window of the mesh's grid at a time holds them (whole blocks: the
+  // same rows).
   Stopwatch clock;
-  TransportResult result =
-      trace_and_project(mesh, set, projection.cols(), nullptr, options, progress);
   const std::size_t last = std::min(options.last_vertex, mesh.vertex_count());
   const std::size_t first = std::min(options.first_vertex, last);
-  if (projection.cols() > 0 && last > first)
-    visible_times_in_blocks(mesh, set, first, last, result.visibility.words(0),
-                            PaddedRows(projection), result.transfer.coefficients.data(),
-                            std::size_t(projection.cols()));
-  if (!options.keep_visibility) result.visibility = VisibilityBits();
+  const std::size_t window = options.keep_visibility ? last + 1 : kBitsWindow;
+  static_assert(kBitsWindow % kProjectionBlock == 0);
+  const PaddedRows rows(projection);
+  const auto cols = std::size_t(projection.cols());
+  TransportResult result;
+  result.transfer.coefficients.resize(Eigen::Index(last - first), projection.cols());
+  if (options.keep_hits) result.hits.resize(last - first);
+  std::optional<RayCaster> own_caster;
+  TransportOptions part_options = options;
+  if (options.shadowed && !options.caster) part_options.caster = &own_caster.emplace(mesh);
+  for (std::size_t begin = first, end;; begin = end) {  // at least once: an empty range's shapes
+    end = std::min(last, (begin / window + 1) * window);
+    part_options.first_vertex = begin;
+    part_options.last_vertex = end;
+    TransportResult part = trace_and_project(mesh, set, 0, nullptr, part_options, progress);
+    if (cols > 0 && end > begin)
+      visible_times_in_blocks(mesh, set, begin, end, part.visibility.words(0), rows,
+                              result.transfer.coefficients.data() + (begin - first) * cols, cols);
+    result.rays_cast += part.rays_cast;
+    std::move(part.hits.begin(), part.hits.end(), result.hits.begin() + (begin - first));
+    if (options.keep_visibility) result.visibility = std::move(part.visibility);  // one window
+    if (end == last) break;
+  }
   result.trace_seconds = clock.seconds();
   return result;
 }
@@ -390,9 +419,11 @@ TransferSignal project_visibility(const Mesh& mesh, const DirectionSet& set,
   // those of the whole mesh's projection.
   if (!basis.has_fast_projection(set)) {
     // T P over the visible pairs only: the bake's own projection.
+    const Eigen::MatrixXd projection = basis.projection_matrix(set);
+    require_finite(projection, "the basis's projection matrix");
     if (count > 0 && basis.size() > 0)
       visible_times_in_blocks(mesh, set, first_vertex, last, visibility.words(0),
-                              PaddedRows(basis.projection_matrix(set)), out.coefficients.data(),
+                              PaddedRows(projection), out.coefficients.data(),
                               std::size_t(basis.size()));
     return out;
   }

@@ -456,8 +456,11 @@ void visible_times_in_blocks(const Mesh& mesh, const DirectionSet& set, std::siz
                              float* out, std::size_t out_stride) {
   const auto s = static_cast<std::size_t>(set.size());
   check_rows(right.rows(), s, "visible_times_in_blocks: the right-hand matrix", "directions");
-  check_range(mesh, first, last >= first ? last - first : 0, "visible_times_in_blocks");
-  if (last <= first) return;
+  if (last < first)
+    throw Error("visible_times_in_blocks: vertices [" + std::to_string(first) + ", " +
+                std::to_string(last) + ") end before they start");
+  check_range(mesh, first, last - first, "visible_times_in_blocks");
+  if (last == first) return;
   const auto normal = [&](std::size_t i, int c) { return mesh.normals[first + i][c]; };
   const std::vector<double> a = coordinates(normal, last - first, 1 / M_PI);
   const MaskedSums m{bits, VisibilityBits::words_for(s), a.data(), set.directions.data(), &right};

@@ -270,7 +270,8 @@ constant = [1.0, 0.7, 0.4]
     // trace was: the rerun traces that slab and computes that channel again.
     const std::string last = "channel-" + std::to_string(channels) + ".transfer";
     for (const std::string& lost :
-         {std::string("transfer"), last, part_name("trace-rays", kProjectionBlock, v)})
+         {std::string("transfer"), last,
+          part_name("trace-rays", kProjectionBlock, std::min(v, 2 * kProjectionBlock))})
       REQUIRE(fs::remove(store.folder() / lost));
     const BakeData resumed = bake(s, registry, options, times);
     for (const BakeData* data : {&first, &resumed}) {

@@ -10,6 +10,7 @@
 #include "prt/mesh.hpp"
 #include "prt/sh.hpp"
 #include "prt/transport.hpp"
+#include "prt/visible_products.hpp"
 
 using namespace prt;
 
@@ -193,4 +194,36 @@ TEST_CASE("no ray leaks out of a closed box through its shared edges (robust tra
   rtcReleaseScene(scene);
   rtcReleaseDevice(device);
   CHECK(leaks > 0);
+}
+
+TEST_CASE("a bake that holds its bits a window at a time equals one that keeps them all",
+          "[transport]") {
+  // More than one window of bits (kBitsWindow vertices), the last short: a
+  // sphere (occluding) over a plane; the rows, rays and hits must not depend
+  // on the windows.
+  const Mesh scene = test::sphere_over_plane(3, 280);
+  REQUIRE(scene.vertex_count() > kBitsWindow);
+  REQUIRE(scene.vertex_count() % kBitsWindow != 0);
+  const DirectionSet set = DirectionSet::fibonacci(24);
+  const Eigen::MatrixXd p = sh_projection(2, set);
+  TransportOptions kept, windowed;
+  kept.keep_visibility = kept.keep_hits = windowed.keep_hits = true;
+  const TransportResult all = diffuse_transfer(scene, set, p, kept, nullptr);
+  const TransportResult parts = diffuse_transfer(scene, set, p, windowed, nullptr);
+  CHECK(parts.transfer.coefficients == all.transfer.coefficients);
+  CHECK(parts.rays_cast == all.rays_cast);
+  CHECK(parts.visibility.vertices() == 0);
+  REQUIRE(parts.hits.size() == all.hits.size());
+  std::size_t differing = 0, hits = 0;
+  for (std::size_t v = 0; v < all.hits.size(); ++v) {
+    hits += all.hits[v].size();
+    differing += parts.hits[v].size() != all.hits[v].size();
+  }
+  CHECK(hits > 0);
+  CHECK(differing == 0);
+  // A range that starts past the first window: its rows are the whole's.
+  windowed.first_vertex = kBitsWindow - kProjectionBlock;
+  const TransportResult tail = diffuse_transfer(scene, set, p, windowed, nullptr);
+  CHECK(tail.transfer.coefficients ==
+        all.transfer.coefficients.bottomRows(tail.transfer.coefficients.rows()));
 }

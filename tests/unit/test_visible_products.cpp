@@ -194,6 +194,14 @@ TEST_CASE("the bake's projection in blocks: vertices that see nothing, no column
   CHECK_THROWS_WITH(visible_times_in_blocks(scene, set, 0, v + 1, bits.words(0), PaddedRows(right),
                                             out.data(), 20),
                     Catch::Contains("for a mesh of"));
+  CHECK_THROWS_WITH(
+      visible_times_in_blocks(scene, set, 5, 4, bits.words(0), PaddedRows(right), out.data(), 20),
+      Catch::Contains("[5, 4) end before they start"));
+  // A matrix with a NaN would spread it along the trees: refused by the bake.
+  Eigen::MatrixXd poisoned = right;
+  poisoned(7, 3) = std::nan("");
+  CHECK_THROWS_WITH(diffuse_transfer(scene, set, poisoned, {}, nullptr),
+                    Catch::Contains("non-finite") && Catch::Contains("direction 7, coefficient 3"));
 }
 
 TEST_CASE("visible products of no vertices are empty", "[visible]") {

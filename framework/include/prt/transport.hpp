@@ -1,5 +1,5 @@
 // Transport sampling with Embree: per-vertex visibility over a direction set,
-// kept as bits, fused with the projection of cosine-weighted visibility.
+// kept as bits, and the projection of cosine-weighted visibility.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -106,13 +106,20 @@ struct TransportResult {
   VisibilityBits visibility;  // when keep_visibility
   HitLists hits;              // when keep_hits
   std::uint64_t rays_cast = 0;
-  double trace_seconds = 0;  // wall time of the fused trace + project pass
+  double trace_seconds = 0;  // wall time of the trace and the projection
 };
 
-// Diffuse transfer per vertex: traces only directions above the tangent plane,
-// then multiplies each vertex block's cosine-weighted visibility by the
-// basis's projection matrix P (s x n). Multithreaded with TBB; results do not
-// depend on the thread count.
+// Vertices whose visibility bits diffuse_transfer holds at once when it does
+// not keep them: a window of the mesh's grid (50 MB at 6,144 directions).
+constexpr std::size_t kBitsWindow = 65536;
+
+// Diffuse transfer per vertex: traces only directions above the tangent plane
+// (a window of kBitsWindow vertices at a time, unless the bits are kept),
+// then projects each vertex's cosine-weighted visibility onto the basis's
+// projection matrix P (s x n) along trees of neighbours
+// (visible_times_in_blocks). Multithreaded with TBB; results do not depend
+// on the thread count, nor on a range whose ends are multiples of
+// kProjectionBlock.
 TransportResult diffuse_transfer(const Mesh& mesh, const DirectionSet& directions,
                                  const Eigen::MatrixXd& projection, const TransportOptions& options,
                                  Progress* progress);

@@ -84,8 +84,8 @@ void visible_times(const Mesh& mesh, const DirectionSet& set, const std::uint32_
                    PaddedRows& out);
 
 // Vertices per block of the bake's projection (visible_times_in_blocks):
-// slabs and shards of a bake are whole blocks, so that their rows are the
-// whole mesh's, bit for bit.
+// the slabs of a per-vertex transfer and the ranks' shards are whole
+// blocks, so that their rows are the whole mesh's, bit for bit.
 constexpr std::size_t kProjectionBlock = 256;
 
 // The bake's projection: T right for the mesh's vertices [first, last), as
