@@ -375,6 +375,61 @@ TEST_CASE("lower_product is A^T A, exactly symmetric, for any width and depth",
     }
 }
 
+TEST_CASE("classification over kept errors labels as a full one when some models change",
+          "[clustering]") {
+  // 37 clusters (three groups, the last partial), 3 directions each; the
+  // errors are kept, then some models change and only theirs are packed.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g;
+  const int n = 20, k = 37, points = 301, components = 3;
+  const auto model = [&] {
+    Eigen::MatrixXd q = Eigen::MatrixXd::NullaryExpr(n, n, [&] { return g(rng); });
+    q = Eigen::HouseholderQR<Eigen::MatrixXd>(q).householderQ();
+    return ClusterModel{Eigen::RowVectorXd::NullaryExpr(n, [&] { return g(rng); }),
+                        q.leftCols(components + 1).transpose(),
+                        Eigen::VectorXd::Ones(components + 1)};
+  };
+  std::vector<ClusterModel> models;
+  for (int j = 0; j < k; ++j) models.push_back(model());
+  const MatrixXfRow x =
+      (Eigen::MatrixXd::NullaryExpr(points, n, [&] { return g(rng); }) * 1.5).cast<float>();
+  std::vector<int> all(k);
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<float> kept(std::size_t(points) * k), scratch;
+  std::vector<std::int32_t> labels(points), want(points);
+  classify_rows_kept(x, 0, points, pack_classifier(models, components), all, kept.data(), k,
+                     labels.data(), scratch);
+  classify_rows(x, 0, points, pack_classifier(models, components), want.data(), scratch);
+  CHECK(labels == want);
+  // Clusters in the first, middle and last group change; the rest keep
+  // their errors. Blocks of rows as the classification takes them.
+  const std::vector<int> changed{0, 17, 18, 36};
+  std::vector<ClusterModel> subset;
+  for (int j : changed) {
+    models[std::size_t(j)] = model();
+    subset.push_back(models[std::size_t(j)]);
+  }
+  const PackedClassifier packed = pack_classifier(subset, components);
+  for (int begin = 0; begin < points; begin += 64) {
+    const int end = std::min(points, begin + 64);
+    classify_rows_kept(x, begin, end, packed, changed, kept.data() + std::size_t(begin) * k, k,
+                       labels.data() + begin, scratch);
+  }
+  classify_rows(x, 0, points, pack_classifier(models, components), want.data(), scratch);
+  CHECK(labels == want);
+  long moved = 0;
+  for (int p = 0; p < points; ++p)
+    moved += std::find(changed.begin(), changed.end(), want[std::size_t(p)]) != changed.end();
+  CHECK(moved > 0);  // the changed clusters win some rows
+  // Nothing changed: no clusters packed, the labels from the kept errors.
+  classify_rows_kept(x, 0, points, pack_classifier({}, components), {}, kept.data(), k,
+                     labels.data(), scratch);
+  CHECK(labels == want);
+  CHECK_THROWS_WITH(
+      classify_rows_kept(x, 0, points, packed, all, kept.data(), k, labels.data(), scratch),
+      Catch::Contains("37 cluster indices for 4 packed clusters"));
+}
+
 TEST_CASE("the packed classification keeps the first of equal clusters and checks the dimension",
           "[clustering][extremes]") {
   // Clusters 3 and 19 (lane 3 of the first and second groups) are the same

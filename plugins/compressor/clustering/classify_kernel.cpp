@@ -137,8 +137,12 @@ Eigen::Index classify_block_rows(Eigen::Index dimension) {
   return std::clamp<Eigen::Index>(rows, 4 * kRows, 256);
 }
 
-void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
-                   std::int32_t* labels, std::vector<float>& errors) {
+namespace {
+
+// Every packed cluster's error for rows [begin, end): errors[row width +
+// packed cluster], width (returned) the packed clusters padded to groups.
+std::size_t packed_errors(RowsRef x, Eigen::Index begin, Eigen::Index end,
+                          const PackedClassifier& c, std::vector<float>& errors) {
   const Eigen::Index n = c.dimension, height = end - begin;
   if (x.cols() != n)
     throw Error("clustering: rows of " + std::to_string(x.cols()) +
@@ -172,8 +176,31 @@ void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const Packed
               base[r] - sum[r]);
     }
   }
-  for (Eigen::Index r = 0; r < height; ++r)
+  return width;
+}
+
+}  // namespace
+
+void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
+                   std::int32_t* labels, std::vector<float>& errors) {
+  const std::size_t width = packed_errors(x, begin, end, c, errors);
+  for (Eigen::Index r = 0; r < end - begin; ++r)
     labels[r] = first_minimum(&errors[std::size_t(r) * width], c.clusters);
+}
+
+void classify_rows_kept(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
+                        const std::vector<int>& clusters, float* kept, int all,
+                        std::int32_t* labels, std::vector<float>& errors) {
+  if (clusters.size() != std::size_t(c.clusters))
+    throw Error("clustering: " + std::to_string(clusters.size()) + " cluster indices for " +
+                std::to_string(c.clusters) + " packed clusters");
+  const std::size_t width = c.clusters > 0 ? packed_errors(x, begin, end, c, errors) : 0;
+  for (Eigen::Index r = 0; r < end - begin; ++r) {
+    float* row = kept + std::size_t(r) * std::size_t(all);
+    for (std::size_t j = 0; j < clusters.size(); ++j)
+      row[clusters[j]] = errors[std::size_t(r) * width + j];
+    labels[r] = first_minimum(row, all);
+  }
 }
 
 }  // namespace prt::clustering

@@ -61,4 +61,14 @@ Eigen::Index classify_block_rows(Eigen::Index dimension);
 void classify_rows(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
                    std::int32_t* labels, std::vector<float>& errors);
 
+// The same over kept errors: `c` packs some of `all` clusters (packed
+// cluster j is cluster clusters[j]); their errors for rows [begin, end)
+// replace those in `kept` (a row of `all` floats per row, from row begin),
+// and each row's label is the first least of its kept row. A cluster's
+// error depends on its own model and the row alone (lanes never mix), so a
+// model that did not change keeps its errors' bits.
+void classify_rows_kept(RowsRef x, Eigen::Index begin, Eigen::Index end, const PackedClassifier& c,
+                        const std::vector<int>& clusters, float* kept, int all,
+                        std::int32_t* labels, std::vector<float>& errors);
+
 }  // namespace prt::clustering
