@@ -364,29 +364,23 @@ struct TreeKernel {
       for (int c = 0; c < 3; ++c)
         for (int p = 0; p < Packets; ++p) n[c][p] = load(from + c * stride + 8 * p);
     }
-    const std::uint32_t* directions = changes.directions.data();
-    for (std::size_t i = 0; i < changes.added; ++i) {
-      const std::size_t j = directions[i];
-      const double* row = base + j * stride;
-      const double bx = m.b[3 * j], by = m.b[3 * j + 1], bz = m.b[3 * j + 2];
-      for (int p = 0; p < Packets; ++p) {
-        const Packet x = load(row + 8 * p);
-        n[0][p] += bx * x;
-        n[1][p] += by * x;
-        n[2][p] += bz * x;
+    // n += sign b_j (x) rows.row(j) over listed directions [from, to) (the
+    // sign is exact: the same bits as subtracting).
+    const auto add = [&](std::size_t from, std::size_t to, double sign) {
+      for (std::size_t i = from; i < to; ++i) {
+        const std::size_t j = changes.directions[i];
+        const double* row = base + j * stride;
+        const double bx = sign * m.b[3 * j], by = sign * m.b[3 * j + 1], bz = sign * m.b[3 * j + 2];
+        for (int p = 0; p < Packets; ++p) {
+          const Packet x = load(row + 8 * p);
+          n[0][p] += bx * x;
+          n[1][p] += by * x;
+          n[2][p] += bz * x;
+        }
       }
-    }
-    for (std::size_t i = changes.added; i < changes.count; ++i) {
-      const std::size_t j = directions[i];
-      const double* row = base + j * stride;
-      const double bx = m.b[3 * j], by = m.b[3 * j + 1], bz = m.b[3 * j + 2];
-      for (int p = 0; p < Packets; ++p) {
-        const Packet x = load(row + 8 * p);
-        n[0][p] -= bx * x;
-        n[1][p] -= by * x;
-        n[2][p] -= bz * x;
-      }
-    }
+    };
+    add(0, changes.added, 1.0);
+    add(changes.added, changes.count, -1.0);
     double* to = ring.slot(position) + 8 * first_packet;
     for (int c = 0; c < 3; ++c)
       for (int p = 0; p < Packets; ++p) store(to + c * stride + 8 * p, n[c][p]);
