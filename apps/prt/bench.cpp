@@ -22,7 +22,9 @@
 #include "prt/basis.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
+#include "prt/error.hpp"
 #include "prt/glossy.hpp"
+#include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/scene.hpp"
@@ -145,16 +147,17 @@ double median_seconds(int runs, const std::function<void()>& work) {
 // One CSV row per JSON record, columns in the records' key order (strings
 // quoted as JSON quotes them, which CSV readers accept).
 void write_csv(const std::vector<nlohmann::ordered_json>& records, const fs::path& file) {
-  std::ofstream csv(file);
+  std::string csv;
   for (std::size_t r = 0; r < records.size(); ++r) {
     std::string header, row;
     for (const auto& [key, value] : records[r].items()) {
       header += (header.empty() ? "" : ",") + key;
       row += (row.empty() ? "" : ",") + value.dump();
     }
-    if (r == 0) csv << header << "\n";
-    csv << row << "\n";
+    if (r == 0) csv += header + "\n";
+    csv += row + "\n";
   }
+  write_text_file(file, csv);
 }
 
 }  // namespace
@@ -354,6 +357,12 @@ int bench(Context& context, const BenchArgs& args) {
     record["lights"] = args.lights;
     const std::string line = record.dump();
     log << line << "\n" << std::flush;
+    // A full disk: stop here; the lines before this one are whole, and the
+    // next run resumes after them (a cut last line is run again).
+    if (!log)
+      throw Error(results.string() +
+                  ": cannot append a result (a full disk?); the configurations before it are "
+                  "kept, and the same command resumes after them");
     progress.add(1);
   }
   log.close();
@@ -365,7 +374,7 @@ int bench(Context& context, const BenchArgs& args) {
       auto record = nlohmann::ordered_json::parse(line, nullptr, false);
       if (record.is_object()) records.push_back(std::move(record));
     }
-  std::ofstream(out / "results.json") << nlohmann::ordered_json(records).dump(2) << "\n";
+  write_text_file(out / "results.json", nlohmann::ordered_json(records).dump(2) + "\n");
   write_csv(records, out / "results.csv");
   std::cout << "results: " << (out / "results.json").string() << " (" << records.size()
             << " configurations)\n";

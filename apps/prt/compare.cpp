@@ -127,9 +127,10 @@ SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet&
 
 int compare_bases(Context& context, const CompareArgs& args) {
   const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
-  for (const std::string& table : {args.csv, args.json})
-    if (!table.empty())
-      check_output({table, FileKind::text, "table"}, scene.input_files(), args.force);
+  if (!args.csv.empty())
+    check_output({args.csv, report_kind(args.csv), "table"}, scene.input_files(), args.force);
+  if (!args.json.empty())
+    check_output({args.json, FileKind::json, "table"}, scene.input_files(), args.force);
   const DirectionSet set = scene.directions();
   std::vector<BasisSpec> specs;
   std::stringstream list(args.bases);

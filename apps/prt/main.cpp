@@ -1,5 +1,7 @@
 // prt: bake, render and inspect precomputed radiance transfer.
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdlib>
 #include <iostream>
 
 #include "commands.hpp"
@@ -59,7 +61,16 @@ int main(int argc, char** argv) {
   render_cmd
       ->add_option("--exposure", render.exposure,
                    "exposure scale of the PNG (default: the scene's)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](const std::string& text) -> std::string {
+            // CLI11's PositiveNumber lets NaN through (every comparison with it is false).
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            if (end == text.c_str() || *end != '\0' || !std::isfinite(value) || !(value > 0))
+              return "exposure \"" + prt::elide(text) + "\" is not a finite positive number";
+            return "";
+          },
+          "POSITIVE"));
 
   prt::cli::CompressArgs compress;
   auto* compress_cmd =

@@ -182,8 +182,9 @@ Ringing ringing(const Eigen::VectorXd& coefficients, int order) {
 int stability(Context& context, const StabilityArgs& args) {
   for (int l : args.bands)
     if (l < 0 || l > 5000) throw Error("--bands: band " + std::to_string(l) + " is not in 0..5000");
-  for (const std::string& file : {args.json, args.figure_data})
-    if (!file.empty()) check_output({file, FileKind::text, "report"}, {}, args.force);
+  if (!args.json.empty()) check_output({args.json, FileKind::json, "report"}, {}, args.force);
+  if (!args.figure_data.empty())
+    check_output({args.figure_data, report_kind(args.figure_data), "figure data"}, {}, args.force);
   Report report;
   report.markdown = "# Numerical stability report (`prt stability`)\n";
 

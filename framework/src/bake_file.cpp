@@ -5,6 +5,8 @@
 #include <fstream>
 
 #include "bake_userblock.hpp"
+#include "child_process.hpp"
+#include "hdf5_failures.hpp"
 #include "prt/error.hpp"
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
@@ -30,10 +32,29 @@ void write_text(H5::H5Object& object, const std::string& name, const std::string
   a.write(type, value);
 }
 
+// What the reader was touching when libhdf5 failed, for a message that names
+// it ("damaged bake file: reading dataset \"weights\" of /compressed: ...").
+thread_local std::string reading_now;
+
+std::string object_name(const H5::H5Object& object) {
+  try {
+    return object.getObjName();
+  } catch (const H5::Exception&) {
+    return "?";
+  }
+}
+
+H5::Group open_group(const H5::H5File& h5, const std::string& name) {
+  reading_now = "group \"" + name + "\"";
+  if (name != "/" && !h5.nameExists(name)) throw Error("group \"" + name + "\" is missing");
+  return h5.openGroup(name);
+}
+
 // Attributes are small: anything larger is damage or a crafted file.
 constexpr hsize_t kMaxAttributeBytes = 1 << 20;
 
 std::string read_text(const H5::H5Object& object, const std::string& name) {
+  reading_now = "attribute \"" + name + "\" of " + object_name(object);
   if (!object.attrExists(name)) throw Error("attribute \"" + name + "\" is missing");
   H5::Attribute a = object.openAttribute(name);
   if (a.getTypeClass() != H5T_STRING || a.getSpace().getSimpleExtentNpoints() != 1)
@@ -53,6 +74,7 @@ void write_number(H5::H5Object& object, const std::string& name, double value) {
 }
 
 double read_number(const H5::H5Object& object, const std::string& name) {
+  reading_now = "attribute \"" + name + "\" of " + object_name(object);
   if (!object.attrExists(name)) throw Error("attribute \"" + name + "\" is missing");
   H5::Attribute a = object.openAttribute(name);
   if (a.getTypeClass() != H5T_FLOAT || a.getSpace().getSimpleExtentNpoints() != 1)
@@ -129,6 +151,7 @@ void require_contiguous_in_file(const H5::DataSet& set, const std::string& name)
 // before anything is allocated for it); rows x cols is its shape.
 H5::DataSet checked_dataset(const H5::Group& group, const std::string& name, H5T_class_t expected,
                             hsize_t& rows, hsize_t& cols) {
+  reading_now = "dataset \"" + name + "\" of " + object_name(group);
   if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
   H5::DataSet set = group.openDataSet(name);
   require_contiguous_in_file(set, name);
@@ -175,6 +198,7 @@ void write_bytes(H5::H5Object& parent, const std::string& name, const std::strin
 }
 
 std::string read_bytes(const H5::Group& group, const std::string& name) {
+  reading_now = "dataset \"" + name + "\" of " + object_name(group);
   if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
   H5::DataSet set = group.openDataSet(name);
   require_contiguous_in_file(set, name);
@@ -317,6 +341,12 @@ std::string one_line(const PluginRecord& plugin) {
   return plugin.name + " " + plugin.version + (parameters.empty() ? "" : " (" + parameters + ")");
 }
 
+namespace {
+// The HDF5 part of write_bake, into `temporary` (`file` names it in messages).
+void write_bake_to(const fs::path& temporary, const fs::path& file, const BakeData& data,
+                   bool streamed);
+}  // namespace
+
 void write_bake(const fs::path& file, const BakeData& data) {
   H5::Exception::dontPrint();
   data.mesh.validate("bake data");
@@ -338,12 +368,31 @@ void write_bake(const fs::path& file, const BakeData& data) {
                 std::to_string(t.exit_rows) + " exit rows and " + std::to_string(t.channel_groups) +
                 " channel transfers do not fit together (or a colour channel reads a missing "
                 "transfer); nothing written");
+  // libhdf5 1.10 cannot recover from a failed write: closing the file after a
+  // failed flush double-frees (SIGSEGV). The file is written by a child
+  // process, which ends at the first failure with its message; this process
+  // never holds a half-written HDF5 file.
   write_atomically(file, [&](const fs::path& temporary) {
-    try {
-      H5::FileCreatPropList creation;
-      creation.setUserblock(kBakeUserBlockSize);
-      H5::H5File h5(temporary.string(), H5F_ACC_TRUNC, creation);
-      H5::Group root = h5.openGroup("/");
+    run_in_child_process(file.string() + ": writing the bake file",
+                         [&] { write_bake_to(temporary, file, data, streamed); });
+    seal_bake_file(temporary, kBakeFormatVersion, file);
+  });
+}
+
+namespace {
+
+void write_bake_to(const fs::path& temporary, const fs::path& file, const BakeData& data,
+                   bool streamed) {
+  Hdf5FailureRecorder failures(file);
+  try {
+    H5::FileCreatPropList creation;
+    creation.setUserblock(kBakeUserBlockSize);
+    H5::FileAccPropList access;
+    // Closing the file closes whatever a failed close left open.
+    access.setFcloseDegree(H5F_CLOSE_STRONG);
+    H5::H5File h5(temporary.string(), H5F_ACC_TRUNC, creation, access);
+    {  // every object closed before the file, so its close reports the flush
+      H5::Group root = open_group(h5, "/");
       write_text(root, "format", kFormatName);
       write_number(root, "format_version", kBakeFormatVersion);
       write_text(root, "scene_file", data.scene_file);
@@ -413,13 +462,17 @@ void write_bake(const fs::path& file, const BakeData& data) {
       }
       H5::Group metrics = create_group(h5, "metrics");
       for (const auto& [name, value] : data.metrics) write_number(metrics, name, value);
-      h5.close();
-    } catch (const H5::Exception& e) {
-      throw Error(file.string() + ": cannot write bake file: " + e.getDetailMsg());
     }
-    seal_bake_file(temporary, kBakeFormatVersion);
-  });
+    h5.close();
+  } catch (const H5::Exception& e) {
+    throw Error(failures.message(e.getDetailMsg()));
+  }
+  // Failures inside the wrappers' destructors (a dataset's flush) are only
+  // recorded there.
+  if (failures.failed()) throw Error(failures.message());
 }
+
+}  // namespace
 
 BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   H5::Exception::dontPrint();
@@ -432,9 +485,10 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   file_bytes = fs::file_size(file);
   BakeData data;
   try {
+    reading_now = "the file's superblock";
     H5::H5File h5(file.string(), H5F_ACC_RDONLY);
     require_no_external_links(h5);
-    H5::Group root = h5.openGroup("/");
+    H5::Group root = open_group(h5, "/");
     if (!root.attrExists("format") || read_text(root, "format") != kFormatName)
       throw Error("it is an HDF5 file but not a PRT bake");
     if (read_number(root, "format_version") != kBakeFormatVersion)
@@ -447,7 +501,7 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
     for (int c = 0; c < 3; ++c)
       data.albedo[c] = static_cast<float>(read_number(root, "albedo_" + std::string(1, "rgb"[c])));
 
-    H5::Group mesh = h5.openGroup("mesh");
+    H5::Group mesh = open_group(h5, "mesh");
     data.mesh.positions = read_vectors<Eigen::Vector3f, float>(mesh, "positions");
     data.mesh.normals = read_vectors<Eigen::Vector3f, float>(mesh, "normals");
     data.mesh.triangles =
@@ -455,7 +509,7 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
     data.mesh.validate("mesh");
 
     hsize_t rows, cols;
-    H5::Group transfer = h5.openGroup("transfer");
+    H5::Group transfer = open_group(h5, "transfer");
     data.transfer.kind = read_text(transfer, "kind");
     data.material = read_text(transfer, "material");
     data.bounces = static_cast<int>(read_count(transfer, "bounces", 1000));
@@ -506,7 +560,7 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
         throw Error("the direct transfer's shape differs from the transfer's");
     }
 
-    H5::Group compressed = h5.openGroup("compressed");
+    H5::Group compressed = open_group(h5, "compressed");
     CompressedTransfer& c = data.compressed;
     c.compressor = read_text(compressed, "compressor");
     c.components = static_cast<int>(read_count(compressed, "components", 1 << 30));
@@ -543,7 +597,7 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
 
     for (const auto& [group, basis_state] :
          {std::pair{"basis_state", &data.basis_state}, {"exit_state", &data.exit_state}}) {
-      H5::Group state = h5.openGroup(group);
+      H5::Group state = open_group(h5, group);
       for (hsize_t i = 0; i < state.getNumObjs(); ++i) {
         const std::string name = state.getObjnameByIdx(i);
         auto values = read_array<double>(state, name, rows, cols);
@@ -552,13 +606,14 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
                 values.data(), rows, cols);
       }
     }
-    H5::Group metrics = h5.openGroup("metrics");
+    H5::Group metrics = open_group(h5, "metrics");
     for (int i = 0; i < metrics.getNumAttrs(); ++i) {
       const std::string name = metrics.openAttribute(static_cast<unsigned>(i)).getName();
       data.metrics[name] = read_number(metrics, name);
     }
   } catch (const H5::Exception& e) {
-    throw Error(file.string() + ": damaged bake file (" + e.getDetailMsg() + ")");
+    throw Error(file.string() + ": damaged bake file: reading " + reading_now + " failed (" +
+                e.getDetailMsg() + ")");
   } catch (const Error& e) {
     throw Error(file.string() + ": bad bake file: " + e.what());
   }

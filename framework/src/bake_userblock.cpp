@@ -1,6 +1,10 @@
 #include "bake_userblock.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <boost/crc.hpp>
+#include <cerrno>
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
@@ -8,6 +12,7 @@
 #include <vector>
 
 #include "prt/error.hpp"
+#include "prt/output_file.hpp"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -28,21 +33,46 @@ std::uint32_t checksum_after_block(std::istream& in) {
 
 }  // namespace
 
-void seal_bake_file(const fs::path& file, int format_version) {
-  std::fstream io(file, std::ios::in | std::ios::out | std::ios::binary);
-  if (!io) throw Error(file.string() + ": cannot reopen the bake file to seal it");
-  const std::uint64_t length = fs::file_size(file);
-  const std::uint32_t crc = checksum_after_block(io);
+void seal_bake_file(const fs::path& file, int format_version, const fs::path& shown) {
+  const fs::path& name = shown.empty() ? file : shown;
+  const int descriptor = ::open(file.c_str(), O_RDWR | O_CLOEXEC);
+  if (descriptor < 0) throw Error(io_failure(name, errno, "reopening the bake file to seal it"));
+  struct Closer {
+    int fd;
+    ~Closer() {
+      if (fd >= 0) ::close(fd);
+    }
+  } closer{descriptor};
+  // The checksum is of what the file holds now, read back through the
+  // kernel, not of what was meant to be written.
+  boost::crc_32_type crc;
+  std::vector<char> buffer(1 << 20);
+  std::uint64_t length = kBakeUserBlockSize;
+  for (;;) {
+    const ssize_t got =
+        ::pread(descriptor, buffer.data(), buffer.size(), static_cast<off_t>(length));
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) throw Error(io_failure(name, errno, "reading the bake file back to seal it"));
+    if (got == 0) break;
+    crc.process_bytes(buffer.data(), static_cast<std::size_t>(got));
+    length += static_cast<std::uint64_t>(got);
+  }
   char block[kBakeUserBlockSize] = {};
   std::snprintf(block, sizeof block,
                 "%sformat %d\nlength %" PRIu64 "\ncrc32 %08" PRIx32
                 "\n(a PRT bake file: HDF5 after this %d-byte block)\n",
-                kBakeMagic, format_version, length, crc, int(kBakeUserBlockSize));
-  io.clear();
-  io.seekp(0);
-  io.write(block, sizeof block);
-  io.flush();
-  if (!io) throw Error(file.string() + ": cannot write the bake file's header");
+                kBakeMagic, format_version, length, crc.checksum(), int(kBakeUserBlockSize));
+  for (std::size_t done = 0; done < sizeof block;) {
+    const ssize_t wrote =
+        ::pwrite(descriptor, block + done, sizeof block - done, static_cast<off_t>(done));
+    if (wrote < 0 && errno == EINTR) continue;
+    if (wrote <= 0)
+      throw Error(io_failure(name, wrote < 0 ? errno : ENOSPC, "writing the bake file's header"));
+    done += static_cast<std::size_t>(wrote);
+  }
+  if (::fsync(descriptor) != 0) throw Error(io_failure(name, errno, "writing the bake file"));
+  closer.fd = -1;
+  if (::close(descriptor) != 0) throw Error(io_failure(name, errno, "writing the bake file"));
 }
 
 int verify_bake_file(const fs::path& file) {

@@ -5,11 +5,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 
 #include "prt/error.hpp"
+#include "prt/output_file.hpp"
 
 namespace prt {
 namespace fs = std::filesystem;
@@ -61,30 +63,31 @@ void write_raw(const fs::path& file, const void* head, std::size_t head_bytes, c
                std::size_t bytes) {
   const fs::path temporary = file.string() + ".tmp-" + std::to_string(::getpid());
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw Error(temporary.string() + ": cannot create: " + std::strerror(errno));
+  if (fd < 0) throw Error(io_failure(temporary, errno, "creating a checkpoint part"));
+  const auto fail = [&](int error_number) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw Error(io_failure(file, error_number, "writing a checkpoint part"));
+  };
   auto write_all = [&](const void* from, std::size_t size) {
     const char* p = static_cast<const char*>(from);
     while (size > 0) {
       const ssize_t n = ::write(fd, p, size);
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) {
-        const std::string reason = std::strerror(errno);
+        const int error_number = n < 0 ? errno : ENOSPC;
         ::close(fd);
-        fs::remove(temporary);
-        throw Error(temporary.string() + ": write failed: " + reason);
+        fail(error_number);
       }
       p += n, size -= static_cast<std::size_t>(n);
     }
   };
   write_all(head, head_bytes);
   write_all(data, bytes);
-  const bool synced = ::fsync(fd) == 0;
-  const bool closed = ::close(fd) == 0;  // always closed, even when fsync failed
-  if (!synced || !closed) {
-    fs::remove(temporary);
-    throw Error(temporary.string() + ": could not be flushed to disk");
-  }
-  fs::rename(temporary, file);
+  const int synced = ::fsync(fd) == 0 ? 0 : errno;
+  const int closed = ::close(fd) == 0 ? 0 : errno;  // always closed, even when fsync failed
+  if (synced || closed) fail(synced ? synced : closed);
+  if (std::rename(temporary.c_str(), file.c_str()) != 0) fail(errno);
   const int dir = ::open(file.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir >= 0) ::fsync(dir), ::close(dir);
 }
@@ -139,7 +142,9 @@ namespace {
 // An exclusive lock on the folder's "lock" file (created with the folder):
 // the descriptor, or throws when another process holds it.
 int lock_folder(const fs::path& folder) {
-  fs::create_directories(folder);
+  std::error_code error;
+  fs::create_directories(folder, error);
+  if (error) throw Error(io_failure(folder, error.value(), "creating the checkpoint folder"));
   const fs::path file = folder / "lock";
   const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) throw Error(file.string() + ": cannot open: " + std::strerror(errno));

@@ -1,17 +1,21 @@
 #include "prt/environment.hpp"
 
-#include <ImfArray.h>
-#include <ImfRgbaFile.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <stb/stb_image.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "image_file_check.hpp"
 #include "prt/camera.hpp"
 #include "prt/error.hpp"
 #include "prt/image.hpp"
+#include "prt/log.hpp"
 #include "prt/quadrature.hpp"
 
 namespace prt {
@@ -26,19 +30,49 @@ void require_file(const std::filesystem::path& file) {
     throw Error(file.string() + ": environment map not found");
 }
 
-// Negative values are clamped to 0; NaN or Inf is refused with the pixel.
+// Radiance beyond this is damage, not light (an RGBE exponent of 255 decodes
+// to ~1.7e38): sums over a map's pixels would overflow to infinity.
+constexpr float kMaxRadiance = 1e20f;
+
+std::string pixel_name(int x, int y) {
+  return "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ")";
+}
+
+// NaN, infinite and implausibly large values are refused with the pixel;
+// negative ones (a filtered or denoised map's ringing) are clamped to 0
+// with one warning that counts them.
 std::vector<float> checked_pixels(const std::filesystem::path& file, const float* data, int width,
                                   int height, int channels) {
   std::vector<float> rgb(static_cast<std::size_t>(width) * height * 3);
+  std::size_t negative = 0;
+  float lowest = 0;
+  int lowest_x = 0, lowest_y = 0;
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x)
       for (int c = 0; c < 3; ++c) {
         const float value = data[(static_cast<std::size_t>(y) * width + x) * channels + c];
         if (!std::isfinite(value))
-          throw Error(file.string() + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                      ") is NaN or infinite");
+          throw Error(file.string() + ": " + pixel_name(x, y) + " is NaN or infinite");
+        if (std::abs(value) > kMaxRadiance) {
+          char text[160];
+          std::snprintf(text, sizeof text,
+                        " holds %g, beyond the %g this reader accepts as radiance (damaged, or "
+                        "an RGBE exponent of 255?)",
+                        double(value), double(kMaxRadiance));
+          throw Error(file.string() + ": " + pixel_name(x, y) + text);
+        }
+        if (value < 0) {
+          ++negative;
+          if (value < lowest) lowest = value, lowest_x = x, lowest_y = y;
+        }
         rgb[(static_cast<std::size_t>(y) * width + x) * 3 + c] = std::max(value, 0.f);
       }
+  if (negative > 0) {
+    char text[200];
+    std::snprintf(text, sizeof text, ": %zu negative value(s) clamped to 0 (the lowest, %g, at ",
+                  negative, double(lowest));
+    log_warning(file.string() + text + pixel_name(lowest_x, lowest_y) + ")");
+  }
   return rgb;
 }
 }  // namespace
@@ -74,31 +108,52 @@ Environment Environment::load_hdr(const std::filesystem::path& file) {
 Environment Environment::load_exr(const std::filesystem::path& file) {
   require_file(file);
   check_exr_file(file);
-  Imf::Array2D<Imf::Rgba> pixels;
+  // Read as 32-bit floats, channel by channel: the RGBA interface converts
+  // to half (finite floats above 65504 became infinite) and fills channels
+  // the file lacks with 0 without a word.
+  std::vector<float> flat;
   int width = 0, height = 0;
   try {
-    Imf::RgbaInputFile in(file.string().c_str());
-    const Imath::Box2i window = in.dataWindow();
-    width = window.max.x - window.min.x + 1;
-    height = window.max.y - window.min.y + 1;
+    Imf::InputFile in(file.string().c_str());
+    const Imath::Box2i window = in.header().dataWindow();
     check_image_resolution(file, std::int64_t(window.max.x) - window.min.x + 1,
                            std::int64_t(window.max.y) - window.min.y + 1);
-    pixels.resizeErase(height, width);
-    in.setFrameBuffer(&pixels[0][0] - window.min.x - window.min.y * width, 1, width);
+    width = window.max.x - window.min.x + 1;
+    height = window.max.y - window.min.y + 1;
+    const Imf::ChannelList& channels = in.header().channels();
+    const bool rgb =
+        channels.findChannel("R") && channels.findChannel("G") && channels.findChannel("B");
+    const bool luminance = !rgb && channels.findChannel("Y");
+    if (!rgb && !luminance) {
+      std::string present, missing;
+      for (auto it = channels.begin(); it != channels.end(); ++it)
+        present += (present.empty() ? "" : ", ") + std::string(it.name());
+      for (const char* name : {"R", "G", "B"})
+        if (!channels.findChannel(name))
+          missing += (missing.empty() ? "" : ", ") + std::string(name);
+      throw Error(file.string() + ": the image has no " + missing + " channel (it has " +
+                  (present.empty() ? "none" : present) +
+                  "); an environment map needs R, G and B (or Y)");
+    }
+    flat.assign(static_cast<std::size_t>(width) * height * 3, 0.f);
+    const std::size_t pixel = 3 * sizeof(float), row = pixel * static_cast<std::size_t>(width);
+    char* origin = reinterpret_cast<char*>(flat.data()) -
+                   static_cast<std::ptrdiff_t>(window.min.x) * std::ptrdiff_t(pixel) -
+                   static_cast<std::ptrdiff_t>(window.min.y) * std::ptrdiff_t(row);
+    Imf::FrameBuffer buffer;
+    for (int c = 0; c < (rgb ? 3 : 1); ++c)
+      buffer.insert(rgb ? std::string(1, "RGB"[c]) : std::string("Y"),
+                    Imf::Slice(Imf::FLOAT, origin + c * sizeof(float), pixel, row));
+    in.setFrameBuffer(buffer);
     in.readPixels(window.min.y, window.max.y);
+    if (luminance)  // grey: Y in every channel
+      for (std::size_t i = 0; i < flat.size(); i += 3) flat[i + 1] = flat[i + 2] = flat[i];
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
     throw Error(file.string() + ": cannot read OpenEXR image: " + e.what());
   }
   if (width < 2 || height < 1) throw Error(file.string() + ": environment map is too small");
-  std::vector<float> flat(static_cast<std::size_t>(width) * height * 3);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const Imf::Rgba& p = pixels[y][x];
-      float* out = &flat[(static_cast<std::size_t>(y) * width + x) * 3];
-      out[0] = p.r, out[1] = p.g, out[2] = p.b;
-    }
   return from_pixels(width, height, checked_pixels(file, flat.data(), width, height, 3));
 }
 

@@ -24,12 +24,32 @@ std::uint8_t encode_srgb(float linear) {
 }  // namespace
 
 void write_png(const Image& image, const std::filesystem::path& file, float exposure) {
+  if (image.width <= 0 || image.height <= 0)
+    throw Error(file.string() + ": cannot write a PNG of " + std::to_string(image.width) + " x " +
+                std::to_string(image.height) + " pixels (a PNG needs at least one)");
+  if (image.rgb.size() != 3 * std::size_t(image.width) * std::size_t(image.height))
+    throw Error(file.string() + ": the image holds " + std::to_string(image.rgb.size()) +
+                " values for " + std::to_string(image.width) + " x " +
+                std::to_string(image.height) + " RGB pixels");
+  if (!std::isfinite(exposure) || exposure < 0)
+    throw Error(file.string() + ": exposure " + std::to_string(exposure) +
+                " is not a finite non-negative number");
   std::vector<std::uint8_t> bytes(image.rgb.size());
   for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = encode_srgb(image.rgb[i] * exposure);
+  // Encoded in memory, then written with every write checked (stb's own
+  // file writer ignores fwrite's failures: a full disk gave a cut PNG).
+  std::vector<std::uint8_t> encoded;
+  const auto append = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<std::uint8_t>*>(context);
+    const auto* from = static_cast<const std::uint8_t*>(data);
+    out->insert(out->end(), from, from + size);
+  };
+  if (!stbi_write_png_to_func(append, &encoded, image.width, image.height, 3, bytes.data(),
+                              image.width * 3) ||
+      encoded.empty())
+    throw Error(file.string() + ": cannot encode the PNG");
   write_atomically(file, [&](const std::filesystem::path& temporary) {
-    if (!stbi_write_png(temporary.c_str(), image.width, image.height, 3, bytes.data(),
-                        image.width * 3))
-      throw Error(file.string() + ": cannot write PNG");
+    write_bytes_checked(temporary, encoded.data(), encoded.size(), file);
   });
 }
 

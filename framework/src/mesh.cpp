@@ -4,6 +4,7 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -130,6 +131,43 @@ void Mesh::validate(const std::string& source) const {
                 std::to_string(positions.size()) + " vertices");
 }
 
+namespace {
+
+// OpenMesh opens every material library an OBJ names, relative to the OBJ's
+// folder, whatever it is (a FIFO hangs the reader, /dev/zero feeds it without
+// end). PRT reads no materials, so an OBJ is read from its own text with its
+// "mtllib" statements blanked (line numbers kept): no other file is opened.
+std::string obj_text_without_side_files(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string text, line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const auto first = line.find_first_not_of(" \t");
+    if (first != std::string::npos && line.compare(first, 6, "mtllib") == 0 &&
+        (line.size() == first + 6 || std::isspace(static_cast<unsigned char>(line[first + 6])))) {
+      log_warning(file.string() + ":" + std::to_string(number) + ": \"" +
+                  elide(line.substr(first), 60) +
+                  "\" not followed: PRT reads no material libraries (the albedo is the scene's "
+                  "[material])");
+      line = "# (mtllib not followed)";
+    }
+    text += line;
+    text += '\n';
+  }
+  if (in.bad()) throw Error(file.string() + ": cannot read the mesh file");
+  return text;
+}
+
+bool read_openmesh(OMesh& om, const std::filesystem::path& file, OpenMesh::IO::Options& options) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".obj") return OpenMesh::IO::read_mesh(om, file.string(), options);
+  std::istringstream text(obj_text_without_side_files(file));
+  return OpenMesh::IO::read_mesh(om, text, ".obj", options);
+}
+
+}  // namespace
+
 Mesh load_mesh(const std::filesystem::path& file) {
   const std::string source = file.string();
   std::error_code error;
@@ -147,7 +185,7 @@ Mesh load_mesh(const std::filesystem::path& file) {
   std::string log;
   {
     OpenMeshLogCapture capture;
-    const bool ok = OpenMesh::IO::read_mesh(om, source, options);
+    const bool ok = read_openmesh(om, file, options);
     log = capture.text();
     if (!ok) {
       const std::string detail = log.substr(0, log.find('\n'));
@@ -175,11 +213,21 @@ Mesh load_mesh(const std::filesystem::path& file) {
   if (declared.known && om.n_vertices() < declared.vertices)
     throw Error(source + ": read " + std::to_string(om.n_vertices()) + " of the " +
                 std::to_string(declared.vertices) + " vertices its header declares");
-  if (declared.known && om.n_faces() + mesh.skipped_degenerate_faces < declared.faces)
+  if (declared.known && om.n_faces() + mesh.skipped_degenerate_faces < declared.faces) {
+    // STL stores corners, not indices: a dropped facet there repeats a corner
+    // (after OpenMesh merges equal positions) or cannot join the surface.
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const bool corners = extension.rfind(".stl", 0) == 0;
     throw Error(source + ": " +
                 std::to_string(declared.faces - om.n_faces() - mesh.skipped_degenerate_faces) +
-                " of its " + std::to_string(declared.faces) +
-                " faces could not be read (vertex indices out of range or negative?)");
+                " of its " + std::to_string(declared.faces) + " faces could not be read (" +
+                (corners ? "facets whose corners coincide, or that would make an edge shared "
+                           "by more than two faces?"
+                         : "vertex indices out of range or negative?") +
+                ")");
+  }
   if (const auto complex = count_lines_containing(log, "complex"))
     log_warning(source + ": " + std::to_string(complex) +
                 " non-manifold face(s); OpenMesh duplicated their vertices");

@@ -374,12 +374,19 @@ DeclaredMeshSize Checker::stl() {
   // ASCII: every facet closed, and the solid too.
   in_.clear();
   in_.seekg(0);
-  std::uint64_t opened = 0, closed = 0;
+  std::uint64_t opened = 0, closed = 0, corners = 0;
   bool solid_closed = false;
   for (std::string token; in_ >> token;) {
     const std::string t = lower(token);
-    if (t == "facet") ++opened, solid_closed = false;
-    if (t == "endfacet") ++closed;
+    if (t == "facet") ++opened, solid_closed = false, corners = 0;
+    if (t == "vertex") ++corners;
+    if (t == "endfacet") {
+      ++closed;
+      // A reader keeps three corners of a facet and drops the rest silently.
+      if (corners != 3)
+        fail("ASCII STL facet " + std::to_string(closed) + " has " + std::to_string(corners) +
+             " vertices; a facet must have exactly 3");
+    }
     if (t == "endsolid") solid_closed = true;
   }
   if (!solid_closed) fail("truncated ASCII STL: no closing \"endsolid\"");

@@ -6,11 +6,14 @@
 
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <mutex>
+#include <string_view>
 
 #include "bake_userblock.hpp"
 #include "prt/error.hpp"
@@ -30,6 +33,10 @@ const char* to_string(FileKind kind) {
       return "a scene file";
     case FileKind::text:
       return "a text file";
+    case FileKind::json:
+      return "a JSON file";
+    case FileKind::csv:
+      return "a CSV table";
     case FileKind::other:
       return "a file of another kind";
   }
@@ -52,7 +59,18 @@ FileKind detect_file_kind(const fs::path& file) {
     const auto c = static_cast<unsigned char>(head[i]);
     if (c == 0 || (c < 32 && c != '\n' && c != '\r' && c != '\t')) return FileKind::other;
   }
-  return file.extension() == ".toml" ? FileKind::scene : FileKind::text;
+  if (file.extension() == ".toml") return FileKind::scene;
+  const std::size_t first = std::string_view(head, n).find_first_not_of(" \t\r\n");
+  if (first != std::string_view::npos && (head[first] == '{' || head[first] == '['))
+    return FileKind::json;
+  if (file.extension() == ".csv") return FileKind::csv;
+  return FileKind::text;
+}
+
+FileKind report_kind(const fs::path& file) {
+  if (file.extension() == ".json") return FileKind::json;
+  if (file.extension() == ".csv") return FileKind::csv;
+  return FileKind::text;
 }
 
 namespace {
@@ -208,7 +226,11 @@ std::atomic<unsigned> temporary_counter{0};
 
 void write_atomically(const fs::path& file, const std::function<void(const fs::path&)>& write) {
   const fs::path folder = file.parent_path();
-  if (!folder.empty()) fs::create_directories(folder);
+  if (!folder.empty()) {
+    std::error_code error;
+    fs::create_directories(folder, error);
+    if (error) throw Error(io_failure(folder, error.value(), "creating the output's folder"));
+  }
   const fs::path dir = folder.empty() ? fs::path(".") : folder;
   remove_stale_temporaries(dir, file.filename().string());
   fs::path temporary;
@@ -232,21 +254,63 @@ void write_atomically(const fs::path& file, const std::function<void(const fs::p
   TemporaryRegistration registration(temporary);
   try {
     write(temporary);
-    fs::rename(temporary, file);
+    // Deferred write errors (a full disk on a file system that allocates
+    // late) surface at fsync: the target is replaced only by what is on disk.
+    flush_to_device(temporary, file);
+    if (std::rename(temporary.c_str(), file.c_str()) != 0)
+      throw Error(io_failure(file, errno, "renaming the finished temporary over it"));
   } catch (...) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
     throw;
   }
+  // The rename is durable once the folder is synced; the file is whole either way.
+  const int directory = open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (directory >= 0) fsync(directory), close(directory);
 }
 
 void write_text_file(const fs::path& file, const std::string& text) {
   write_atomically(file, [&](const fs::path& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    out << text;
-    out.flush();
-    if (!out) throw Error(file.string() + ": cannot write");
+    write_bytes_checked(temporary, text.data(), text.size(), file);
   });
+}
+
+std::string io_failure(const fs::path& file, int error_number, const char* doing) {
+  std::string reason = std::strerror(error_number);
+  if (!reason.empty())
+    reason[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(reason[0])));
+  return file.string() + ": " + reason + " while " + doing;
+}
+
+void write_bytes_checked(const fs::path& path, const void* bytes, std::size_t size,
+                         const fs::path& shown) {
+  const fs::path& name = shown.empty() ? path : shown;
+  const int descriptor = open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (descriptor < 0) throw Error(io_failure(name, errno, "creating it"));
+  const char* from = static_cast<const char*>(bytes);
+  while (size > 0) {
+    const ssize_t wrote = ::write(descriptor, from, size);
+    if (wrote < 0 && errno == EINTR) continue;
+    if (wrote <= 0) {
+      const int error_number = wrote < 0 ? errno : ENOSPC;
+      close(descriptor);
+      throw Error(io_failure(name, error_number, "writing"));
+    }
+    from += wrote;
+    size -= static_cast<std::size_t>(wrote);
+  }
+  const int synced = fsync(descriptor) == 0 ? 0 : errno;
+  const int closed = close(descriptor) == 0 ? 0 : errno;
+  if (synced || closed) throw Error(io_failure(name, synced ? synced : closed, "writing"));
+}
+
+void flush_to_device(const fs::path& path, const fs::path& shown) {
+  const fs::path& name = shown.empty() ? path : shown;
+  const int descriptor = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (descriptor < 0) throw Error(io_failure(name, errno, "reopening it to flush it"));
+  const int synced = fsync(descriptor) == 0 ? 0 : errno;
+  const int closed = close(descriptor) == 0 ? 0 : errno;
+  if (synced || closed) throw Error(io_failure(name, synced ? synced : closed, "writing"));
 }
 
 }  // namespace prt

@@ -164,7 +164,7 @@ void Params::validate(const ParamSchema& schema) {
     const ParamSpecRecord* spec = schema.find(key);
     if (!spec) {
       std::string message =
-          schema.owner + ": unknown parameter \"" + key + "\"; valid: " + join(valid, ", ");
+          schema.owner + ": unknown parameter \"" + elide(key) + "\"; valid: " + join(valid, ", ");
       const std::string suggestion = closest_match(key, valid);
       if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
       throw Error(entry.where, message);

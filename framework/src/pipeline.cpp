@@ -19,6 +19,7 @@
 #include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
 #include "prt/log.hpp"
+#include "prt/memory.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
 #include "prt/row_file.hpp"
@@ -80,40 +81,6 @@ std::string transport_description(const SceneSpec& scene, const DirectionSet& se
   return set.kind + " " + std::to_string(set.size()) + " directions, " +
          (scene.transport.get_bool("shadowed") ? "shadowed" : "unshadowed") +
          ", seed=" + std::to_string(scene.transport.get_int("seed"));
-}
-
-// Memory this machine can give now (MemAvailable), in bytes.
-double available_memory() {
-  std::ifstream meminfo("/proc/meminfo");
-  std::string key;
-  double kilobytes = 0;
-  while (meminfo >> key >> kilobytes) {
-    if (key == "MemAvailable:") return kilobytes * 1024.0;
-    meminfo.ignore(256, '\n');
-  }
-  return double(sysconf(_SC_AVPHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
-}
-
-// The machine's memory, or the control group's limit when lower (a
-// container, a Slurm job): what this process may really hold.
-double physical_memory() {
-  double bytes = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
-  for (const char* limit : {"/sys/fs/cgroup/memory.max",                       // cgroup v2
-                            "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {  // v1
-    std::ifstream in(limit);
-    double value = 0;
-    if (in >> value && value > 0) bytes = std::min(bytes, value);  // "max" reads as nothing
-  }
-  return bytes;
-}
-
-std::string gigabytes(double bytes) {
-  char text[32];
-  if (bytes < 1e9)
-    std::snprintf(text, sizeof text, "%.0f MB", bytes / 1e6);
-  else
-    std::snprintf(text, sizeof text, "%.1f GB", bytes / 1e9);
-  return text;
 }
 
 // Refuses, before any ray, a bake whose largest arrays cannot fit: the

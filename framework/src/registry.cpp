@@ -264,6 +264,36 @@ std::string unsafe_to_load(const fs::path& path, const char* what) {
   return "";
 }
 
+// A folder is as safe as the folders above it: whoever may write a parent
+// may rename the folder away and put their own in its place (or change a
+// symlink that leads to it). Every ancestor of the path as written and of
+// the path it resolves to is checked as the folder itself is; a sticky
+// folder such as /tmp is fine, since only an entry's owner may replace it.
+std::string unsafe_ancestor(const fs::path& directory) {
+  std::error_code error;
+  const fs::path written = fs::absolute(directory, error).lexically_normal();
+  const fs::path resolved = fs::canonical(directory, error);
+  for (const fs::path& path : {written, resolved}) {
+    if (path.empty()) continue;
+    for (fs::path parent = path.parent_path(); !parent.empty(); parent = parent.parent_path()) {
+      struct stat s {};
+      if (stat(parent.c_str(), &s) == 0) {
+        const bool sticky = (s.st_mode & S_ISVTX) != 0;
+        if ((s.st_mode & (S_IWGRP | S_IWOTH)) && !sticky)
+          return directory.string() + ": skipped: the plug-in folder's parent " + parent.string() +
+                 " is writable by others than its owner, who could replace the folder "
+                 "(chmod go-w " +
+                 parent.string() + " to use it)";
+        if (s.st_uid != 0 && s.st_uid != geteuid())
+          return directory.string() + ": skipped: the plug-in folder's parent " + parent.string() +
+                 " belongs to another user (uid " + std::to_string(s.st_uid) + ")";
+      }
+      if (parent == parent.root_path()) break;
+    }
+  }
+  return "";
+}
+
 // "libprt-<kind>-<name>.so": what a file that cannot be read claims to be.
 PluginProblem problem_from_file_name(const fs::path& file, std::string message) {
   PluginProblem problem{file, PluginKind::basis, "", std::move(message)};
@@ -288,10 +318,11 @@ void PluginRegistry::scan(const fs::path& directory) {
                          directory.string() + ": plug-in directory does not exist"});
     return;
   }
-  if (auto why = unsafe_to_load(directory, "plug-in folder"); !why.empty()) {
-    problems_.push_back({directory, PluginKind::basis, "", why});
-    return;
-  }
+  for (auto why : {unsafe_to_load(directory, "plug-in folder"), unsafe_ancestor(directory)})
+    if (!why.empty()) {
+      problems_.push_back({directory, PluginKind::basis, "", why});
+      return;
+    }
   std::vector<fs::path> files;
   for (fs::directory_iterator it(directory, error), end; !error && it != end; it.increment(error))
     if (it->is_regular_file(error) && is_candidate(it->path())) files.push_back(it->path());

@@ -478,7 +478,7 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     const std::string name(key.str());
     const SourceLocation where = location_of(key.source(), file);
     if (std::find(valid.begin(), valid.end(), name) == valid.end()) {
-      std::string message = "unknown section [" + name +
+      std::string message = "unknown section [" + elide(name) +
                             "]; valid: mesh, material, transport, "
                             "basis, compressor, lighting, renderer, camera, output, ground_truth";
       const std::string suggestion = closest_match(name, valid);

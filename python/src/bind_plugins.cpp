@@ -5,6 +5,7 @@
 #include "kit.hpp"
 #include "long_call.hpp"
 #include "prt/direction_set.hpp"
+#include "prt/memory.hpp"
 #include "prt/mesh.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
@@ -184,6 +185,25 @@ void register_plugin(const std::string& kind_name, const std::string& name, py::
   });
 }
 
+// A call that returns rows x cols doubles: refused before it starts when the
+// result cannot fit in the memory available, and an allocation that fails
+// inside it named, as prt.Error rather than a bare MemoryError.
+template <class Work>
+auto returning_doubles(const char* method, Eigen::Index rows, Eigen::Index cols, Work&& work) {
+  const double bytes = double(rows) * double(cols) * sizeof(double);
+  const std::string what = std::string(method) + ": a " + std::to_string(rows) + " x " +
+                           std::to_string(cols) + " array of doubles (" + gigabytes(bytes) + ")";
+  const double available = available_memory();
+  if (bytes > available)
+    throw Error(what + " is more than the " + gigabytes(available) +
+                " of memory available; ask for fewer rows or a smaller basis");
+  try {
+    return work();
+  } catch (const std::bad_alloc&) {
+    throw Error(what + ": out of memory while computing it (the basis's own work needs more)");
+  }
+}
+
 }  // namespace
 
 void bind_plugins(py::module_& m) {
@@ -206,13 +226,16 @@ void bind_plugins(py::module_& m) {
       .def(
           "evaluate",
           [](const Basis& b, const Directions& d) {
-            return long_call([&] { return b.evaluate(d); });
+            return returning_doubles("evaluate", d.rows(), b.size(),
+                                     [&] { return long_call([&] { return b.evaluate(d); }); });
           },
           py::arg("directions"), "Basis values at unit directions (s x 3): s x size().")
       .def(
           "projection_matrix",
           [](const Basis& b, const DirectionSet& set) {
-            return long_call([&] { return b.projection_matrix(set); });
+            return returning_doubles("projection_matrix", set.size(), b.size(), [&] {
+              return long_call([&] { return b.projection_matrix(set); });
+            });
           },
           py::arg("set"))
       .def(
@@ -222,7 +245,9 @@ void bind_plugins(py::module_& m) {
               throw Error("project: samples have " + std::to_string(samples.cols()) +
                           " columns, the direction set " + std::to_string(set.size()) +
                           " directions");
-            return long_call([&] { return b.project(samples, set); });
+            return returning_doubles("project", samples.rows(), b.size(), [&] {
+              return long_call([&] { return b.project(samples, set); });
+            });
           },
           py::arg("samples"), py::arg("set"),
           "Coefficients (m x size()) of m functions sampled on the set (m x s).")

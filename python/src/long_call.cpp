@@ -20,6 +20,10 @@ struct sigaction previous_sigint {};
 
 void on_sigint(int) {
   Progress::request_interrupt();  // async-signal-safe: one atomic store
+  // And Python's own flag (async-signal-safe too): a Python plug-in waiting
+  // in a system call (time.sleep, a read) sees EINTR, runs Python's handler
+  // and raises KeyboardInterrupt at once instead of when it returns.
+  PyErr_SetInterruptEx(SIGINT);
 }
 
 void deliver(const ProgressReport& report) {
@@ -88,7 +92,12 @@ LongCallScope::LongCallScope() {
 LongCallScope::~LongCallScope() {
   --depth;
   if (!active_) return;
-  if (installed_) sigaction(SIGINT, &previous_sigint, nullptr);
+  if (installed_) {
+    sigaction(SIGINT, &previous_sigint, nullptr);
+    // The Ctrl-C was delivered as this call's KeyboardInterrupt: clear
+    // Python's flag, or it would raise a second one at the next line.
+    if (std::this_thread::get_id() == main_thread) PyOS_InterruptOccurred();
+  }
   Progress::set_sink(nullptr);
   Progress::clear_interrupt();
 }

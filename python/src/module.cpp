@@ -1,5 +1,8 @@
 // The Python module prt._prt: the framework's stages, plug-ins and bake
 // files with numpy arrays (docs/python.md).
+#include <cstring>
+#include <new>
+
 #include "bindings.hpp"
 #include "long_call.hpp"
 #include "prt/error.hpp"
@@ -63,6 +66,23 @@ py::dict params_to_dict(const Params& params) {
   return out;
 }
 
+namespace {
+
+// Messages may quote a path's bytes that are not UTF-8: they are shown
+// escaped (\xNN) rather than lost (PyErr_SetString gave an empty message).
+void set_error(PyObject* type, const char* message) {
+  PyObject* text = PyUnicode_DecodeUTF8(message, static_cast<Py_ssize_t>(std::strlen(message)),
+                                        "backslashreplace");
+  if (!text) {
+    PyErr_Clear();
+    text = PyUnicode_FromString("(a message that could not be decoded)");
+  }
+  PyErr_SetObject(type, text);
+  Py_XDECREF(text);
+}
+
+}  // namespace
+
 }  // namespace prt::python
 
 using namespace prt;
@@ -79,7 +99,13 @@ PYBIND11_MODULE(_prt, m) {
     } catch (const Interrupted&) {
       PyErr_SetNone(PyExc_KeyboardInterrupt);
     } catch (const Error& e) {
-      PyErr_SetString(error.ptr(), e.what());
+      set_error(error.ptr(), e.what());
+    } catch (const std::filesystem::filesystem_error& e) {
+      set_error(error.ptr(), filesystem_message(e).c_str());
+    } catch (const std::bad_alloc&) {
+      set_error(error.ptr(),
+                "out of memory: an allocation failed in the call (the sizes asked for are "
+                "larger than this machine can hold)");
     }
   });
   m.def("progress_callback", &progress_callback, "The current progress callback (or None).");

@@ -222,11 +222,14 @@ CompressedTransfer PyCompressor::encode(const TransferSignal& signal, const Mesh
     if (!signal.coefficients.row(p).allFinite())
       throw Error(label_of(py::cast(this), "compressor") + ": the transfer of vertex " +
                   std::to_string(p) + " is not finite");
-  auto c = cast_result<CompressedTransfer>(
-      this, "compressor", "encode",
-      call_override(this, "compressor", "encode", override,
-                    py::make_tuple(py::cast(signal, py::return_value_policy::reference),
-                                   py::cast(mesh, py::return_value_policy::reference))));
+  // Copies owned by Python: a plug-in may keep its arguments past the call
+  // (the caller's signal and mesh do not live that long). A signal kept on
+  // disk shares its file, so only an in-memory signal costs its size again.
+  py::object signal_copy = py::cast(TransferSignal(signal));
+  py::object mesh_copy = mesh ? py::cast(Mesh(*mesh)) : py::none();
+  auto c = cast_result<CompressedTransfer>(this, "compressor", "encode",
+                                           call_override(this, "compressor", "encode", override,
+                                                         py::make_tuple(signal_copy, mesh_copy)));
   try {
     c.validate(signal.vertices());
     if (c.dimension != signal.dimension())

@@ -1,5 +1,7 @@
 // Errors thrown by the framework and by plug-ins. Only `main` decides to exit.
 #pragma once
+#include <cstddef>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -24,18 +26,31 @@ struct SourceLocation {
 // unwinding, and catch (const prt::Error&) matches across modules.
 class __attribute__((visibility("default"))) Error : public std::runtime_error {
  public:
-  explicit Error(const std::string& message) : std::runtime_error(message) {}
+  // Messages longer than kMaxMessage characters keep their start and end
+  // (a 10^6-character key echoed back is not a readable line).
+  explicit Error(const std::string& message) : std::runtime_error(bounded(message)) {}
   Error(const SourceLocation& where, const std::string& message)
-      : std::runtime_error(format(where, message)) {}
+      : std::runtime_error(bounded(format(where, message))) {}
   ~Error() override;
+
+  static constexpr std::size_t kMaxMessage = 2000;
 
  private:
   static std::string format(const SourceLocation& where, const std::string& message);
+  static std::string bounded(const std::string& message);
 };
+
+// `value` for quoting in a message: at most `limit` characters, the middle
+// elided with a count of what was left out.
+std::string elide(const std::string& value, std::size_t limit = 80);
 
 // A refusal in the one documented form, "place: error: message" (place is a
 // file, file:line or file:line:col), or "error: message" where there is none.
 std::string error_line(const std::string& what);
+
+// "PATH: cannot create directories: Permission denied" from a
+// std::filesystem error (whose own text puts the path last, in brackets).
+std::string filesystem_message(const std::filesystem::filesystem_error& error);
 
 // For a main's catch (...): the exception in flight as one such line (an
 // out-of-memory included, never a bare std:: text).

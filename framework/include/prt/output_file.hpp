@@ -11,9 +11,14 @@ namespace prt {
 
 // What a file holds, judged from its first bytes; a text file named *.toml
 // counts as a scene, which only --force may replace.
-enum class FileKind { missing, bake, png, scene, text, other };
+// JSON (text starting with { or [) and CSV (a *.csv text) are kinds of their
+// own, so a report replaces an earlier report, never a note.
+enum class FileKind { missing, bake, png, scene, text, json, csv, other };
 const char* to_string(FileKind kind);
 FileKind detect_file_kind(const std::filesystem::path& file);
+
+// The kind of a text report named `file`: json, csv or plain text, by extension.
+FileKind report_kind(const std::filesystem::path& file);
 
 struct OutputRequest {
   std::filesystem::path path;
@@ -39,5 +44,19 @@ void write_atomically(const std::filesystem::path& file,
 
 // Writes `text` to `file` through write_atomically.
 void write_text_file(const std::filesystem::path& file, const std::string& text);
+
+// Writes `bytes` to the new file `path` with every write, fsync and close
+// checked; a failure throws "FILE: no space left on device while writing"
+// (FILE is `shown`, the name the user knows, when given).
+void write_bytes_checked(const std::filesystem::path& path, const void* bytes, std::size_t size,
+                         const std::filesystem::path& shown = {});
+
+// Flushes a written file to the device (fsync), checked: write errors that the
+// page cache deferred (a full disk, a failing device) surface here.
+void flush_to_device(const std::filesystem::path& path, const std::filesystem::path& shown = {});
+
+// "FILE: no space left on device while writing": one located message for a
+// failed system call on a file, from errno's value.
+std::string io_failure(const std::filesystem::path& file, int error_number, const char* doing);
 
 }  // namespace prt

@@ -6,6 +6,8 @@
 
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
+#include "prt/error.hpp"
+#include "prt/log.hpp"
 #include "prt/plugin.hpp"
 
 namespace prt::compressor_params {
@@ -122,12 +124,34 @@ inline void improve_coherence(const CoherenceOptions& o, const Params& p,
 
 // The compressed form of clusters and their models, then the coherence
 // passes. Distributed: the rows are gathered on rank 0, which superclusters.
+// A budget larger than the data can use is used as far as it goes, with a
+// warning naming the key and the value used: clusters beyond the vertices
+// (LBG also drops clusters left empty), components beyond the coefficients
+// or beyond what a cluster's members span.
+inline void report_budget_used(const std::string& name, const Params& p,
+                               const CompressedTransfer& c) {
+  const auto warn = [&](const std::string& key, std::int64_t asked, std::int64_t used,
+                        const char* why) {
+    log_warning(Error(p.location(key), "compressor \"" + name + "\": " + key + " = " +
+                                           std::to_string(asked) + " is more than " + why + "; " +
+                                           std::to_string(used) + " used")
+                    .what());
+  };
+  if (p.has("clusters") && c.clusters() < p.get_int("clusters"))
+    warn("clusters", p.get_int("clusters"), c.clusters(),
+         "this transfer supports (vertices, or clusters LBG left empty)");
+  if (p.has("components") && c.components < p.get_int("components"))
+    warn("components", p.get_int("components"), c.components,
+         "this transfer supports (its coefficients per vertex, or a cluster's members)");
+}
+
 inline CompressedTransfer finish(const std::string& name, const CoherenceOptions& o,
                                  const Params& p, const clustering::Rows& rows,
                                  const std::vector<std::int32_t>& labels,
                                  const std::vector<clustering::ClusterModel>& models,
                                  const Mesh* mesh) {
   CompressedTransfer c = clustering::assemble(rows, labels, models, name);
+  if (rows.comm.rank() == 0) report_budget_used(name, p, c);
   if (!rows.distributed()) {
     improve_coherence(o, p, rows, mesh, c);
     rows.release_all();  // moved vertices were re-read where they lie

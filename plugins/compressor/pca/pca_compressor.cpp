@@ -15,7 +15,7 @@ class PrincipalComponents final : public Compressor {
   }
 
   explicit PrincipalComponents(const Params& params)
-      : components_(static_cast<int>(params.get_int("components"))) {}
+      : params_(params), components_(static_cast<int>(params.get_int("components"))) {}
 
   CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
     return encode_shard(signal, mesh, Distribution::whole_signal(signal.vertices()));
@@ -33,11 +33,13 @@ class PrincipalComponents final : public Compressor {
     const std::vector<std::int32_t> labels(std::size_t(signal.vertices()), 0);
     CompressedTransfer compressed =
         clustering::assemble(rows, labels, clustering::fit_models(rows, labels, 1, {c}), "pca");
+    if (rows.comm.rank() == 0) compressor_params::report_budget_used("pca", params_, compressed);
     clustering::gather_rows(rows, compressed);
     return compressed;
   }
 
  private:
+  Params params_;  // for the located warning when the budget exceeds the data
   int components_;
 };
 
