@@ -64,11 +64,11 @@ void split_longest_edges(SubdivisionMesh& mesh, std::size_t target) {
   }
 }
 
-// Peak resident bytes per vertex of the result (OpenMesh's mesh with its
-// status and normal properties, one Loop level's temporaries, the split
-// queue), measured with /usr/bin/time on bunny00.off to 10^6 and 4 x 10^6
-// vertices (~KBPV bytes), with a margin for other meshes.
-constexpr double kBytesPerVertex = 600;
+// Peak resident bytes per vertex of the result (OpenMesh's mesh, one Loop
+// level's temporaries, the split queue, the encoded file): bunny00.off to
+// 10^6 vertices peaked at 276 MB and to 4 x 10^6 at 873 MB (/usr/bin/time),
+// so 400 leaves a margin for meshes that subdivide less evenly.
+constexpr double kBytesPerVertex = 400;
 // Vertex indices are 32-bit in OpenMesh and in the bake file.
 constexpr std::size_t kMaxVertices = std::size_t(1) << 31;
 
@@ -102,7 +102,9 @@ void subdivide_once(SubdivisionMesh& mesh) {
 
 }  // namespace
 
-int subdivide(const SubdivideArgs& args) {
+namespace {
+
+int subdivide_checked(const SubdivideArgs& args) {
   const std::filesystem::path output = args.output;
   const std::string extension = output.extension().string();
   if (extension != ".ply" && extension != ".off" && extension != ".obj")
@@ -143,6 +145,20 @@ int subdivide(const SubdivideArgs& args) {
             << " longest-edge splits = " << mesh.n_vertices() << " vertices, " << mesh.n_faces()
             << " triangles -> " << args.output << " (" << clock.seconds() << " s)\n";
   return 0;
+}
+
+}  // namespace
+
+// The estimate leaves a margin, but a mesh that subdivides unevenly or a
+// tight ulimit may still run out: say so in the command's own terms.
+int subdivide(const SubdivideArgs& args) {
+  try {
+    return subdivide_checked(args);
+  } catch (const std::bad_alloc&) {
+    throw Error("--vertices " + std::to_string(args.vertices) +
+                ": out of memory while subdividing (" + gigabytes(available_memory()) +
+                " available now); ask for fewer vertices");
+  }
 }
 
 }  // namespace prt::cli

@@ -70,8 +70,7 @@ void seal_bake_file(const fs::path& file, int format_version, const fs::path& sh
       throw Error(io_failure(name, wrote < 0 ? errno : ENOSPC, "writing the bake file's header"));
     done += static_cast<std::size_t>(wrote);
   }
-  if (::fsync(descriptor) != 0) throw Error(io_failure(name, errno, "writing the bake file"));
-  closer.fd = -1;
+  closer.fd = -1;  // flushed to the device by write_atomically, which renames it
   if (::close(descriptor) != 0) throw Error(io_failure(name, errno, "writing the bake file"));
 }
 

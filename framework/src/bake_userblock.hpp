@@ -12,7 +12,7 @@ inline constexpr char kBakeMagic[] = "PRT-BAKE\n";
 inline constexpr std::uint64_t kBakeUserBlockSize = 512;
 
 // Fills the user block of a finished HDF5 file written with that block size,
-// every read and write checked and the file flushed to the device; messages
+// every read and write checked (write_atomically flushes it to the device); messages
 // name `shown` (the user's name for the file) when given.
 void seal_bake_file(const std::filesystem::path& file, int format_version,
                     const std::filesystem::path& shown = {});

@@ -69,7 +69,75 @@ expect_error "corrupt bake" 'corrupt.h5: error: not a PRT bake file' -- render g
 expect_error "missing bake" 'out.h5: error: bake file not found' -- render good.toml
 
 good_scene | sed 's/^rays = 64/rays = 0/' >"$work/range.toml"
+{ good_scene; printf '[compressor]\nplugin = "pca"\n%s = 1\n' "$(head -c 1000000 /dev/zero | tr '\0' k)"; } >"$work/long_key.toml"
 expect_error "out of range" 'range.toml:10:1: error: section \[transport\]: parameter "rays" = 0 is out of range \[1, 4194304\]' -- bake range.toml
+
+# Issue 45: inputs that used to be accepted silently, or hang, or abort.
+mesh="$src/data/meshes/bunny00.off"
+start=$(date +%s%N)
+expect_error "subdivide to 10^12 vertices" 'error: --vertices 1000000000000: meshes are limited to' -- subdivide "$mesh" -o big.ply -n 1000000000000
+expect_error "subdivide beyond memory" 'error: --vertices 100000000: the subdivided mesh needs about 40.0 GB of memory' -- subdivide "$mesh" -o big.ply -n 100000000
+elapsed_ms=$((($(date +%s%N) - start) / 1000000))
+if [ "$elapsed_ms" -lt 4000 ]; then
+  echo "ok   both subdivide refusals came up front ($elapsed_ms ms)"
+  pass=$((pass + 1))
+else
+  echo "FAIL subdivide refusals took $elapsed_ms ms"
+  failures=$((failures + 1))
+fi
+# Under a 2 GB address-space limit (where 10^12 used to abort with "pure
+# virtual method called") the limit is part of the memory available.
+(cd "$work" && ulimit -v 2000000 && "$prt" -q subdivide "$mesh" -o lim.ply -n 10000000 >/dev/null 2>"$work/stderr")
+code=$?
+if [ "$code" -ne 0 ] && [ "$code" -lt 128 ] && [ "$(wc -l <"$work/stderr")" -eq 1 ] &&
+  grep -q "memory" "$work/stderr" && [ ! -e "$work/lim.ply" ]; then
+  echo "ok   subdivide under ulimit -v 2 GB: $(cat "$work/stderr")"
+  pass=$((pass + 1))
+else
+  echo "FAIL subdivide under ulimit -v 2 GB: exit $code"
+  sed 's/^/    stderr: /' "$work/stderr"
+  failures=$((failures + 1))
+fi
+# A command-line value is refused by the argument parser (its own two-line form).
+(cd "$work" && "$prt" -q render good.toml --exposure nan >/dev/null 2>"$work/stderr")
+if [ $? -ne 0 ] && grep -q 'exposure "nan" is not a finite positive number' "$work/stderr" &&
+  [ ! -e "$work/out.png" ]; then
+  echo "ok   exposure NaN: $(head -n 1 "$work/stderr")"
+  pass=$((pass + 1))
+else
+  echo "FAIL exposure NaN accepted"
+  failures=$((failures + 1))
+fi
+echo "my notes" >"$work/notes.txt"
+expect_error "stability report over a note" 'notes.txt: error: refusing to replace a text file with a JSON file' -- stability --json notes.txt
+grep -q "my notes" "$work/notes.txt" || { echo "FAIL the note was changed"; failures=$((failures + 1)); }
+expect_error "a 10^6-character key is elided" 'characters elided' -- bake long_key.toml
+[ "$(wc -c <"$work/stderr")" -lt 2500 ] || { echo "FAIL the long key's message has $(wc -c <"$work/stderr") bytes"; failures=$((failures + 1)); }
+
+# A budget beyond what the data supports is used as far as it goes, with a
+# warning at the key's line that says what was used.
+{ good_scene | sed 's/^bake = .*/bake = "budget.h5"/; s/^image = .*/image = "budget.png"/'
+  printf '[compressor]\nplugin = "cpca"\nclusters = 1000000\ncomponents = 100000\n'; } >"$work/budget.toml"
+(cd "$work" && "$prt" -q bake budget.toml >/dev/null 2>"$work/stderr")
+if [ $? -eq 0 ] && grep -q 'budget.toml:16:1: compressor "cpca": clusters = 1000000 is more than .*; [0-9]* used' "$work/stderr" &&
+  grep -q 'budget.toml:17:1: compressor "cpca": components = 100000 is more than .*; [0-9]* used' "$work/stderr"; then
+  echo "ok   budgets beyond the data warn with the value used"
+  pass=$((pass + 1))
+else
+  echo "FAIL budgets beyond the data"
+  sed 's/^/    stderr: /' "$work/stderr"
+  failures=$((failures + 1))
+fi
+{ good_scene | sed 's/^bake = .*/bake = "haar.h5"/; s/^image = .*/image = "haar.png"/; s/^plugin = "sh"/plugin = "haar"\nresolution = 4\nk = 1000000000/; /^order = 3/d'; } >"$work/haar.toml"
+(cd "$work" && "$prt" -q bake haar.toml >/dev/null 2>"$work/stderr")
+if grep -q 'basis "haar": k = 1000000000 is more than its 96 coefficients (resolution 4); 96 used' "$work/stderr"; then
+  echo "ok   haar k beyond its coefficients warns"
+  pass=$((pass + 1))
+else
+  echo "FAIL haar k beyond its coefficients"
+  sed 's/^/    stderr: /' "$work/stderr"
+  failures=$((failures + 1))
+fi
 
 # A good scene still works end to end in the same folder.
 if (cd "$work" && "$prt" -q bake good.toml >/dev/null && "$prt" -q render good.toml >/dev/null) &&

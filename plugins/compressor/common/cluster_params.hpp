@@ -6,7 +6,6 @@
 
 #include "prt/clustering.hpp"
 #include "prt/compressor.hpp"
-#include "prt/error.hpp"
 #include "prt/log.hpp"
 #include "prt/plugin.hpp"
 
@@ -132,10 +131,9 @@ inline void report_budget_used(const std::string& name, const Params& p,
                                const CompressedTransfer& c) {
   const auto warn = [&](const std::string& key, std::int64_t asked, std::int64_t used,
                         const char* why) {
-    log_warning(Error(p.location(key), "compressor \"" + name + "\": " + key + " = " +
-                                           std::to_string(asked) + " is more than " + why + "; " +
-                                           std::to_string(used) + " used")
-                    .what());
+    log_warning(p.location(key).str() + ": compressor \"" + name + "\": " + key + " = " +
+                std::to_string(asked) + " is more than " + why + "; " + std::to_string(used) +
+                " used");
   };
   if (p.has("clusters") && c.clusters() < p.get_int("clusters"))
     warn("clusters", p.get_int("clusters"), c.clusters(),
