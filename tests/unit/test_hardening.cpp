@@ -15,6 +15,7 @@
 #include <fstream>
 
 #include "../../framework/src/bake_userblock.hpp"
+#include "../common/temp_files.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/environment.hpp"
 #include "prt/error.hpp"
@@ -31,20 +32,11 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("prt_hardening_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
+  return test::fresh_dir("prt_hardening_", name);
 }
 
-void write_file(const fs::path& file, const std::string& bytes) {
-  std::ofstream(file, std::ios::binary) << bytes;
-}
-
-std::string read_file(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test::read_file;
+using test::write_file;
 
 bool has_temporaries(const fs::path& dir) {
   for (const auto& e : fs::directory_iterator(dir))

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <thread>
 
+#include "../common/temp_files.hpp"
 #include "prt/environment.hpp"
 #include "prt/error.hpp"
 #include "prt/image.hpp"
@@ -28,22 +29,11 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("prt_reliability_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  fs::permissions(dir, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
-                           fs::perms::others_read | fs::perms::others_exec);
-  return dir;
+  return test::fresh_dir("prt_reliability_", name);
 }
 
-void write_file(const fs::path& file, const std::string& bytes) {
-  std::ofstream(file, std::ios::binary) << bytes;
-}
-
-std::string read_file(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test::read_file;
+using test::write_file;
 
 // A float EXR with the named channels, every value `value`.
 void write_exr(const fs::path& file, const std::vector<std::string>& channels, float value,
