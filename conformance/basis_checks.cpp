@@ -10,6 +10,7 @@
 
 #include "kit.hpp"
 #include "prt/basis.hpp"
+#include "prt/basis_metric.hpp"
 #include "prt/error.hpp"
 #include "prt/mesh.hpp"
 #include "prt/quadrature.hpp"
@@ -418,6 +419,50 @@ static void basis_check_11(Kit& kit) {
   }
 }
 
+// The PRT identity: relighting, the transfer's coefficients dotted with the
+// light as the framework hands it over (G l, prt/basis_metric.hpp), equals
+// the integral of light times transfer. T lies in the span (T = sum c_i B_i),
+// L is a smooth function that does not (two exponential lobes and a
+// constant), so int L T = int P(L) T holds exactly and the quadrature on the
+// kit's rule is the reference. A basis whose projection is not least squares
+// for its metric, or that claims orthonormality it lacks, relights wrong and
+// fails here with both numbers.
+static void basis_check_12(Kit& kit) {
+  Fixture fixture(kit);
+  [[maybe_unused]] auto& [registry, basis, set] = fixture;
+  const int n = basis->size();
+  const Eigen::MatrixXd values = basis->evaluate(set.directions);  // s x n
+  const Eigen::MatrixXd c = random_coefficients(3, n, 12);
+  const Eigen::MatrixXd transfer = c * values.transpose();  // 3 x s
+  Eigen::MatrixXd light(3, set.size());
+  const Eigen::Vector3d axes[3] = {Eigen::Vector3d(0.3, 0.5, 0.81).normalized(),
+                                   Eigen::Vector3d(-0.7, 0.1, 0.2).normalized(),
+                                   Eigen::Vector3d(0.05, -0.9, 0.4).normalized()};
+  for (int j = 0; j < 3; ++j)
+    for (Eigen::Index k = 0; k < set.size(); ++k) {
+      const Eigen::Vector3d d = set.directions.row(k).transpose();
+      light(j, k) =
+          std::exp(2.0 * axes[j].dot(d)) + 0.5 * std::exp(3.0 * axes[(j + 1) % 3].dot(d)) + 0.3;
+    }
+  const Eigen::MatrixXd t = basis->project(transfer, set), l = basis->project(light, set);
+  const BasisMetric metric = basis_metric(*basis);
+  const Eigen::MatrixXd g = metric.identity ? Eigen::MatrixXd::Identity(n, n) : metric.gram;
+  for (int j = 0; j < 3; ++j) {
+    const double relit = t.row(j) * g * l.row(j).transpose();
+    const double expected =
+        (transfer.row(j).array() * light.row(j).array() * set.weights.transpose().array()).sum();
+    // Cauchy-Schwarz's bound on |int L T| sets the scale of the tolerance.
+    const double scale =
+        std::sqrt((transfer.row(j).array().square() * set.weights.transpose().array()).sum() *
+                  (light.row(j).array().square() * set.weights.transpose().array()).sum());
+    KIT_INFO(kit, "light " << j << ": t . G l = " << relit << ", int L T by quadrature = "
+                           << expected << ", tolerance 1e-6 x " << scale
+                           << (metric.identity ? " (G = I: the basis says it is orthonormal)"
+                                               : " (G from the basis's rule)"));
+    KIT_CHECK_LESS(kit, std::abs(relit - expected), 1e-6 * scale);
+  }
+}
+
 std::vector<Check> basis_checks() {
   return {
       {"basis values are finite everywhere, poles included", "[conformance]", basis_check_0},
@@ -436,6 +481,8 @@ std::vector<Check> basis_checks() {
        "[conformance][parameters]", basis_check_10},
       {"a distributed fit equals the one-process fit bit for bit", "[conformance][distributed]",
        basis_check_11},
+      {"relighting equals the integral of light times transfer", "[conformance][metric]",
+       basis_check_12},
   };
 }
 

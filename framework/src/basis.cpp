@@ -1,5 +1,6 @@
 #include "prt/basis.hpp"
 
+#include "prt/basis_metric.hpp"
 #include "prt/error.hpp"
 #include "prt/mesh.hpp"
 
@@ -11,7 +12,10 @@ Shard FitData::rows() const {
 }
 
 Eigen::MatrixXd Basis::projection_matrix(const DirectionSet& set) const {
-  return set.weights.asDiagonal() * evaluate(set.directions);
+  Eigen::MatrixXd inner_products = set.weights.asDiagonal() * evaluate(set.directions);
+  if (orthonormal()) return inner_products;  // G = I: bit for bit the quadrature
+  // Least-squares coefficients through the dual basis: c = G^-1 int f B.
+  return inner_products * basis_metric(*this).inverse;
 }
 
 Eigen::MatrixXd Basis::project(const Eigen::MatrixXd& samples, const DirectionSet& set) const {

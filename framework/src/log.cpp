@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <mutex>
+#include <set>
 
 namespace prt {
 
@@ -38,6 +39,16 @@ void log_info(const std::string& text) {
 }
 
 void log_warning(const std::string& text) {
+  emit(LogLevel::warning, text);
+}
+
+void log_warning_once(const std::string& text) {
+  static std::mutex mutex;
+  static std::set<std::string> said;
+  {
+    std::lock_guard lock(mutex);
+    if (!said.insert(text).second) return;
+  }
   emit(LogLevel::warning, text);
 }
 

@@ -11,6 +11,7 @@
 #include "coupled_slabs.hpp"
 #include "kept_state.hpp"
 #include "prt/basis.hpp"
+#include "prt/basis_metric.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
@@ -160,6 +161,34 @@ void record(const CompressionReport& r, std::map<std::string, double>& metrics) 
   for (const auto& [name, value] : r.statistics) metrics[name] = value;
 }
 
+namespace {
+
+// What the direction set really is, and whether it can resolve the basis:
+// a cube map rounds `rays` to 6 R^2, and fewer directions than twice the
+// basis's functions alias (unless the set is the basis's own lattice, on
+// which its projection is exact).
+void warn_if_under_sampled(const SceneSpec& scene, const DirectionSet& set, const Basis& basis,
+                           const std::string& name) {
+  const std::string where = scene.transport.location("rays").str() + ": ";
+  const auto rays = scene.transport.get_int("rays");
+  if (set.kind == "cubemap" && set.size() != rays) {
+    const int r = static_cast<int>(std::lround(std::sqrt(set.size() / 6.0)));
+    log_warning_once(where + "rays = " + std::to_string(rays) + " makes a 6 x " +
+                     std::to_string(r) + " x " + std::to_string(r) + " cube map: " +
+                     std::to_string(set.size()) + " directions (a cube map has 6 R^2)");
+  }
+  const auto native = basis.native_directions();
+  const bool own_lattice = native && native->kind == set.kind && native->size() == set.size();
+  if (!own_lattice && set.size() < 2 * Eigen::Index(basis.size()))
+    log_warning_once(where + std::to_string(set.size()) + " directions for basis \"" + name +
+                     "\"'s " + std::to_string(basis.size()) +
+                     " functions: fewer than twice as many, so the projection aliases; raise "
+                     "[transport] rays to " +
+                     std::to_string(2 * basis.size()) + " or more");
+}
+
+}  // namespace
+
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   BakePlan plan;
   PluginChoice basis = scene.basis, compressor = scene.compressor;
@@ -172,7 +201,9 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
     throw Error(basis.where, domain_error(basis, "basis", Domain::sphere));
   scene.check_window(*plan.basis);
   try {  // the direction set is cheap to make; its rays come later
-    plan.basis->check_directions(scene.directions());
+    const DirectionSet set = scene.directions();
+    plan.basis->check_directions(set);
+    warn_if_under_sampled(scene, set, *plan.basis, basis.name);
   } catch (const Error& e) {
     throw Error(scene.transport.location("directions"), e.what());
   }
@@ -714,6 +745,8 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
   basis_->load(data.basis_state);
   check_bake_dimension(data, *basis_);
   scene.check_window(*basis_);
+  if (const BasisMetric metric = basis_metric(*basis_); !metric.identity)
+    light_gram_ = std::move(metric.gram);
   if (data.transfer.glossy()) {
     PluginChoice exit = scene.exit;
     exit_ = registry.create<Basis>(exit.name, exit.params, exit.where);
@@ -763,6 +796,11 @@ Eigen::MatrixX3d Relighting::light(const Environment& environment) const {
   return scene_.project_light(environment, *basis_);
 }
 
+Eigen::MatrixX3d Relighting::seen_by_transfer(const Eigen::MatrixX3d& light) const {
+  if (light_gram_.size() == 0) return light;
+  return light_gram_ * light;
+}
+
 RelightKernel Relighting::prepare(const CompressedTransfer& transfer) const {
   return RelightKernel(transfer, data_.transfer.exit_rows * data_.transfer.channel_groups);
 }
@@ -790,8 +828,9 @@ Eigen::MatrixX3f channel_radiance(const RelightKernel& kernel, const Eigen::Matr
 
 }  // namespace
 
-Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& light,
+Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& light_coefficients,
                           const Camera& camera) const {
+  const Eigen::MatrixX3d light = seen_by_transfer(light_coefficients);
   Relit out;
   out.exit_values = exit_values_toward(camera);  // empty for diffuse transfer
   // The renderers' own relight path (RelightKernel), so CPU results are theirs.
@@ -820,7 +859,7 @@ RenderInput Relighting::input(const CompressedTransfer& transfer, const Relit& r
   RenderInput input;
   input.mesh = &data_.mesh;
   input.transfer = &transfer;
-  input.light = light;
+  input.light = seen_by_transfer(light);
   input.albedo = data_.albedo;
   input.camera = camera;
   if (exit_) input.exit_values = &relit.exit_values;

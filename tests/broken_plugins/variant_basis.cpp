@@ -4,7 +4,12 @@
 // PRT_BUG_WEIGHTS (native weights doubled and functions scaled to match, so
 // the basis looks orthonormal on its own rule), PRT_BUG_SIZE (size() ignores
 // the boolean), PRT_BUG_REFLECTION (the "rotation" also mirrors z),
-// PRT_BUG_LOCAL_FIT (fits distributed, but sums only its own rank's shard).
+// PRT_BUG_LOCAL_FIT (fits distributed, but sums only its own rank's shard),
+// PRT_BUG_CLAIMS_ORTHONORMAL (functions mixed so that they overlap, still
+// claiming orthonormality), PRT_BUG_GRAM_FACTOR (the same mixed functions,
+// honestly not orthonormal, but projected by its own least squares with a
+// Gram matrix 10% too large).
+#include <Eigen/LU>
 #include <array>
 #include <cmath>
 
@@ -33,10 +38,18 @@ class VariantBasis final : public prt::Basis {
 #endif
   }
   bool orthonormal() const override {
+#ifdef PRT_BUG_GRAM_FACTOR
+    return false;
+#else
     return true;
+#endif
   }
   Eigen::MatrixXd evaluate(const prt::Directions& d) const override {
     Eigen::MatrixXd all = prt::sh::evaluate(3, d);
+#if defined(PRT_BUG_CLAIMS_ORTHONORMAL) || defined(PRT_BUG_GRAM_FACTOR)
+    all.col(2) += 0.5 * all.col(0);  // overlapping functions: G is not the identity
+    all.col(6) += 0.3 * all.col(4);
+#endif
 #ifdef PRT_BUG_NORMALISATION
     all.col(5) *= 1.05;
 #endif
@@ -60,6 +73,15 @@ class VariantBasis final : public prt::Basis {
   bool can_rotate() const override {
     return true;
   }
+#ifdef PRT_BUG_GRAM_FACTOR
+  // Least squares of its own, through a Gram matrix off by a factor.
+  Eigen::MatrixXd projection_matrix(const prt::DirectionSet& set) const override {
+    const prt::DirectionSet rule = prt::gauss_product_sphere(6);
+    const Eigen::MatrixXd b = evaluate(rule.directions);
+    const Eigen::MatrixXd gram = 1.1 * (b.transpose() * rule.weights.asDiagonal() * b);
+    return set.weights.asDiagonal() * evaluate(set.directions) * gram.inverse();
+  }
+#endif
 #ifdef PRT_BUG_LOCAL_FIT
   // "Fitted" state that leaves the functions alone: the fraction of visible
   // (vertex, direction) pairs, counted over this rank's shard only.

@@ -117,14 +117,25 @@ expect_error "a 10^6-character key is elided" 'characters elided' -- bake long_k
 # A budget beyond what the data supports is used as far as it goes, with a
 # warning at the key's line that says what was used.
 { good_scene | sed 's/^bake = .*/bake = "budget.h5"/; s/^image = .*/image = "budget.png"/'
-  printf '[compressor]\nplugin = "cpca"\nclusters = 1000000\ncomponents = 100000\n'; } >"$work/budget.toml"
+  printf '[compressor]\nplugin = "cpca"\nclusters = 1000000\ncomponents = 8\n'; } >"$work/budget.toml"
 (cd "$work" && "$prt" -q bake budget.toml >/dev/null 2>"$work/stderr")
-if [ $? -eq 0 ] && grep -q 'budget.toml:16:1: compressor "cpca": clusters = 1000000 is more than .*; [0-9]* used' "$work/stderr" &&
-  grep -q 'budget.toml:17:1: compressor "cpca": components = 100000 is more than .*; [0-9]* used' "$work/stderr"; then
+if [ $? -eq 0 ] && grep -q 'budget.toml:16:1: compressor "cpca": clusters = 1000000 is more than .*; [0-9]* used' "$work/stderr"; then
   echo "ok   budgets beyond the data warn with the value used"
   pass=$((pass + 1))
 else
   echo "FAIL budgets beyond the data"
+  sed 's/^/    stderr: /' "$work/stderr"
+  failures=$((failures + 1))
+fi
+# More components than coefficients: the coefficients are used, and said.
+{ good_scene | sed 's/^bake = .*/bake = "components.h5"/; s/^image = .*/image = "components.png"/'
+  printf '[compressor]\nplugin = "pca"\ncomponents = 100000\n'; } >"$work/components.toml"
+(cd "$work" && "$prt" -q bake components.toml >/dev/null 2>"$work/stderr")
+if [ $? -eq 0 ] && grep -q 'components.toml:16:1: compressor "pca": components = 100000 is more than .*; 9 used' "$work/stderr"; then
+  echo "ok   components beyond the coefficients warn: $(cat "$work/stderr")"
+  pass=$((pass + 1))
+else
+  echo "FAIL components beyond the coefficients"
   sed 's/^/    stderr: /' "$work/stderr"
   failures=$((failures + 1))
 fi

@@ -28,5 +28,7 @@ check weights "native quadrature weights integrate 1 to the domain's measure" "w
 check size "every boolean and choice parameter value gives a consistent basis" "drop_constant=true"
 check reflection "rotation is consistent with re-projection and composes" "ra * rb"
 check local_fit "a distributed fit equals the one-process fit bit for bit" "visible_fraction"
+check claims_orthonormal "relighting equals the integral of light times transfer" "G = I: the basis says it is orthonormal"
+check gram_factor "relighting equals the integral of light times transfer" "G from the basis's rule"
 echo "$failures failure(s)"
 [ "$failures" -eq 0 ]

@@ -51,15 +51,20 @@ class Basis : public PluginObject {
   // Number of coefficients.
   virtual int size() const = 0;
   virtual Domain domain() const { return Domain::sphere; }
-  // True if the basis is orthonormal over its domain (checked by conformance tests).
+  // True if the basis is orthonormal over its domain. The conformance kit
+  // checks the claim (its Gram matrix on the kit's rule is the identity);
+  // a basis that is not orthonormal says false and the framework uses its
+  // metric (prt/basis_metric.hpp), so relighting is right either way.
   virtual bool orthonormal() const = 0;
 
   // Basis values at the directions: s x size().
   virtual Eigen::MatrixXd evaluate(const Directions& directions) const = 0;
 
   // The s x size() matrix P with coefficients = samples * P for functions
-  // sampled on `set` (one row per function). Default: diag(weights) * evaluate,
-  // the quadrature of an orthonormal basis. Least-squares bases override it.
+  // sampled on `set` (one row per function): least-squares coefficients,
+  // f ~ sum_i c_i B_i. Default: diag(weights) * evaluate * G^-1, with the
+  // basis's Gram matrix G (prt/basis_metric.hpp; G = I, so plain quadrature,
+  // for an orthonormal basis). A basis with its own least squares overrides it.
   virtual Eigen::MatrixXd projection_matrix(const DirectionSet& set) const;
 
   // Projects a batch of functions sampled on `set` (m x s) to m x size().

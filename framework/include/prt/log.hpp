@@ -15,5 +15,8 @@ using LogSink = std::function<void(LogLevel level, const std::string& text)>;
 void set_log_sink(LogSink sink);
 void log_info(const std::string& text);
 void log_warning(const std::string& text);
+// The same warning once per process (a plan made twice, a metric asked for
+// by every render of a session).
+void log_warning_once(const std::string& text);
 
 }  // namespace prt

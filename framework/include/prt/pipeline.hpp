@@ -274,7 +274,12 @@ class Relighting {
  private:
   const SceneSpec& scene_;
   const BakeData& data_;
+  // The light as the transfer's dot products need it: G l for a light basis
+  // that is not orthonormal (t . G l = int T L), l itself otherwise.
+  Eigen::MatrixX3d seen_by_transfer(const Eigen::MatrixX3d& light) const;
+
   std::shared_ptr<Basis> basis_, exit_;
+  Eigen::MatrixXd light_gram_;  // empty for an orthonormal light basis
   std::vector<Frame> frames_;
   std::vector<PointLight> point_lights_;
   std::unique_ptr<PointLightProjector> projector_;
