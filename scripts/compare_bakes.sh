@@ -5,7 +5,7 @@
 # datasets (h5diff) where the files differ.
 #   scripts/compare_bakes.sh OLD_PRT NEW_PRT [SCENE.toml ...]
 # Scenes default to scenes/*.toml without those naming out-of-tree plug-ins
-# (zonal, gautron). Example: build the commit before a change in a worktree
+# (zonal, gautron, lobes). Example: build the commit before a change in a worktree
 #   git worktree add /tmp/before HEAD~1 && ln -s "$PWD/data" /tmp/before/data
 #   (cd /tmp/before && bash scripts/build.sh)
 #   scripts/compare_bakes.sh /tmp/before/build/bin/prt build/bin/prt
@@ -17,7 +17,7 @@ shift 2
 scenes=("$@")
 if [ ${#scenes[@]} -eq 0 ]; then
   for s in "$root"/scenes/*.toml; do
-    grep -q 'plugin = "\(zonal\|gautron\)"' "$s" || scenes+=("$s")
+    grep -q 'plugin = "\(zonal\|gautron\|lobes\)"' "$s" || scenes+=("$s")
   done
 fi
 work="$(mktemp -d)"

@@ -26,7 +26,7 @@ echo "---"
 }
 grep -E "tests passed|Passed" "$work/out.txt"
 grep -q "^basis zonal " "$work/out.txt" || { echo "FAIL: prt plugins does not list zonal"; exit 1; }
-for image in bunny_zonal_diffuse bunny_zonal_glossy bunny_gautron; do
+for image in bunny_zonal_diffuse bunny_zonal_glossy bunny_gautron bunny_lobes; do
   [ -s "$work/checkout/out/$image.png" ] || { echo "FAIL: no image $image.png"; exit 1; }
 done
 if grep -q "warning" "$work/out.txt"; then grep warning "$work/out.txt"; echo "FAIL: warnings"; exit 1; fi
