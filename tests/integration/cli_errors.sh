@@ -150,6 +150,20 @@ else
   failures=$((failures + 1))
 fi
 
+# Under-sampling is said, not silent: a cube map rounds rays to 6 R^2, and
+# fewer directions than twice the basis's functions alias.
+{ good_scene | sed 's/^bake = .*/bake = "sampled.h5"/; s/^image = .*/image = "sampled.png"/; s/^rays = 64/directions = "cubemap"\nrays = 256/; s/^order = 3/order = 13/'; } >"$work/sampled.toml"
+(cd "$work" && "$prt" -q bake sampled.toml >/dev/null 2>"$work/stderr")
+if grep -q 'sampled.toml:11:1: rays = 256 makes a 6 x 7 x 7 cube map: 294 directions' "$work/stderr" &&
+  grep -q "sampled.toml:11:1: 294 directions for basis .sh.'s 169 functions: fewer than twice as many" "$work/stderr"; then
+  echo "ok   under-sampling is said: $(tr '\n' ' ' <"$work/stderr")"
+  pass=$((pass + 1))
+else
+  echo "FAIL under-sampling is silent"
+  sed 's/^/    stderr: /' "$work/stderr"
+  failures=$((failures + 1))
+fi
+
 # A good scene still works end to end in the same folder.
 if (cd "$work" && "$prt" -q bake good.toml >/dev/null && "$prt" -q render good.toml >/dev/null) &&
   [ -s "$work/out.h5" ] && [ -s "$work/out.png" ]; then
