@@ -187,6 +187,25 @@ void warn_if_under_sampled(const SceneSpec& scene, const DirectionSet& set, cons
                      std::to_string(2 * basis.size()) + " or more");
 }
 
+// orthonormal() is a claim the relight relies on (it then applies no
+// metric): checked on the basis's rule before any ray, for bases small
+// enough that G costs milliseconds (n <= 400) and not fitted to the bake.
+void check_orthonormal_claim(const Basis& basis, const PluginChoice& choice) {
+  if (!basis.orthonormal() || basis.can_fit() || basis.size() > 400) return;
+  const Eigen::MatrixXd g = gram_matrix(basis);
+  const double off = (g - Eigen::MatrixXd::Identity(g.rows(), g.cols())).cwiseAbs().maxCoeff();
+  if (!(off <= 1e-6)) {
+    char text[120];
+    std::snprintf(text, sizeof text, "%.3g", off);
+    throw Error(choice.where, "basis \"" + choice.name +
+                                  "\" says it is orthonormal, but its Gram matrix differs from "
+                                  "the identity by " +
+                                  text +
+                                  " on its own rule; relighting with it would be wrong. Return "
+                                  "false from orthonormal() and the framework applies its metric");
+  }
+}
+
 }  // namespace
 
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
@@ -200,6 +219,7 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   if (plan.basis->domain() != Domain::sphere)
     throw Error(basis.where, domain_error(basis, "basis", Domain::sphere));
   scene.check_window(*plan.basis);
+  check_orthonormal_claim(*plan.basis, basis);
   try {  // the direction set is cheap to make; its rays come later
     const DirectionSet set = scene.directions();
     plan.basis->check_directions(set);
@@ -227,6 +247,7 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
     plan.exit_record = record_of(scene.exit, registry, PluginKind::basis);
     if (plan.exit->domain() != Domain::hemisphere)
       throw Error(exit.where, domain_error(exit, "exit", Domain::hemisphere));
+    check_orthonormal_claim(*plan.exit, exit);
     if (plan.exit->can_fit())
       throw Error(exit.where, "[exit] basis \"" + exit.name +
                                   "\" is data-driven (fits to traced visibility); an exit basis "

@@ -164,6 +164,24 @@ else
   failures=$((failures + 1))
 fi
 
+# A basis that claims an orthonormality it lacks is refused before any ray
+# (its relight would silently be wrong); the honest one bakes.
+variants="$(dirname "$(dirname "$(realpath "$prt")")")/test_plugins/variants"
+if [ -d "$variants/claims_orthonormal" ]; then
+  good_scene | sed 's/^plugin = "sh"/plugin = "variant"/; /^order = 3/d' >"$work/claims.toml"
+  export PRT_PLUGIN_PATH="$variants/claims_orthonormal"
+  expect_error "a false orthonormality claim" 'claims.toml:7:10: error: basis "variant" says it is orthonormal, but its Gram matrix differs from the identity by 0.5' -- bake claims.toml
+  unset PRT_PLUGIN_PATH
+  if (cd "$work" && PRT_PLUGIN_PATH="$variants/good" "$prt" -q bake claims.toml >/dev/null 2>"$work/stderr"); then
+    echo "ok   the orthonormal variant bakes"
+    pass=$((pass + 1))
+  else
+    echo "FAIL the orthonormal variant is refused"
+    sed 's/^/    stderr: /' "$work/stderr"
+    failures=$((failures + 1))
+  fi
+fi
+
 # A good scene still works end to end in the same folder.
 if (cd "$work" && "$prt" -q bake good.toml >/dev/null && "$prt" -q render good.toml >/dev/null) &&
   [ -s "$work/out.h5" ] && [ -s "$work/out.png" ]; then
