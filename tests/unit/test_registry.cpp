@@ -24,7 +24,7 @@ bool is_mapped(const std::string& fragment) {
 
 TEST_CASE("the build's plug-ins are discovered from their info records", "[registry]") {
   PluginRegistry r({PRT_BUILD_PLUGIN_DIR});
-  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sh"});
+  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sg", "sh"});
   CHECK(r.names(PluginKind::compressor) == std::vector<std::string>{"cpca", "none", "pca", "vq"});
   CHECK(r.names(PluginKind::renderer) == std::vector<std::string>{"cpu", "opengl"});
   const auto& sh = r.find(PluginKind::basis, "sh");
@@ -123,7 +123,7 @@ TEST_CASE("each plug-in failure gives one clear error naming the file", "[regist
 TEST_CASE("one bad file on the plug-in path does not hide the others", "[registry]") {
   PluginRegistry r({PRT_BUILD_PLUGIN_DIR, case_dir("not_a_plugin"), "/no/such/dir"});
   CHECK(r.problems().size() == 2);
-  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sh"});
+  CHECK(r.names(PluginKind::basis) == std::vector<std::string>{"eigen", "haar", "hsh", "sg", "sh"});
   CHECK_NOTHROW(r.find(PluginKind::basis, "sh"));
   // A stale, unreadable copy named like a valid plug-in does not shadow it.
   const fs::path stale = fs::temp_directory_path() / "prt_registry_stale";
