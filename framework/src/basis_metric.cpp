@@ -41,10 +41,6 @@ std::string label_of(const Basis& basis) {
   return label;
 }
 
-void warn_once(const Basis& basis, const std::string& text) {
-  log_warning_once(label_of(basis) + ": " + text);
-}
-
 }  // namespace
 
 BasisMetric basis_metric(const Basis& basis, double cutoff) {
@@ -76,13 +72,13 @@ BasisMetric basis_metric(const Basis& basis, double cutoff) {
                   "its Gram matrix is rank-deficient: %d of %d eigenvalues below %g x the largest "
                   "were discarded (least squares in the span of the others)",
                   metric.discarded, int(values.size()), cutoff);
-    warn_once(basis, text);
+    log_warning_once(label_of(basis) + ": " + text);
   } else if (metric.condition > kMetricWarnCondition) {
     std::snprintf(text, sizeof text,
                   "its Gram matrix has condition number %.3g: least-squares coefficients and "
                   "relighting lose about %.0f of their ~16 digits",
                   metric.condition, std::log10(metric.condition));
-    warn_once(basis, text);
+    log_warning_once(label_of(basis) + ": " + text);
   }
   return metric;
 }

@@ -69,27 +69,16 @@ void write_raw(const fs::path& file, const void* head, std::size_t head_bytes, c
     fs::remove(temporary, ignored);
     throw Error(io_failure(file, error_number, "writing a checkpoint part"));
   };
-  auto write_all = [&](const void* from, std::size_t size) {
-    const char* p = static_cast<const char*>(from);
-    while (size > 0) {
-      const ssize_t n = ::write(fd, p, size);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) {
-        const int error_number = n < 0 ? errno : ENOSPC;
-        ::close(fd);
-        fail(error_number);
-      }
-      p += n, size -= static_cast<std::size_t>(n);
+  for (const auto& [from, size] : {std::pair{head, head_bytes}, {data, bytes}})
+    if (const int failed = write_fully(fd, from, size)) {
+      ::close(fd);
+      fail(failed);
     }
-  };
-  write_all(head, head_bytes);
-  write_all(data, bytes);
   const int synced = ::fsync(fd) == 0 ? 0 : errno;
   const int closed = ::close(fd) == 0 ? 0 : errno;  // always closed, even when fsync failed
   if (synced || closed) fail(synced ? synced : closed);
   if (std::rename(temporary.c_str(), file.c_str()) != 0) fail(errno);
-  const int dir = ::open(file.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir >= 0) ::fsync(dir), ::close(dir);
+  sync_folder(file.parent_path());
 }
 
 void write_whole(const fs::path& file, const Header& header, const void* data, std::size_t bytes) {

@@ -12,23 +12,13 @@
 #include <iostream>
 
 #include "prt/error.hpp"
+#include "prt/output_file.hpp"
 
 namespace prt {
 
 namespace {
 
 int verdict_pipe = -1;  // the child's write end, while a child runs its work
-
-void write_all(int fd, const std::string& text) {
-  const char* p = text.data();
-  std::size_t left = text.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd, p, left);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return;
-    p += n, left -= static_cast<std::size_t>(n);
-  }
-}
 
 std::string read_all(int fd) {
   std::string text;
@@ -49,7 +39,8 @@ bool in_child_process() {
 
 void fail_child_process(const std::string& message) {
   if (verdict_pipe < 0) throw Error(message);  // ran in this process: an ordinary error
-  write_all(verdict_pipe, message.empty() ? "failed" : message);
+  const std::string text = message.empty() ? "failed" : message;
+  write_fully(verdict_pipe, text.data(), text.size());  // the parent reports a lost message
   ::_exit(1);
 }
 

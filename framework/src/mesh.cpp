@@ -157,11 +157,16 @@ std::string obj_text_without_side_files(const std::filesystem::path& file) {
   return text;
 }
 
-bool read_openmesh(OMesh& om, const std::filesystem::path& file, OpenMesh::IO::Options& options) {
+std::string lowercase_extension(const std::filesystem::path& file) {
   std::string extension = file.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension != ".obj") return OpenMesh::IO::read_mesh(om, file.string(), options);
+  return extension;
+}
+
+bool read_openmesh(OMesh& om, const std::filesystem::path& file, OpenMesh::IO::Options& options) {
+  if (lowercase_extension(file) != ".obj")
+    return OpenMesh::IO::read_mesh(om, file.string(), options);
   std::istringstream text(obj_text_without_side_files(file));
   return OpenMesh::IO::read_mesh(om, text, ".obj", options);
 }
@@ -216,10 +221,7 @@ Mesh load_mesh(const std::filesystem::path& file) {
   if (declared.known && om.n_faces() + mesh.skipped_degenerate_faces < declared.faces) {
     // STL stores corners, not indices: a dropped facet there repeats a corner
     // (after OpenMesh merges equal positions) or cannot join the surface.
-    std::string extension = file.extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    const bool corners = extension.rfind(".stl", 0) == 0;
+    const bool corners = lowercase_extension(file).rfind(".stl", 0) == 0;
     throw Error(source + ": " +
                 std::to_string(declared.faces - om.n_faces() - mesh.skipped_degenerate_faces) +
                 " of its " + std::to_string(declared.faces) + " faces could not be read (" +

@@ -264,9 +264,7 @@ void write_atomically(const fs::path& file, const std::function<void(const fs::p
     fs::remove(temporary, ignored);
     throw;
   }
-  // The rename is durable once the folder is synced; the file is whole either way.
-  const int directory = open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (directory >= 0) fsync(directory), close(directory);
+  sync_folder(dir);
 }
 
 void write_text_file(const fs::path& file, const std::string& text) {
@@ -282,22 +280,31 @@ std::string io_failure(const fs::path& file, int error_number, const char* doing
   return file.string() + ": " + reason + " while " + doing;
 }
 
+int write_fully(int descriptor, const void* bytes, std::size_t size) {
+  const char* from = static_cast<const char*>(bytes);
+  while (size > 0) {
+    const ssize_t wrote = ::write(descriptor, from, size);
+    if (wrote < 0 && errno == EINTR) continue;
+    if (wrote <= 0) return wrote < 0 ? errno : ENOSPC;
+    from += wrote;
+    size -= static_cast<std::size_t>(wrote);
+  }
+  return 0;
+}
+
+void sync_folder(const fs::path& folder) {
+  const int descriptor = open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (descriptor >= 0) fsync(descriptor), close(descriptor);
+}
+
 void write_bytes_checked(const fs::path& path, const void* bytes, std::size_t size,
                          const fs::path& shown) {
   const fs::path& name = shown.empty() ? path : shown;
   const int descriptor = open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (descriptor < 0) throw Error(io_failure(name, errno, "creating it"));
-  const char* from = static_cast<const char*>(bytes);
-  while (size > 0) {
-    const ssize_t wrote = ::write(descriptor, from, size);
-    if (wrote < 0 && errno == EINTR) continue;
-    if (wrote <= 0) {
-      const int error_number = wrote < 0 ? errno : ENOSPC;
-      close(descriptor);
-      throw Error(io_failure(name, error_number, "writing"));
-    }
-    from += wrote;
-    size -= static_cast<std::size_t>(wrote);
+  if (const int failed = write_fully(descriptor, bytes, size)) {
+    close(descriptor);
+    throw Error(io_failure(name, failed, "writing"));
   }
   const int synced = fsync(descriptor) == 0 ? 0 : errno;
   const int closed = close(descriptor) == 0 ? 0 : errno;

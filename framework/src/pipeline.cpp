@@ -766,7 +766,7 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
   basis_->load(data.basis_state);
   check_bake_dimension(data, *basis_);
   scene.check_window(*basis_);
-  if (const BasisMetric metric = basis_metric(*basis_); !metric.identity)
+  if (BasisMetric metric = basis_metric(*basis_); !metric.identity)
     light_gram_ = std::move(metric.gram);
   if (data.transfer.glossy()) {
     PluginChoice exit = scene.exit;

@@ -252,23 +252,38 @@ namespace {
 
 // Code may be loaded only from what no one but its owner (root or this
 // user) can change: a folder or file others may write could hold anyone's code.
-std::string unsafe_to_load(const fs::path& path, const char* what) {
+// A sticky folder (as /tmp) protects its entries, so it may count as safe
+// when it is only a parent of the one that holds the code.
+enum class Exposure { none, writable, foreign };
+Exposure exposure_of(const fs::path& path, bool sticky_is_safe, uid_t& owner) {
   struct stat s {};
-  if (stat(path.c_str(), &s) != 0) return "";
-  if (s.st_mode & (S_IWGRP | S_IWOTH))
-    return path.string() + ": skipped: the " + what +
-           " is writable by others than its owner (chmod go-w to use it)";
-  if (s.st_uid != 0 && s.st_uid != geteuid())
-    return path.string() + ": skipped: the " + what + " belongs to another user (uid " +
-           std::to_string(s.st_uid) + ")";
+  if (stat(path.c_str(), &s) != 0) return Exposure::none;
+  owner = s.st_uid;
+  if ((s.st_mode & (S_IWGRP | S_IWOTH)) && !(sticky_is_safe && (s.st_mode & S_ISVTX)))
+    return Exposure::writable;
+  if (s.st_uid != 0 && s.st_uid != geteuid()) return Exposure::foreign;
+  return Exposure::none;
+}
+
+std::string unsafe_to_load(const fs::path& path, const char* what) {
+  uid_t owner = 0;
+  switch (exposure_of(path, false, owner)) {
+    case Exposure::writable:
+      return path.string() + ": skipped: the " + what +
+             " is writable by others than its owner (chmod go-w to use it)";
+    case Exposure::foreign:
+      return path.string() + ": skipped: the " + what + " belongs to another user (uid " +
+             std::to_string(owner) + ")";
+    case Exposure::none:
+      break;
+  }
   return "";
 }
 
 // A folder is as safe as the folders above it: whoever may write a parent
 // may rename the folder away and put their own in its place (or change a
 // symlink that leads to it). Every ancestor of the path as written and of
-// the path it resolves to is checked as the folder itself is; a sticky
-// folder such as /tmp is fine, since only an entry's owner may replace it.
+// the path it resolves to is checked as the folder itself is.
 std::string unsafe_ancestor(const fs::path& directory) {
   std::error_code error;
   const fs::path written = fs::absolute(directory, error).lexically_normal();
@@ -276,17 +291,17 @@ std::string unsafe_ancestor(const fs::path& directory) {
   for (const fs::path& path : {written, resolved}) {
     if (path.empty()) continue;
     for (fs::path parent = path.parent_path(); !parent.empty(); parent = parent.parent_path()) {
-      struct stat s {};
-      if (stat(parent.c_str(), &s) == 0) {
-        const bool sticky = (s.st_mode & S_ISVTX) != 0;
-        if ((s.st_mode & (S_IWGRP | S_IWOTH)) && !sticky)
-          return directory.string() + ": skipped: the plug-in folder's parent " + parent.string() +
-                 " is writable by others than its owner, who could replace the folder "
-                 "(chmod go-w " +
-                 parent.string() + " to use it)";
-        if (s.st_uid != 0 && s.st_uid != geteuid())
-          return directory.string() + ": skipped: the plug-in folder's parent " + parent.string() +
-                 " belongs to another user (uid " + std::to_string(s.st_uid) + ")";
+      uid_t owner = 0;
+      const std::string subject =
+          directory.string() + ": skipped: the plug-in folder's parent " + parent.string();
+      switch (exposure_of(parent, true, owner)) {
+        case Exposure::writable:
+          return subject + " is writable by others than its owner, who could replace the " +
+                 "folder (chmod go-w " + parent.string() + " to use it)";
+        case Exposure::foreign:
+          return subject + " belongs to another user (uid " + std::to_string(owner) + ")";
+        case Exposure::none:
+          break;
       }
       if (parent == parent.root_path()) break;
     }

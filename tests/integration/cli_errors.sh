@@ -53,6 +53,29 @@ expect_error() {
   fi
 }
 
+# expect_warning NAME PATTERN... -- ARGS...: runs prt, which must succeed
+# with every pattern (grep) on its stderr.
+expect_warning() {
+  local name="$1" patterns=()
+  shift
+  while [ "$1" != "--" ]; do patterns+=("$1") && shift; done
+  shift
+  (cd "$work" && "$prt" -q "$@" >"$work/stdout" 2>"$work/stderr")
+  local code=$? problems=""
+  [ "$code" -eq 0 ] || problems+=" exit code $code;"
+  for pattern in "${patterns[@]}"; do
+    grep -q -- "$pattern" "$work/stderr" || problems+=" stderr lacks '$pattern';"
+  done
+  if [ -n "$problems" ]; then
+    echo "FAIL $name:$problems"
+    sed 's/^/    stderr: /' "$work/stderr"
+    failures=$((failures + 1))
+  else
+    echo "ok   $name: $(tr '\n' ' ' <"$work/stderr")"
+    pass=$((pass + 1))
+  fi
+}
+
 good_scene | sed 's/^order = 3/ordr = 3/' >"$work/misspelt.toml"
 expect_error "misspelt key" 'misspelt.toml:8:1: error: basis "sh": unknown parameter "ordr".*did you mean "order"' -- bake misspelt.toml
 
@@ -118,51 +141,22 @@ expect_error "a 10^6-character key is elided" 'characters elided' -- bake long_k
 # warning at the key's line that says what was used.
 { good_scene | sed 's/^bake = .*/bake = "budget.h5"/; s/^image = .*/image = "budget.png"/'
   printf '[compressor]\nplugin = "cpca"\nclusters = 1000000\ncomponents = 8\n'; } >"$work/budget.toml"
-(cd "$work" && "$prt" -q bake budget.toml >/dev/null 2>"$work/stderr")
-if [ $? -eq 0 ] && grep -q 'budget.toml:16:1: compressor "cpca": clusters = 1000000 is more than .*; [0-9]* used' "$work/stderr"; then
-  echo "ok   budgets beyond the data warn with the value used"
-  pass=$((pass + 1))
-else
-  echo "FAIL budgets beyond the data"
-  sed 's/^/    stderr: /' "$work/stderr"
-  failures=$((failures + 1))
-fi
+expect_warning "budgets beyond the data warn with the value used" \
+  'budget.toml:16:1: compressor "cpca": clusters = 1000000 is more than .*; [0-9]* used' -- bake budget.toml
 # More components than coefficients: the coefficients are used, and said.
 { good_scene | sed 's/^bake = .*/bake = "components.h5"/; s/^image = .*/image = "components.png"/'
   printf '[compressor]\nplugin = "pca"\ncomponents = 100000\n'; } >"$work/components.toml"
-(cd "$work" && "$prt" -q bake components.toml >/dev/null 2>"$work/stderr")
-if [ $? -eq 0 ] && grep -q 'components.toml:16:1: compressor "pca": components = 100000 is more than .*; 9 used' "$work/stderr"; then
-  echo "ok   components beyond the coefficients warn: $(cat "$work/stderr")"
-  pass=$((pass + 1))
-else
-  echo "FAIL components beyond the coefficients"
-  sed 's/^/    stderr: /' "$work/stderr"
-  failures=$((failures + 1))
-fi
+expect_warning "components beyond the coefficients warn" \
+  'components.toml:16:1: compressor "pca": components = 100000 is more than .*; 9 used' -- bake components.toml
 { good_scene | sed 's/^bake = .*/bake = "haar.h5"/; s/^image = .*/image = "haar.png"/; s/^plugin = "sh"/plugin = "haar"\nresolution = 4\nk = 1000000000/; /^order = 3/d'; } >"$work/haar.toml"
-(cd "$work" && "$prt" -q bake haar.toml >/dev/null 2>"$work/stderr")
-if grep -q 'basis "haar": k = 1000000000 is more than its 96 coefficients (resolution 4); 96 used' "$work/stderr"; then
-  echo "ok   haar k beyond its coefficients warns"
-  pass=$((pass + 1))
-else
-  echo "FAIL haar k beyond its coefficients"
-  sed 's/^/    stderr: /' "$work/stderr"
-  failures=$((failures + 1))
-fi
+expect_warning "haar k beyond its coefficients warns" \
+  'basis "haar": k = 1000000000 is more than its 96 coefficients (resolution 4); 96 used' -- bake haar.toml
 
 # Under-sampling is said, not silent: a cube map rounds rays to 6 R^2, and
 # fewer directions than twice the basis's functions alias.
 { good_scene | sed 's/^bake = .*/bake = "sampled.h5"/; s/^image = .*/image = "sampled.png"/; s/^rays = 64/directions = "cubemap"\nrays = 256/; s/^order = 3/order = 13/'; } >"$work/sampled.toml"
-(cd "$work" && "$prt" -q bake sampled.toml >/dev/null 2>"$work/stderr")
-if grep -q 'sampled.toml:11:1: rays = 256 makes a 6 x 7 x 7 cube map: 294 directions' "$work/stderr" &&
-  grep -q "sampled.toml:11:1: 294 directions for basis .sh.'s 169 functions: fewer than twice as many" "$work/stderr"; then
-  echo "ok   under-sampling is said: $(tr '\n' ' ' <"$work/stderr")"
-  pass=$((pass + 1))
-else
-  echo "FAIL under-sampling is silent"
-  sed 's/^/    stderr: /' "$work/stderr"
-  failures=$((failures + 1))
-fi
+expect_warning "under-sampling is said" 'sampled.toml:11:1: rays = 256 makes a 6 x 7 x 7 cube map: 294 directions' \
+  "sampled.toml:11:1: 294 directions for basis .sh.'s 169 functions: fewer than twice as many" -- bake sampled.toml
 
 # A basis that claims an orthonormality it lacks is refused before any ray
 # (its relight would silently be wrong); the honest one bakes.
@@ -172,14 +166,9 @@ if [ -d "$variants/claims_orthonormal" ]; then
   export PRT_PLUGIN_PATH="$variants/claims_orthonormal"
   expect_error "a false orthonormality claim" 'claims.toml:7:10: error: basis "variant" says it is orthonormal, but its Gram matrix differs from the identity by 0.5' -- bake claims.toml
   unset PRT_PLUGIN_PATH
-  if (cd "$work" && PRT_PLUGIN_PATH="$variants/good" "$prt" -q bake claims.toml >/dev/null 2>"$work/stderr"); then
-    echo "ok   the orthonormal variant bakes"
-    pass=$((pass + 1))
-  else
-    echo "FAIL the orthonormal variant is refused"
-    sed 's/^/    stderr: /' "$work/stderr"
-    failures=$((failures + 1))
-  fi
+  export PRT_PLUGIN_PATH="$variants/good"
+  expect_warning "the orthonormal variant bakes" -- bake claims.toml
+  unset PRT_PLUGIN_PATH
 fi
 
 # A good scene still works end to end in the same folder.

@@ -51,6 +51,15 @@ void write_text_file(const std::filesystem::path& file, const std::string& text)
 void write_bytes_checked(const std::filesystem::path& path, const void* bytes, std::size_t size,
                          const std::filesystem::path& shown = {});
 
+// Writes all `size` bytes to `descriptor`, retrying short writes and EINTR:
+// 0 when done, otherwise the errno of the failure (ENOSPC for a write that
+// wrote nothing). The one write loop of every checked writer.
+int write_fully(int descriptor, const void* bytes, std::size_t size);
+
+// Syncs a folder after a rename into it (best effort: the renamed file is
+// whole either way; the sync makes the rename durable).
+void sync_folder(const std::filesystem::path& folder);
+
 // Flushes a written file to the device (fsync), checked: write errors that the
 // page cache deferred (a full disk, a failing device) surface here.
 void flush_to_device(const std::filesystem::path& path, const std::filesystem::path& shown = {});

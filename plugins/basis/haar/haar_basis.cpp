@@ -39,9 +39,10 @@ class HaarCubeMap final : public Basis {
       params.fail("resolution", "must be a power of 2, got " + std::to_string(resolution_));
     root_weights_ = lattice_.weights.cwiseSqrt();
     if (k_ > size()) {  // keeping more than there is keeps all: say so
-      log_warning(params.location("k").str() + ": basis \"haar\": k = " + std::to_string(k_) +
-                  " is more than its " + std::to_string(size()) + " coefficients (resolution " +
-                  std::to_string(resolution_) + "); " + std::to_string(size()) + " used");
+      log_warning_once(params.location("k").str() + ": basis \"haar\": k = " + std::to_string(k_) +
+                       " is more than its " + std::to_string(size()) +
+                       " coefficients (resolution " + std::to_string(resolution_) + "); " +
+                       std::to_string(size()) + " used");
       k_ = size();
     }
   }

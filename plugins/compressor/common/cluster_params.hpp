@@ -121,8 +121,6 @@ inline void improve_coherence(const CoherenceOptions& o, const Params& p,
   }
 }
 
-// The compressed form of clusters and their models, then the coherence
-// passes. Distributed: the rows are gathered on rank 0, which superclusters.
 // A budget larger than the data can use is used as far as it goes, with a
 // warning naming the key and the value used: clusters beyond the vertices
 // (LBG also drops clusters left empty), components beyond the coefficients
@@ -143,6 +141,8 @@ inline void report_budget_used(const std::string& name, const Params& p,
          "this transfer supports (its coefficients per vertex, or a cluster's members)");
 }
 
+// The compressed form of clusters and their models, then the coherence
+// passes. Distributed: the rows are gathered on rank 0, which superclusters.
 inline CompressedTransfer finish(const std::string& name, const CoherenceOptions& o,
                                  const Params& p, const clustering::Rows& rows,
                                  const std::vector<std::int32_t>& labels,
