@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <numeric>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -253,7 +254,9 @@ int bench(Context& context, const BenchArgs& args) {
       data.compressed = compress_stage(plan, data.transfer, data.mesh, scene.compressor.where);
     const double encode_seconds = clock.seconds();
     data.compressor = plan.compressor_record;
-    const double se = squared_error(data.transfer.coefficients, data.compressed.decode());
+    const RenderedMetric metric = rendered_metric(plan);  // the SE a bake reports
+    const std::vector<double> errors = vertex_errors(data.transfer, data.compressed, &metric);
+    const double se = std::accumulate(errors.begin(), errors.end(), 0.0);
     const fs::path bake_file = out / "bake.h5";
     write_bake(bake_file, data);
     const double file_bytes = double(fs::file_size(bake_file));

@@ -125,6 +125,12 @@ int render(Context& context, const RenderArgs& args) {
           " 99th percentile %.6g, max %.6g\n",
           static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms,
           e.p99, e.max);
+      const DarkPixels dark = count_dark_pixels(
+          result.image, truth.image, static_cast<float>(scene.camera.get_real("exposure")));
+      std::printf(
+          "pixels darker than half the ground truth (of %lld with ground-truth luminance > 40 of "
+          "255 at the scene's exposure): %lld\n",
+          dark.lit, dark.dark);
       // One relighting, light vector and camera for every comparison below.
       const Relighting relighting(scene, data, context.registry);
       const Environment environment = scene.load_environment();
@@ -217,14 +223,18 @@ int compress(Context& context, const CompressArgs& args) {
   for (std::size_t i = 0; i < args.parameters.size(); ++i)
     parse_parameter(args.parameters[i], i, params);
   auto compressor = context.registry.create<Compressor>(args.compressor, params);
+  const RenderedMetric metric = rendered_metric(data, context.registry);
   clock = Stopwatch();
   std::optional<TransferSignal> loaded;
-  data.compressed = compressor->encode(
-      readable_signal(*compressor, args.compressor, data.transfer, loaded), &data.mesh);
+  const Distribution whole = Distribution::whole_signal(data.transfer.vertices());
+  data.compressed =
+      encode_in_metric(*compressor, readable_signal(*compressor, args.compressor, data.transfer, loaded),
+                       &data.mesh, whole, metric);
   loaded.reset();
   const double seconds = clock.seconds();
   times.add("compress (" + args.compressor + ")", seconds);
-  const CompressionReport report = measure(data.transfer, data.compressed, &data.mesh, seconds);
+  const CompressionReport report =
+      measure(data.transfer, data.compressed, &data.mesh, seconds, whole, &metric);
   record(report, data.metrics);
   const auto& info = context.registry.find(PluginKind::compressor, args.compressor);
   data.compressor = {args.compressor, info.info.version, params.describe()};

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "prt/log.hpp"
+#include "prt/rendered_metric.hpp"
 #include "prt/row_blocks.hpp"
 #include "prt/segment_sum.hpp"
 
@@ -92,16 +93,19 @@ const TransferSignal& readable_signal(const Compressor& compressor, const std::s
 }
 
 std::vector<double> vertex_errors(const TransferSignal& signal,
-                                  const CompressedTransfer& compressed) {
+                                  const CompressedTransfer& compressed,
+                                  const RenderedMetric* metric) {
   std::vector<double> errors(std::size_t(signal.vertices()));
   const auto rows = signal.rows();
   for_each_row_block(Eigen::Index(0), signal.vertices(), Eigen::Index(4096),
                      [&](Eigen::Index begin, Eigen::Index end) {
                        Eigen::RowVectorXf row(signal.dimension());
+                       Eigen::MatrixXd difference(1, signal.dimension());
                        for (Eigen::Index p = begin; p < end; ++p) {
                          compressed.decode_row(p, row);
-                         errors[std::size_t(p)] =
-                             (rows.row(p).cast<double>() - row.cast<double>()).squaredNorm();
+                         difference = rows.row(p).cast<double>() - row.cast<double>();
+                         if (metric) metric->whiten_rows(difference, signal.exit_rows);
+                         errors[std::size_t(p)] = difference.squaredNorm();
                        }
                        signal.release(begin, end);
                      });
@@ -109,9 +113,12 @@ std::vector<double> vertex_errors(const TransferSignal& signal,
 }
 
 CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
-                          const Mesh* mesh, double encode_seconds, const Distribution& where) {
+                          const Mesh* mesh, double encode_seconds, const Distribution& where,
+                          const RenderedMetric* metric) {
   CompressionReport r;
-  std::vector<double> errors = vertex_errors(signal, compressed);
+  if (metric && metric->identity()) metric = nullptr;
+  r.rendered_metric = metric != nullptr;
+  std::vector<double> errors = vertex_errors(signal, compressed, metric);
   r.squared_error = segment_sum_rows(where.shard, errors, *where.comm);
   if (where.comm->size() > 1) {  // every vertex's error on rank 0
     const auto all = where.comm->gather(to_bytes(errors), 0);
@@ -146,6 +153,7 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
 std::string CompressionReport::json() const {
   nlohmann::ordered_json j;
   j["squared_error"] = squared_error;
+  j["error_metric"] = rendered_metric ? "rendered" : "coefficients";
   j["vertex_squared_error"] = {{"p50", vertex_error_p50},
                                {"p90", vertex_error_p90},
                                {"p99", vertex_error_p99},
@@ -164,10 +172,11 @@ std::string CompressionReport::json() const {
 std::string CompressionReport::text() const {
   char buffer[768];
   std::snprintf(buffer, sizeof buffer,
-                "SE %.6g  (per-vertex squared error p50 %.3g, p90 %.3g, p99 %.3g, max %.3g)\n"
+                "SE %.6g%s  (per-vertex squared error p50 %.3g, p90 %.3g, p99 %.3g, max %.3g)\n"
                 "storage %.0f floats = %.2f MB, %zu clusters, encode %.3f s, overdraw %.4f "
                 "(superclusters %.4f)\n",
-                squared_error, vertex_error_p50, vertex_error_p90, vertex_error_p99,
+                squared_error, rendered_metric ? " in the rendered metric (function space)" : "",
+                vertex_error_p50, vertex_error_p90, vertex_error_p99,
                 vertex_error_max, stored_floats, stored_bytes / 1e6, clusters, encode_seconds,
                 overdraw, supercluster_overdraw);
   std::string out = buffer;

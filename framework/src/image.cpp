@@ -60,6 +60,24 @@ double mean_absolute_difference(const Image& a, const Image& b) {
   return a.rgb.empty() ? 0.0 : sum / a.rgb.size();
 }
 
+DarkPixels count_dark_pixels(const Image& image, const Image& truth, float exposure, double lit,
+                             double fraction) {
+  if (image.width != truth.width || image.height != truth.height)
+    throw Error("images differ in size");
+  const auto luminance = [exposure](const float* rgb) {
+    return 0.2126 * encode_srgb(rgb[0] * exposure) + 0.7152 * encode_srgb(rgb[1] * exposure) +
+           0.0722 * encode_srgb(rgb[2] * exposure);
+  };
+  DarkPixels count;
+  for (std::size_t i = 0; i + 2 < truth.rgb.size(); i += 3) {
+    const double expected = luminance(&truth.rgb[i]);
+    if (expected <= lit) continue;
+    ++count.lit;
+    if (luminance(&image.rgb[i]) < fraction * expected) ++count.dark;
+  }
+  return count;
+}
+
 Image8 read_png(const std::filesystem::path& file) {
   int width = 0, height = 0, channels = 0;
   unsigned char* pixels = stbi_load(file.string().c_str(), &width, &height, &channels, 3);

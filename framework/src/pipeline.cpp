@@ -12,6 +12,7 @@
 #include "kept_state.hpp"
 #include "prt/basis.hpp"
 #include "prt/basis_metric.hpp"
+#include "prt/rendered_metric.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
@@ -149,6 +150,7 @@ double RunOptions::budget() const {
 
 void record(const CompressionReport& r, std::map<std::string, double>& metrics) {
   metrics["squared_error"] = r.squared_error;
+  if (r.rendered_metric) metrics["squared_error_in_rendered_metric"] = 1;
   metrics["vertex_squared_error_p50"] = r.vertex_error_p50;
   metrics["vertex_squared_error_p90"] = r.vertex_error_p90;
   metrics["vertex_squared_error_p99"] = r.vertex_error_p99;
@@ -525,6 +527,11 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
   return stack_channels(parts, channels);
 }
 
+RenderedMetric rendered_metric(const BakePlan& plan) {
+  if (plan.sparse_terms > 0) return {};  // the basis's own coefficients are kept
+  return RenderedMetric(*plan.basis, plan.glossy ? plan.exit.get() : nullptr);
+}
+
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where,
                                   const Distribution& shard) {
@@ -538,9 +545,10 @@ CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& tr
       return sparse;
     }
     std::optional<TransferSignal> loaded;
-    return plan.compressor->encode_shard(
+    return encode_in_metric(
+        *plan.compressor,
         readable_signal(*plan.compressor, plan.compressor_record.name, transfer, loaded), &mesh,
-        here);
+        here, rendered_metric(plan));
   } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
     throw Error(where, "out of memory while compressing the " +
                            std::to_string(transfer.vertices()) + " x " +
@@ -652,6 +660,9 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
                                   plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
 
   clock = Stopwatch();
+  // Compression minimises the error of what is rendered (after a fit: the
+  // fitted basis's metric).
+  const RenderedMetric metric = rendered_metric(plan);
   data.compressed =
       options.compress || plan.sparse_terms > 0
           ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, encode_where)
@@ -659,7 +670,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
   const CompressionReport report =
-      measure(transfer, data.compressed, &data.mesh, encode_seconds, shard);
+      measure(transfer, data.compressed, &data.mesh, encode_seconds, shard, &metric);
   if (distributed && comm.rank() != 0) return {};  // rank 0 holds the bake
   record(report, data.metrics);
   std::string text = report.text();
@@ -756,6 +767,18 @@ void check_bake_dimension(const BakeData& data, const Basis& basis) {
                      ? " x " + std::to_string(data.transfer.channel_groups) + " channel transfers"
                      : std::string()) +
                 "; the bake file does not match its plug-ins (bake again)");
+}
+
+RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry) {
+  SceneSpec scene = SceneSpec::parse(data.scene_text, data.scene_file, registry);
+  check_bake_matches(data, scene);
+  auto basis = registry.create<Basis>(scene.basis.name, scene.basis.params, scene.basis.where);
+  basis->load(data.basis_state);
+  check_bake_dimension(data, *basis);
+  if (!data.transfer.glossy()) return RenderedMetric(*basis, nullptr);
+  auto exit = registry.create<Basis>(scene.exit.name, scene.exit.params, scene.exit.where);
+  exit->load(data.exit_state);
+  return RenderedMetric(*basis, exit.get());
 }
 
 Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry)

@@ -11,6 +11,7 @@
 namespace prt {
 
 class CheckpointStore;
+class RenderedMetric;
 
 // Where a distributed compressor's rows sit (prt-mpi): the signal it is given
 // holds rows [shard.first, shard.last) of the whole; sums over rows go
@@ -60,6 +61,9 @@ class Compressor : public PluginObject {
 // distribution, storage and overdraw.
 struct CompressionReport {
   double squared_error = 0;  // SE = sum_p |t_p - t~_p|^2
+  // SE measured in the rendered metric (a basis that is not orthonormal):
+  // sum_p |F(t_p - t~_p)|^2, the function-space error of what is rendered.
+  bool rendered_metric = false;
   double vertex_error_p50 = 0, vertex_error_p90 = 0, vertex_error_p99 = 0, vertex_error_max = 0;
   double stored_floats = 0;  // sum_p n'_k(p) + sum_k (n'_k + 1) n
   double stored_bytes = 0;   // as float32
@@ -89,18 +93,22 @@ const TransferSignal& readable_signal(const Compressor& compressor, const std::s
 
 // The report of an encode. Distributed: `signal` holds this rank's rows and
 // `compressed` is encode_shard's result; the squared error is on every rank,
-// the rest on rank 0.
+// the rest on rank 0. With a metric the errors are measured in it (the
+// function-space error of what is rendered, prt/rendered_metric.hpp).
 CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
-                          const Mesh* mesh, double encode_seconds, const Distribution& where);
+                          const Mesh* mesh, double encode_seconds, const Distribution& where,
+                          const RenderedMetric* metric = nullptr);
 inline CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
                                  const Mesh* mesh, double encode_seconds) {
   return measure(signal, compressed, mesh, encode_seconds,
                  Distribution::whole_signal(signal.vertices()));
 }
 
-// |t_p - decoded_p|^2 for every row of `signal` (rows of `compressed` alike).
+// |t_p - decoded_p|^2 for every row of `signal` (rows of `compressed` alike),
+// in `metric` when given.
 std::vector<double> vertex_errors(const TransferSignal& signal,
-                                  const CompressedTransfer& compressed);
+                                  const CompressedTransfer& compressed,
+                                  const RenderedMetric* metric = nullptr);
 
 // The ranks' rows of a compressed form (cluster ids, weights, sparse
 // indices) joined in rank order on rank 0; other ranks keep theirs.

@@ -32,4 +32,16 @@ Image8 read_png(const std::filesystem::path& file);
 // Mean absolute difference of two images of the same size (linear values).
 double mean_absolute_difference(const Image& a, const Image& b);
 
+// Pixels far darker than the truth, as displayed: the artifact a good RMS
+// hides (a contour of black speckles). Both images are exposure-scaled and
+// sRGB-encoded to 8 bits as write_png does; a pixel counts when the truth's
+// luminance (Rec. 709 weights, 0..255) is above `lit` and the image's is below
+// `fraction` of it.
+struct DarkPixels {
+  long long dark = 0;  // darker than fraction x the truth
+  long long lit = 0;   // pixels whose truth is above the threshold
+};
+DarkPixels count_dark_pixels(const Image& image, const Image& truth, float exposure,
+                             double lit = 40, double fraction = 0.5);
+
 }  // namespace prt

@@ -17,6 +17,7 @@
 #include "prt/point_lights.hpp"
 #include "prt/registry.hpp"
 #include "prt/relight.hpp"
+#include "prt/rendered_metric.hpp"
 #include "prt/renderer.hpp"
 #include "prt/scene.hpp"
 
@@ -186,7 +187,11 @@ BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const Checkpoin
 // the key of its checkpoint.
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan);
 
-// 3. Compression (or the basis's sparse approximation).
+// 3. Compression (or the basis's sparse approximation), in the rendered metric
+// of the plan's bases (identity for orthonormal ones and sparse approximations).
+RenderedMetric rendered_metric(const BakePlan& plan);
+// The same for a bake read from its file (its scene text names the bases).
+RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry);
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where,
                                   const Distribution& shard = {});

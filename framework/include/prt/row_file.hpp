@@ -30,6 +30,7 @@ class RowFile {
   void map();
 
   Eigen::Index rows() const { return rows_; }
+  const std::filesystem::path& folder() const { return where_; }
   Eigen::Index cols() const { return cols_; }
   Eigen::Map<const MatrixXfRow> matrix() const;
   // Drops the resident pages that hold any of rows [first, last) (a page
