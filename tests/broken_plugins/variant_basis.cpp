@@ -8,12 +8,15 @@
 // PRT_BUG_CLAIMS_ORTHONORMAL (functions mixed so that they overlap, still
 // claiming orthonormality), PRT_BUG_GRAM_FACTOR (the same mixed functions,
 // honestly not orthonormal, but projected by its own least squares with a
-// Gram matrix 10% too large).
+// Gram matrix 10% too large), PRT_BUG_HORIZON (a hemisphere basis, an exit
+// basis, honest about its metric, whose least squares leaves out the band
+// near the horizon: fine where it was fitted, wrong toward grazing views).
 #include <Eigen/LU>
 #include <array>
 #include <cmath>
 
 #include "prt/basis.hpp"
+#include "prt/hemisphere.hpp"
 #include "prt/plugin.hpp"
 #include "prt/quadrature.hpp"
 #include "prt/sh.hpp"
@@ -37,8 +40,19 @@ class VariantBasis final : public prt::Basis {
     return drop_ ? 8 : 9;
 #endif
   }
+#ifdef PRT_BUG_HORIZON
+  prt::Domain domain() const override { return prt::Domain::hemisphere; }
+  Eigen::MatrixXd projection_matrix(const prt::DirectionSet& set) const override {
+    Eigen::VectorXd weights = set.weights;
+    for (Eigen::Index k = 0; k < set.size(); ++k)
+      if (set.directions(k, 2) < 0.5) weights[k] = 0;  // "the horizon hardly matters"
+    const Eigen::MatrixXd b = evaluate(set.directions);
+    const Eigen::MatrixXd gram = b.transpose() * weights.asDiagonal() * b;
+    return weights.asDiagonal() * b * gram.inverse();
+  }
+#endif
   bool orthonormal() const override {
-#ifdef PRT_BUG_GRAM_FACTOR
+#if defined(PRT_BUG_GRAM_FACTOR) || defined(PRT_BUG_HORIZON)
     return false;
 #else
     return true;
@@ -59,7 +73,11 @@ class VariantBasis final : public prt::Basis {
     return drop_ ? Eigen::MatrixXd(all.rightCols(8)) : all;
   }
   std::optional<prt::DirectionSet> native_directions() const override {
+#ifdef PRT_BUG_HORIZON
+    prt::DirectionSet set = prt::hemisphere::upper_quadrature(6);
+#else
     prt::DirectionSet set = prt::gauss_product_sphere(6);
+#endif
 #ifdef PRT_BUG_WEIGHTS
     set.weights *= 2.0;
 #endif

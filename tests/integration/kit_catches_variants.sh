@@ -30,5 +30,6 @@ check reflection "rotation is consistent with re-projection and composes" "ra * 
 check local_fit "a distributed fit equals the one-process fit bit for bit" "visible_fraction"
 check claims_orthonormal "relighting equals the integral of light times transfer" "G = I: the basis says it is orthonormal"
 check gram_factor "relighting equals the integral of light times transfer" "G from the basis's rule"
+check horizon "exit radiance equals the BRDF integral toward every view, grazing ones included" "exit radiance of a Phong lobe"
 echo "$failures failure(s)"
 [ "$failures" -eq 0 ]
