@@ -20,6 +20,8 @@ Needs the built Python module: PYTHONPATH=build/lib/python3.11/dist-packages.
 """
 import argparse
 import hashlib
+import json
+import tomllib
 import math
 import pathlib
 import sys
@@ -63,6 +65,21 @@ def camera_position(scene, mesh, turn, elevation):
     return (target + rotate @ offset).tolist()
 
 
+def truth_key(scene):
+    """What the ground truth depends on: not the bases, the compressor, the
+    renderer, the output or the light's window (the truth is the full light)."""
+    sections = scene.to_dict()
+    for section in ("basis", "exit", "compressor", "renderer", "output"):
+        sections.pop(section, None)
+    sections.get("lighting", {}).pop("window", None)
+    folder = pathlib.Path(scene.file).parent  # paths as files, wherever the scene is
+    for section, key in (("mesh", "file"), ("lighting", "environment")):
+        if key in sections.get(section, {}):
+            sections[section][key] = str((folder / sections[section][key]).resolve())
+    text = json.dumps(sections, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("scene")
@@ -71,6 +88,9 @@ def main():
     parser.add_argument("--cameras", default=",".join(CAMERAS))
     parser.add_argument("--cache", default="out/ground-truth-cache")
     parser.add_argument("--crops", default=None)
+    parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                        help="change the scene for every render (a TOML value), e.g. "
+                             "lighting.window='\"hanning\"'")
     parser.add_argument("--samples", type=int, default=None,
                         help="ground-truth samples per vertex (default: the scene's)")
     args = parser.parse_args()
@@ -93,8 +113,12 @@ def main():
                        "camera": {"position": camera_position(scene, mesh, turn, elevation)}}
             if args.samples:
                 changes["ground_truth"] = {"samples": args.samples}
+            for assignment in args.set:
+                name, value = assignment.split("=", 1)
+                section, key = name.split(".", 1)
+                changes.setdefault(section, {})[key] = tomllib.loads(f"v = {value}")["v"]
             variant = scene.replace(changes)
-            key = hashlib.sha256(variant.text.encode()).hexdigest()[:16]
+            key = truth_key(variant)
             cached = cache / f"{key}.npz"
             if cached.exists():
                 truth = dict(np.load(cached))

@@ -24,7 +24,7 @@ scene() {  # source scene, name, sed program
 }
 scene bunny.toml bunny ''
 scene bunny_cpca.toml bunny_cpca ''
-scene bunny_glossy.toml bunny_glossy_24x25 's/^order = 8$/order = 5/'
+scene bunny_glossy.toml bunny_glossy_24x25 's/^order = 10$/order = 5/; s/^method = "iterative"$/method = "static"/; s/^clusters = 512$/clusters = 256/; s/^components = 12$/components = 8/; /^iterations_per_component = /d'
 for s in bunny bunny_cpca bunny_glossy_24x25; do
   [ -f "$out/$s.h5" ] || "$bin/prt" -q bake "$out/$s.toml" >"$out/bake_$s.log"
 done

@@ -223,6 +223,7 @@ int compress(Context& context, const CompressArgs& args) {
   for (std::size_t i = 0; i < args.parameters.size(); ++i)
     parse_parameter(args.parameters[i], i, params);
   auto compressor = context.registry.create<Compressor>(args.compressor, params);
+  refuse_budget_beyond_signal(params, data.transfer.dimension(), args.compressor);
   const RenderedMetric metric = rendered_metric(data, context.registry);
   clock = Stopwatch();
   std::optional<TransferSignal> loaded;

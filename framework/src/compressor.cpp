@@ -100,11 +100,16 @@ std::vector<double> vertex_errors(const TransferSignal& signal,
   for_each_row_block(Eigen::Index(0), signal.vertices(), Eigen::Index(4096),
                      [&](Eigen::Index begin, Eigen::Index end) {
                        Eigen::RowVectorXf row(signal.dimension());
-                       Eigen::MatrixXd difference(1, signal.dimension());
+                       Eigen::MatrixXd difference(1, metric ? signal.dimension() : 0);
                        for (Eigen::Index p = begin; p < end; ++p) {
                          compressed.decode_row(p, row);
+                         if (!metric) {  // coefficient space: the sum as it always was
+                           errors[std::size_t(p)] =
+                               (rows.row(p).cast<double>() - row.cast<double>()).squaredNorm();
+                           continue;
+                         }
                          difference = rows.row(p).cast<double>() - row.cast<double>();
-                         if (metric) metric->whiten_rows(difference, signal.exit_rows);
+                         metric->whiten_rows(difference, signal.exit_rows);
                          errors[std::size_t(p)] = difference.squaredNorm();
                        }
                        signal.release(begin, end);

@@ -210,6 +210,27 @@ void check_orthonormal_claim(const Basis& basis, const PluginChoice& choice) {
 
 }  // namespace
 
+void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
+                                 const std::string& compressor) {
+  if (!params.has("components")) return;
+  const SourceLocation &at = params.location("components"), &section = params.location();
+  const bool given = at.file != section.file || at.line != section.line ||
+                     at.column != section.column;  // a default is located at its section
+  std::int64_t components = 0;
+  try {
+    components = params.get_int("components");
+  } catch (const Error&) {
+    return;  // not an integer: not the conventional budget key
+  }
+  if (!given || components <= dimension) return;
+  params.fail("components", "compressor \"" + compressor + "\": components = " +
+                                std::to_string(components) + " is more than the transfer's " +
+                                std::to_string(dimension) +
+                                " coefficients per vertex: each cluster would store more than "
+                                "the uncompressed transfer (at most " +
+                                std::to_string(dimension) + ")");
+}
+
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   BakePlan plan;
   PluginChoice basis = scene.basis, compressor = scene.compressor;
@@ -269,6 +290,12 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   plan.subsurface_material = scene.subsurface();
   plan.channels = scene.channels();
   plan.keep_visibility = plan.fit || plan.glossy;
+  if (plan.sparse_terms == 0)
+    refuse_budget_beyond_signal(
+        compressor.params,
+        Eigen::Index(plan.basis->size()) * (plan.glossy ? plan.exit->size() : 1) *
+            Eigen::Index(std::max<std::size_t>(1, plan.channels.groups.size())),
+        compressor.name);
   return plan;
 }
 

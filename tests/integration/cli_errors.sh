@@ -143,11 +143,11 @@ expect_error "a 10^6-character key is elided" 'characters elided' -- bake long_k
   printf '[compressor]\nplugin = "cpca"\nclusters = 1000000\ncomponents = 8\n'; } >"$work/budget.toml"
 expect_warning "budgets beyond the data warn with the value used" \
   'budget.toml:16:1: compressor "cpca": clusters = 1000000 is more than .*; [0-9]* used' -- bake budget.toml
-# More components than coefficients: the coefficients are used, and said.
-{ good_scene | sed 's/^bake = .*/bake = "components.h5"/; s/^image = .*/image = "components.png"/'
+# More components than coefficients would store more than the transfer: refused at the key.
+{ good_scene | sed 's/^bake = .*/bake = "out.h5"/; s/^image = .*/image = "out.png"/'
   printf '[compressor]\nplugin = "pca"\ncomponents = 100000\n'; } >"$work/components.toml"
-expect_warning "components beyond the coefficients warn" \
-  'components.toml:16:1: compressor "pca": components = 100000 is more than .*; 9 used' -- bake components.toml
+expect_error "components beyond the coefficients are refused" \
+  "components.toml:16:1: .*components = 100000 is more than the transfer's 9 coefficients per vertex" -- bake components.toml
 { good_scene | sed 's/^bake = .*/bake = "haar.h5"/; s/^image = .*/image = "haar.png"/; s/^plugin = "sh"/plugin = "haar"\nresolution = 4\nk = 1000000000/; /^order = 3/d'; } >"$work/haar.toml"
 expect_warning "haar k beyond its coefficients warns" \
   'basis "haar": k = 1000000000 is more than its 96 coefficients (resolution 4); 96 used' -- bake haar.toml

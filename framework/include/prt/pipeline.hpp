@@ -187,6 +187,12 @@ BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const Checkpoin
 // the key of its checkpoint.
 std::string bake_key(const SceneSpec& scene, const BakePlan& plan);
 
+// Refuses (located at the key) a `components` budget, given by the user, larger
+// than the transfer's `dimension` coefficients per vertex; a default beyond it
+// is used as far as it goes (the compressor warns).
+void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
+                                 const std::string& compressor);
+
 // 3. Compression (or the basis's sparse approximation), in the rendered metric
 // of the plan's bases (identity for orthonormal ones and sparse approximations).
 RenderedMetric rendered_metric(const BakePlan& plan);
