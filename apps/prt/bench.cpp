@@ -133,16 +133,6 @@ std::string stem_of(const std::string& label) {
   return stem;
 }
 
-double median_seconds(int runs, const std::function<void()>& work) {
-  std::vector<double> t;
-  for (int r = 0; r < runs; ++r) {
-    Stopwatch clock;
-    work();
-    t.push_back(clock.seconds());
-  }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
-}
 
 // The JSON lines as CSV: the keys of the first line are the columns.
 // One CSV row per JSON record, columns in the records' key order (strings
@@ -162,6 +152,17 @@ void write_csv(const std::vector<nlohmann::ordered_json>& records, const fs::pat
 }
 
 }  // namespace
+
+double median_seconds(int runs, const std::function<void()>& work) {
+  std::vector<double> t;
+  for (int r = 0; r < runs; ++r) {
+    Stopwatch clock;
+    work();
+    t.push_back(clock.seconds());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
 
 int bench(Context& context, const BenchArgs& args) {
   Progress::set_enabled(!context.quiet);

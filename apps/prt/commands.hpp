@@ -1,6 +1,7 @@
 // The prt command-line tool's subcommands. Each returns the process exit code;
 // errors are thrown as prt::Error and reported by main.
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -95,5 +96,8 @@ struct DemoArgs {
   std::string scene;
 };
 int demo(Context& context, const DemoArgs& args);
+
+// The median wall time of `runs` calls of `work` (bench, compare-bases).
+double median_seconds(int runs, const std::function<void()>& work);
 
 }  // namespace prt::cli

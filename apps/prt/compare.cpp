@@ -47,6 +47,7 @@ struct Row {
   std::string spec;
   int coefficients = 0;
   double bytes = 0, shading_rms = 0, shading_relative = 0, seconds = 0;
+  double relight_seconds = 0;  // one relight of every vertex toward the camera (median of 3)
   double transport_error = std::numeric_limits<double>::quiet_NaN();  // diffuse only
 };
 
@@ -172,8 +173,10 @@ int compare_bases(Context& context, const CompareArgs& args) {
     row.bytes = 4 * data.compressed.stored_floats();
     if (!data.transfer.glossy() && data.transfer.channel_groups == 1)  // one transport per vertex
       row.transport_error = transport_error(mesh, set, traced, data, relighting.basis());
-    const Eigen::MatrixX3f radiance =
-        relighting.relight(data.compressed, relighting.light(environment), camera).vertex_radiance;
+    const Eigen::MatrixX3d light = relighting.light(environment);
+    Eigen::MatrixX3f radiance;
+    row.relight_seconds = median_seconds(
+        3, [&] { radiance = relighting.relight(data.compressed, light, camera).vertex_radiance; });
     const ErrorStats shading = vertex_error(radiance, truth);
     row.shading_rms = shading.rms;
     row.shading_relative = shading.relative_rms;
@@ -187,14 +190,14 @@ int compare_bases(Context& context, const CompareArgs& args) {
   std::ostringstream csv;
   nlohmann::ordered_json json = nlohmann::ordered_json::array();
   csv << "basis,coefficients,bytes,transport_l2_relative,shading_rms,shading_relative_rms,"
-         "seconds\n";
+         "seconds,relight_seconds\n";
   for (const Row& r : rows) {
     const bool has_transport = std::isfinite(r.transport_error);
     char line[512];
-    std::snprintf(line, sizeof line, "%s,%d,%.0f,%s,%.6g,%.6g,%.3f\n",
+    std::snprintf(line, sizeof line, "%s,%d,%.0f,%s,%.6g,%.6g,%.3f,%.5f\n",
                   nlohmann::json(r.spec).dump().c_str(), r.coefficients, r.bytes,
                   transport_text(r.transport_error, "%.6g", "").c_str(), r.shading_rms,
-                  r.shading_relative, r.seconds);
+                  r.shading_relative, r.seconds, r.relight_seconds);
     csv << line;
     json.push_back({{"basis", r.spec},
                     {"coefficients", r.coefficients},
@@ -203,16 +206,17 @@ int compare_bases(Context& context, const CompareArgs& args) {
                      has_transport ? nlohmann::ordered_json(r.transport_error) : nullptr},
                     {"shading_rms", r.shading_rms},
                     {"shading_relative_rms", r.shading_relative},
-                    {"seconds", r.seconds}});
+                    {"seconds", r.seconds},
+                    {"relight_seconds", r.relight_seconds}});
   }
   if (!args.csv.empty()) write_text_file(args.csv, csv.str());
   if (!args.json.empty()) write_text_file(args.json, json.dump(2) + "\n");
-  std::printf("%-28s %6s %12s %14s %12s %10s\n", "basis", "coeffs", "bytes", "transport L2",
-              "shading RMS", "relative");
+  std::printf("%-28s %6s %12s %14s %12s %10s %8s %11s\n", "basis", "coeffs", "bytes",
+              "transport L2", "shading RMS", "relative", "bake s", "relight ms");
   for (const auto& r : rows)
-    std::printf("%-28s %6d %12.0f %14s %12.5g %10.4f\n", r.spec.c_str(), r.coefficients, r.bytes,
-                transport_text(r.transport_error, "%.4f", "-").c_str(), r.shading_rms,
-                r.shading_relative);
+    std::printf("%-28s %6d %12.0f %14s %12.5g %10.4f %8.2f %11.2f\n", r.spec.c_str(),
+                r.coefficients, r.bytes, transport_text(r.transport_error, "%.4f", "-").c_str(),
+                r.shading_rms, r.shading_relative, r.seconds, 1e3 * r.relight_seconds);
   return 0;
 }
 

@@ -223,8 +223,8 @@ void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
     return;  // not an integer: not the conventional budget key
   }
   if (!given || components <= dimension) return;
-  params.fail("components", "compressor \"" + compressor + "\": components = " +
-                                std::to_string(components) + " is more than the transfer's " +
+  params.fail("components", "compressor \"" + compressor + "\": " + std::to_string(components) +
+                                " is more than the transfer's " +
                                 std::to_string(dimension) +
                                 " coefficients per vertex: each cluster would store more than "
                                 "the uncompressed transfer (at most " +

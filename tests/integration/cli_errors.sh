@@ -147,7 +147,7 @@ expect_warning "budgets beyond the data warn with the value used" \
 { good_scene | sed 's/^bake = .*/bake = "out.h5"/; s/^image = .*/image = "out.png"/'
   printf '[compressor]\nplugin = "pca"\ncomponents = 100000\n'; } >"$work/components.toml"
 expect_error "components beyond the coefficients are refused" \
-  "components.toml:16:1: .*components = 100000 is more than the transfer's 9 coefficients per vertex" -- bake components.toml
+  "components.toml:16:1: error: parameter \"components\": compressor \"pca\": 100000 is more than the transfer's 9 coefficients per vertex" -- bake components.toml
 { good_scene | sed 's/^bake = .*/bake = "haar.h5"/; s/^image = .*/image = "haar.png"/; s/^plugin = "sh"/plugin = "haar"\nresolution = 4\nk = 1000000000/; /^order = 3/d'; } >"$work/haar.toml"
 expect_warning "haar k beyond its coefficients warns" \
   'basis "haar": k = 1000000000 is more than its 96 coefficients (resolution 4); 96 used' -- bake haar.toml
