@@ -67,8 +67,14 @@ TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
       visibility.directions() != static_cast<std::size_t>(set.size()) ||
       frames.size() != mesh.vertex_count())
     throw Error("glossy transfer: visibility or frames do not match the mesh and directions");
-  // The light at each direction, weighted: b(s)^T w_s.
-  const Eigen::MatrixXd light = set.weights.asDiagonal() * light_basis.evaluate(set.directions);
+  // The light basis's projection at each direction: b(s)^T w_s, through the
+  // dual basis G^-1 when the basis is not orthonormal, so that M holds
+  // least-squares coefficients of the light side as a diffuse row does (the
+  // relight applies G to the light: M G l, prt/basis_metric.hpp).
+  const Eigen::MatrixXd light = light_basis.orthonormal()
+                                    ? Eigen::MatrixXd(set.weights.asDiagonal() *
+                                                      light_basis.evaluate(set.directions))
+                                    : light_basis.projection_matrix(set);
   const Eigen::MatrixXd incident = sh::evaluate(order, set.directions);  // s x M^2
   const std::size_t words = VisibilityBits::words_for(set.size());
 
