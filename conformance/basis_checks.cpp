@@ -540,11 +540,11 @@ static void basis_check_13(Kit& kit) {
   const double best_error = (best - expected).cwiseAbs().maxCoeff();
   const double scale = expected.cwiseAbs().maxCoeff();
   KIT_INFO(kit, "exit radiance of a Phong lobe (exponent 12) toward "
-                    << views.rows() << " view directions (z down to 1e-3): largest error "
-                    << error << " at z = " << views(worst, 2) << " (relit " << relit[worst]
+                    << views.rows() << " view directions (z down to 1e-3): largest error " << error
+                    << " at z = " << views(worst, 2) << " (relit " << relit[worst]
                     << ", BRDF integral " << expected[worst] << "); the least squares in the "
-                    << "same span errs by at most " << best_error << "; tolerance 2 x that + 1e-6 x "
-                    << scale);
+                    << "same span errs by at most " << best_error
+                    << "; tolerance 2 x that + 1e-6 x " << scale);
   KIT_CHECK(kit, relit.allFinite());
   KIT_CHECK_LESS(kit, error, 2 * best_error + 1e-6 * scale);
 }

@@ -13,8 +13,8 @@
 #include <fstream>
 #include <iostream>
 #include <map>
-#include <numeric>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -132,7 +132,6 @@ std::string stem_of(const std::string& label) {
   for (char c : label) stem += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
   return stem;
 }
-
 
 // The JSON lines as CSV: the keys of the first line are the columns.
 // One CSV row per JSON record, columns in the records' key order (strings

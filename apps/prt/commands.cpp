@@ -228,9 +228,9 @@ int compress(Context& context, const CompressArgs& args) {
   clock = Stopwatch();
   std::optional<TransferSignal> loaded;
   const Distribution whole = Distribution::whole_signal(data.transfer.vertices());
-  data.compressed =
-      encode_in_metric(*compressor, readable_signal(*compressor, args.compressor, data.transfer, loaded),
-                       &data.mesh, whole, metric);
+  data.compressed = encode_in_metric(
+      *compressor, readable_signal(*compressor, args.compressor, data.transfer, loaded), &data.mesh,
+      whole, metric);
   loaded.reset();
   const double seconds = clock.seconds();
   times.add("compress (" + args.compressor + ")", seconds);

@@ -181,9 +181,9 @@ std::string CompressionReport::text() const {
                 "storage %.0f floats = %.2f MB, %zu clusters, encode %.3f s, overdraw %.4f "
                 "(superclusters %.4f)\n",
                 squared_error, rendered_metric ? " in the rendered metric (function space)" : "",
-                vertex_error_p50, vertex_error_p90, vertex_error_p99,
-                vertex_error_max, stored_floats, stored_bytes / 1e6, clusters, encode_seconds,
-                overdraw, supercluster_overdraw);
+                vertex_error_p50, vertex_error_p90, vertex_error_p99, vertex_error_max,
+                stored_floats, stored_bytes / 1e6, clusters, encode_seconds, overdraw,
+                supercluster_overdraw);
   std::string out = buffer;
   for (const auto& [name, value] : statistics) {
     std::snprintf(buffer, sizeof buffer, "  %s = %.6g\n", name.c_str(), value);

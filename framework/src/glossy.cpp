@@ -71,10 +71,10 @@ TransferSignal glossy_transfer(const Mesh& mesh, const DirectionSet& set,
   // dual basis G^-1 when the basis is not orthonormal, so that M holds
   // least-squares coefficients of the light side as a diffuse row does (the
   // relight applies G to the light: M G l, prt/basis_metric.hpp).
-  const Eigen::MatrixXd light = light_basis.orthonormal()
-                                    ? Eigen::MatrixXd(set.weights.asDiagonal() *
-                                                      light_basis.evaluate(set.directions))
-                                    : light_basis.projection_matrix(set);
+  const Eigen::MatrixXd light =
+      light_basis.orthonormal()
+          ? Eigen::MatrixXd(set.weights.asDiagonal() * light_basis.evaluate(set.directions))
+          : light_basis.projection_matrix(set);
   const Eigen::MatrixXd incident = sh::evaluate(order, set.directions);  // s x M^2
   const std::size_t words = VisibilityBits::words_for(set.size());
 

@@ -12,7 +12,6 @@
 #include "kept_state.hpp"
 #include "prt/basis.hpp"
 #include "prt/basis_metric.hpp"
-#include "prt/rendered_metric.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
@@ -23,6 +22,7 @@
 #include "prt/log.hpp"
 #include "prt/memory.hpp"
 #include "prt/progress.hpp"
+#include "prt/rendered_metric.hpp"
 #include "prt/renderer.hpp"
 #include "prt/row_file.hpp"
 #include "prt/subsurface.hpp"
@@ -224,8 +224,7 @@ void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
   }
   if (!given || components <= dimension) return;
   params.fail("components", "compressor \"" + compressor + "\": " + std::to_string(components) +
-                                " is more than the transfer's " +
-                                std::to_string(dimension) +
+                                " is more than the transfer's " + std::to_string(dimension) +
                                 " coefficients per vertex: each cluster would store more than "
                                 "the uncompressed transfer (at most " +
                                 std::to_string(dimension) + ")");

@@ -56,8 +56,10 @@ void RenderedMetric::apply(Eigen::Ref<Eigen::MatrixXd> rows, int exit_rows, bool
                 std::to_string(exit_rows) + " x " + std::to_string(light_size) +
                 " (exit rows x light coefficients)");
   if (exit_.size() && exit_.rows() != exit_rows)
-    throw Error("transfer rows hold " + std::to_string(exit_rows) + " exit rows, but the exit "
-                "basis has " + std::to_string(exit_.rows()) + " functions");
+    throw Error("transfer rows hold " + std::to_string(exit_rows) +
+                " exit rows, but the exit "
+                "basis has " +
+                std::to_string(exit_.rows()) + " functions");
   using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   Block m(exit_rows, light_size);
   // Row by row, so that a row's result does not depend on which rows share
@@ -86,8 +88,7 @@ void RenderedMetric::unwhiten_rows(MatrixXfRow& rows, int exit_rows) const {
   if (identity() || rows.size() == 0) return;
   for_each_row_block(Eigen::Index(0), rows.rows(), Eigen::Index(256),
                      [&](Eigen::Index begin, Eigen::Index end) {
-                       Eigen::MatrixXd block =
-                           rows.middleRows(begin, end - begin).cast<double>();
+                       Eigen::MatrixXd block = rows.middleRows(begin, end - begin).cast<double>();
                        apply(block, exit_rows, false);
                        rows.middleRows(begin, end - begin) = block.cast<float>();
                      });
@@ -96,8 +97,9 @@ void RenderedMetric::unwhiten_rows(MatrixXfRow& rows, int exit_rows) const {
 void RenderedMetric::unwhiten(CompressedTransfer& compressed, int exit_rows) const {
   if (identity()) return;
   if (compressed.sparse())
-    throw Error("a sparse approximation keeps a basis's own coefficients; it cannot be mapped "
-                "out of the rendered metric");
+    throw Error(
+        "a sparse approximation keeps a basis's own coefficients; it cannot be mapped "
+        "out of the rendered metric");
   unwhiten_rows(compressed.means, exit_rows);
   for (MatrixXfRow& representatives : compressed.representatives)
     unwhiten_rows(representatives, exit_rows);

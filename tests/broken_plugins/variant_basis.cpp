@@ -41,7 +41,9 @@ class VariantBasis final : public prt::Basis {
 #endif
   }
 #ifdef PRT_BUG_HORIZON
-  prt::Domain domain() const override { return prt::Domain::hemisphere; }
+  prt::Domain domain() const override {
+    return prt::Domain::hemisphere;
+  }
   Eigen::MatrixXd projection_matrix(const prt::DirectionSet& set) const override {
     Eigen::VectorXd weights = set.weights;
     for (Eigen::Index k = 0; k < set.size(); ++k)

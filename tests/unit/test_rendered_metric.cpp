@@ -47,8 +47,9 @@ double function_space_error(const TransferSignal& exact, const MatrixXfRow& appr
   for (Eigen::Index p = 0; p < exact.vertices(); ++p) {
     Eigen::MatrixXd d(r, l);
     for (int i = 0; i < r; ++i)
-      d.row(i) = (exact.coefficients.row(p).segment(i * l, l) - approximation.row(p).segment(i * l, l))
-                     .cast<double>();
+      d.row(i) =
+          (exact.coefficients.row(p).segment(i * l, l) - approximation.row(p).segment(i * l, l))
+              .cast<double>();
     sum += (d.transpose() * gram_exit * d * gram_light).trace();
   }
   return sum;
@@ -65,8 +66,7 @@ TEST_CASE("rendered metric: the identity for orthonormal bases, not for hsh or s
   CHECK(RenderedMetric().identity());
 }
 
-TEST_CASE("rendered metric: whitened rows carry the function-space norm and map back",
-          "[metric]") {
+TEST_CASE("rendered metric: whitened rows carry the function-space norm and map back", "[metric]") {
   const auto light = make_basis("sg", {{"lobes", std::int64_t(9)}});
   const auto exit = make_basis("hsh", {{"order", std::int64_t(3)}});
   const RenderedMetric metric(*light, exit.get());
