@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 
 #include "coupled_slabs.hpp"
 #include "kept_state.hpp"
@@ -795,15 +796,50 @@ void check_bake_dimension(const BakeData& data, const Basis& basis) {
                 "; the bake file does not match its plug-ins (bake again)");
 }
 
+namespace {
+
+// A bake's basis made again from its plug-in record ("key = value" lines, as
+// Params::describe writes them) and its saved state: what re-compressing a
+// bake file needs, without its scene's mesh or map (a bake may travel alone).
+std::shared_ptr<Basis> basis_of_record(const PluginRecord& record, const BasisState& state,
+                                       PluginRegistry& registry, const std::string& role) {
+  const SourceLocation where{"the bake's " + role + " \"" + record.name + "\""};
+  Params params(where);
+  const auto trim = [](std::string text) {
+    const auto first = text.find_first_not_of(" \t"), last = text.find_last_not_of(" \t");
+    return first == std::string::npos ? std::string() : text.substr(first, last - first + 1);
+  };
+  std::istringstream lines(record.parameters);
+  for (std::string line; std::getline(lines, line);) {
+    const auto equals = line.find('=');
+    if (trim(line).empty()) continue;
+    if (equals == std::string::npos) throw Error(where, "unreadable parameter \"" + line + "\"");
+    parse_assignment(trim(line.substr(0, equals)) + "=" + trim(line.substr(equals + 1)), where,
+                     params);
+  }
+  auto basis = registry.create<Basis>(record.name, params, where);
+  basis->load(state);
+  return basis;
+}
+
+}  // namespace
+
 RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry) {
-  SceneSpec scene = SceneSpec::parse(data.scene_text, data.scene_file, registry);
-  check_bake_matches(data, scene);
-  auto basis = registry.create<Basis>(scene.basis.name, scene.basis.params, scene.basis.where);
-  basis->load(data.basis_state);
+  std::shared_ptr<Basis> basis;
+  try {
+    basis = basis_of_record(data.basis, data.basis_state, registry, "basis");
+  } catch (const Error& e) {  // e.g. a basis written in Python, absent from this process
+    log_warning(std::string(e.what()) +
+                "; without the bake's basis its transfer is compressed in coefficient space");
+    return {};
+  }
   check_bake_dimension(data, *basis);
   if (!data.transfer.glossy()) return RenderedMetric(*basis, nullptr);
-  auto exit = registry.create<Basis>(scene.exit.name, scene.exit.params, scene.exit.where);
-  exit->load(data.exit_state);
+  const auto exit = basis_of_record(data.exit, data.exit_state, registry, "exit basis");
+  if (exit->size() != data.transfer.exit_rows)
+    throw Error("the bake's transfer has " + std::to_string(data.transfer.exit_rows) +
+                " exit rows, but its exit basis \"" + data.exit.name + "\" has " +
+                std::to_string(exit->size()) + " functions");
   return RenderedMetric(*basis, exit.get());
 }
 

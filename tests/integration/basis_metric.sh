@@ -46,6 +46,18 @@ done
 "$prt" -q bake "$work/lobes_diffuse_false.toml" >/dev/null
 "$prt" -q render "$work/lobes_diffuse_false.toml" >/dev/null
 [ -s "$work/lobes_diffuse_false.png" ] || { echo "FAIL: no image"; exit 1; }
+# A bake travels alone: prt compress re-compresses it in the rendered metric
+# of its bases (made from the bake's records) without its scene's mesh.
+mkdir "$work/alone"
+cp "$src/data/meshes/bunny00.off" "$work/alone/mesh.off"
+sed "s|$src/data/meshes/bunny00.off|$work/alone/mesh.off|; s|$work/lobes_diffuse_false|$work/alone/bake|" \
+  "$work/lobes_diffuse_false.toml" >"$work/alone/scene.toml"
+"$prt" -q bake "$work/alone/scene.toml" >/dev/null
+rm "$work/alone/mesh.off"
+out=$("$prt" compress "$work/alone/bake.h5" -c pca -p components=4 -o "$work/alone/pca.h5")
+grep -q "in the rendered metric" <<<"$out" ||
+  { echo "FAIL: prt compress of a bake without its mesh: $out"; exit 1; }
+echo "ok: a bake without its mesh re-compresses in the rendered metric"
 /usr/bin/python3 - "$work" <<'PY'
 import sys
 import numpy as np
