@@ -135,9 +135,9 @@ kill_when() {
   setsid "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/$1.toml" -o "$work/$2.h5" "${@:4}" \
     >/dev/null 2>&1 &
   pid=$!
-  for _ in $(seq 600); do  # at most a minute
+  for _ in $(seq 3000); do  # at most a minute, polled often: the window before the end is short
     [ -e "$work/.$2.h5.checkpoint/$3" ] && break
-    sleep 0.1
+    sleep 0.02
   done
   kill -9 -- "-$pid" 2>/dev/null || true
   wait "$pid" 2>/dev/null || true
