@@ -250,11 +250,12 @@ int bench(Context& context, const BenchArgs& args) {
     const BakePlan& plan = plans[i];
     clock = Stopwatch();
     // An exact compressor keeps the bake's form (sparse for bases that approximate).
+    const RenderedMetric metric = rendered_metric(plan);  // encodes and measures in it
     if (!plan.compressor->exact())
-      data.compressed = compress_stage(plan, data.transfer, data.mesh, scene.compressor.where);
+      data.compressed =
+          compress_stage(plan, data.transfer, data.mesh, scene.compressor.where, metric);
     const double encode_seconds = clock.seconds();
     data.compressor = plan.compressor_record;
-    const RenderedMetric metric = rendered_metric(plan);  // the SE a bake reports
     const std::vector<double> errors = vertex_errors(data.transfer, data.compressed, &metric);
     const double se = std::accumulate(errors.begin(), errors.end(), 0.0);
     const fs::path bake_file = out / "bake.h5";

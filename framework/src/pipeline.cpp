@@ -561,7 +561,7 @@ RenderedMetric rendered_metric(const BakePlan& plan) {
 
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where,
-                                  const Distribution& shard) {
+                                  const RenderedMetric& metric, const Distribution& shard) {
   const Distribution here =
       shard.shard.total == 0 ? Distribution::whole_signal(transfer.vertices()) : shard;
   try {
@@ -575,7 +575,7 @@ CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& tr
     return encode_in_metric(
         *plan.compressor,
         readable_signal(*plan.compressor, plan.compressor_record.name, transfer, loaded), &mesh,
-        here, rendered_metric(plan));
+        here, metric);
   } catch (const std::bad_alloc&) {  // the compressor's own memory is not estimated up front
     throw Error(where, "out of memory while compressing the " +
                            std::to_string(transfer.vertices()) + " x " +
@@ -692,7 +692,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
   const RenderedMetric metric = rendered_metric(plan);
   data.compressed =
       options.compress || plan.sparse_terms > 0
-          ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, encode_where)
+          ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, metric, encode_where)
           : exact_form(transfer);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);

@@ -39,13 +39,6 @@ RenderedMetric::RenderedMetric(const Basis& light, const Basis* exit) {
   if (exit) factor_metric(*exit, exit_, exit_inverse_);
 }
 
-std::string RenderedMetric::description() const {
-  if (identity()) return "identity";
-  std::string text = "whitened by the Cholesky factor of the ";
-  if (exit_.size() && light_.size()) return text + "exit and light metrics";
-  return text + (exit_.size() ? "exit metric" : "light metric");
-}
-
 void RenderedMetric::apply(Eigen::Ref<Eigen::MatrixXd> rows, int exit_rows, bool forward) const {
   const Eigen::Index cols = rows.cols();
   const Eigen::Index light_size =

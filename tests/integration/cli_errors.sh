@@ -27,6 +27,18 @@ image = "out.png"
 EOT
 }
 
+# report NAME PROBLEMS OK_TEXT: one check's verdict, counted (stderr shown on failure).
+report() {
+  if [ -n "$2" ]; then
+    echo "FAIL $1:$2"
+    sed 's/^/    stderr: /' "$work/stderr"
+    failures=$((failures + 1))
+  else
+    echo "ok   $1: $3"
+    pass=$((pass + 1))
+  fi
+}
+
 # expect_error NAME PATTERN -- ARGS...: runs prt, checks exit, message and leftovers.
 expect_error() {
   local name="$1" pattern="$2"
@@ -43,14 +55,7 @@ expect_error() {
   [ ! -e "$work/out.h5" ] || problems+=" out.h5 was written;"
   [ ! -e "$work/out.png" ] || problems+=" out.png was written;"
   ls -a "$work" | grep -q '\.tmp-' && problems+=" a temporary was left;"
-  if [ -n "$problems" ]; then
-    echo "FAIL $name:$problems"
-    sed 's/^/    stderr: /' "$work/stderr"
-    failures=$((failures + 1))
-  else
-    echo "ok   $name: $(cat "$work/stderr")"
-    pass=$((pass + 1))
-  fi
+  report "$name" "$problems" "$(cat "$work/stderr")"
 }
 
 # expect_warning NAME PATTERN... -- ARGS...: runs prt, which must succeed
@@ -66,14 +71,7 @@ expect_warning() {
   for pattern in "${patterns[@]}"; do
     grep -q -- "$pattern" "$work/stderr" || problems+=" stderr lacks '$pattern';"
   done
-  if [ -n "$problems" ]; then
-    echo "FAIL $name:$problems"
-    sed 's/^/    stderr: /' "$work/stderr"
-    failures=$((failures + 1))
-  else
-    echo "ok   $name: $(tr '\n' ' ' <"$work/stderr")"
-    pass=$((pass + 1))
-  fi
+  report "$name" "$problems" "$(tr '\n' ' ' <"$work/stderr")"
 }
 
 good_scene | sed 's/^order = 3/ordr = 3/' >"$work/misspelt.toml"

@@ -200,7 +200,7 @@ RenderedMetric rendered_metric(const BakePlan& plan);
 RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry);
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where,
-                                  const Distribution& shard = {});
+                                  const RenderedMetric& metric, const Distribution& shard = {});
 
 // Traces the scene's mesh over its direction set, keeping the visibility
 // bits, and the hits when the scene asks for bounces.

@@ -28,8 +28,6 @@ class RenderedMetric {
   RenderedMetric(const Basis& light, const Basis* exit);
 
   bool identity() const { return light_.size() == 0 && exit_.size() == 0; }
-  // "identity", or which factors apply (for the bake's metrics and messages).
-  std::string description() const;
 
   // Rows in whitened coordinates: M' = L_e^T M L_l per block of every row
   // (a copy; an on-disk signal is whitened into a row file beside its own).
