@@ -48,37 +48,22 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
   const bool root = comm.rank() == 0;
   Progress::set_enabled(root && !args.quiet);
   PluginRegistry registry(PluginRegistry::default_directories());
-  Stopwatch clock;
   const SceneSpec scene = SceneSpec::load(args.scene, registry);
   StageTimes times;
   const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
-  if (root) {
-    check_output({output, FileKind::bake, "bake file", args.output.empty()}, scene.input_files(),
-                 args.force);
-    if (args.restart) CheckpointStore::discard(output);
-  }
   const BakePlan plan = plan_bake(scene, registry);
-  // Every rank hashes its own scene, plug-ins and mesh file: a rank whose
-  // inputs differ from rank 0's is refused when it opens the checkpoint.
-  const std::string key = bake_key(scene, plan);
-  // Rank 0 makes (or checks) the folder before the others open it.
-  std::optional<CheckpointStore> checkpoint;
-  if (root) {
-    checkpoint.emplace(output, key,
-                       "prt-mpi bake " + scene.file.string() + " -> " + output.string() + " on " +
-                           std::to_string(comm.size()) + " ranks");
-    checkpoint->remove_temporaries();
-  }
-  comm.barrier();
-  if (!root) checkpoint.emplace(output, key, "", false);  // rank 0 holds the lock
+  const BakeTarget target{{output, FileKind::bake, "bake file", args.output.empty()},
+                          args.force,
+                          args.restart,
+                          "prt-mpi bake " + scene.file.string() + " -> " + output.string() +
+                              " on " + std::to_string(comm.size()) + " ranks"};
   RunOptions options{!root || args.quiet};
-  options.checkpoint = &*checkpoint;
   options.slab_vertices = args.slab_vertices;
   options.memory_budget = double(args.memory);
   options.checkpoint_seconds = args.checkpoint_seconds;
   options.comm = &comm;
   if (!root) options.log = [](const std::string&) {};
-  BakeData data = bake(scene, registry, options, times);
+  BakeData data = bake_to_file(scene, plan, target, options, times);
   const double peak = peak_memory_gb();
   std::vector<double> peaks, received;  // per rank (received: before this exchange)
   const double mine_received = comm.bytes_received();
@@ -86,14 +71,7 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
     peaks.push_back(p[0]);
     received.push_back(p[1]);
   }
-  if (root) {
-    clock = Stopwatch();
-    write_bake(output, data);
-    times.add("write bake file", clock.seconds());
-  }
-  comm.barrier();  // every rank is done with the checkpoint
   if (!root) return 0;
-  checkpoint->remove();
   std::cout << "baked " << data.mesh.vertex_count() << " vertices x "
             << (data.streamed_transfer.rows ? data.streamed_transfer.cols
                                             : data.transfer.dimension())

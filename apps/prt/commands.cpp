@@ -37,30 +37,19 @@ int bake(Context& context, const BakeArgs& args) {
   StageTimes times;
   times.add("parse + validate scene", clock.seconds());
   const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
-  check_output({output, FileKind::bake, "bake file", args.output.empty()}, scene.input_files(),
-               args.force);
-  // A killed bake rerun with the same command resumes from its checkpoint.
+  clock = Stopwatch();
   const BakePlan plan = plan_bake(scene, context.registry);
-  if (args.restart) CheckpointStore::discard(output);
-  const CheckpointStore checkpoint(output, bake_key(scene, plan),
-                                   "prt bake " + scene.file.string() + " -> " + output.string());
-  checkpoint.remove_temporaries();
+  times.add("load plug-ins", clock.seconds());
+  // A killed bake rerun with the same command resumes from its checkpoint.
+  const BakeTarget target{{output, FileKind::bake, "bake file", args.output.empty()},
+                          args.force,
+                          args.restart,
+                          "prt bake " + scene.file.string() + " -> " + output.string()};
   RunOptions options{context.quiet};
-  options.checkpoint = &checkpoint;
   options.slab_vertices = args.slab_vertices;
   options.memory_budget = double(args.memory);
   options.checkpoint_seconds = args.checkpoint_seconds;
-  BakeData data;
-  try {
-    data = bake(scene, context.registry, options, times);
-  } catch (...) {
-    if (checkpoint.parts().empty()) checkpoint.remove();  // nothing to resume: no litter
-    throw;
-  }
-  clock = Stopwatch();
-  write_bake(output, data);
-  checkpoint.remove();
-  times.add("write bake file", clock.seconds());
+  BakeData data = bake_to_file(scene, plan, target, options, times);
   const Eigen::Index columns =
       data.streamed_transfer.rows > 0 ? data.streamed_transfer.cols : data.transfer.dimension();
   std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << columns

@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
       app.add_subcommand("compress", "re-compress the transfer of a bake file with a compressor");
   compress_cmd->add_option("bake", compress.bake, "bake file (.h5)")->required();
   compress_cmd->add_option("-c,--compressor", compress.compressor, "compressor plug-in")
-      ->capture_default_str();
+      ->required();
   compress_cmd->add_option("-p,--param", compress.parameters,
                            "compressor parameter key=value (repeatable)");
   compress_cmd->add_option("-o,--output", compress.output, "output bake file (default: in place)");

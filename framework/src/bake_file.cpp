@@ -9,7 +9,7 @@
 #include "hdf5_failures.hpp"
 #include "prt/error.hpp"
 #include "prt/output_file.hpp"
-#include "prt/pipeline.hpp"
+#include "prt/memory.hpp"
 #include "prt/row_file.hpp"
 
 namespace prt {

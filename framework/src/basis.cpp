@@ -1,6 +1,5 @@
 #include "prt/basis.hpp"
 
-#include "prt/basis_metric.hpp"
 #include "prt/error.hpp"
 #include "prt/mesh.hpp"
 
@@ -9,13 +8,6 @@ namespace prt {
 Shard FitData::rows() const {
   if (shard.total != 0) return shard;
   return whole(mesh ? static_cast<Eigen::Index>(mesh->vertex_count()) : 0);
-}
-
-Eigen::MatrixXd Basis::projection_matrix(const DirectionSet& set) const {
-  Eigen::MatrixXd inner_products = set.weights.asDiagonal() * evaluate(set.directions);
-  if (orthonormal()) return inner_products;  // G = I: bit for bit the quadrature
-  // Least-squares coefficients through the dual basis: c = G^-1 int f B.
-  return inner_products * basis_metric(*this).inverse;
 }
 
 Eigen::MatrixXd Basis::project(const Eigen::MatrixXd& samples, const DirectionSet& set) const {

@@ -16,6 +16,15 @@
 
 namespace prt {
 
+// The interface's default projection (prt/basis.hpp) lives with the metric it
+// needs, so the interface layer does not include the numerics layer.
+Eigen::MatrixXd Basis::projection_matrix(const DirectionSet& set) const {
+  Eigen::MatrixXd inner_products = set.weights.asDiagonal() * evaluate(set.directions);
+  if (orthonormal()) return inner_products;  // G = I: bit for bit the quadrature
+  // Least-squares coefficients through the dual basis: c = G^-1 int f B.
+  return inner_products * basis_metric(*this).inverse;
+}
+
 DirectionSet metric_rule(const Basis& basis) {
   if (auto native = basis.native_directions()) return *native;
   return basis.domain() == Domain::hemisphere ? hemisphere::upper_quadrature(64)

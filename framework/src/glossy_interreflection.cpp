@@ -86,21 +86,17 @@ MatrixXfRow glossy_bounce(const Mesh& mesh, const DirectionSet& set, const HitLi
   return next;
 }
 
-GlossyInterreflection glossy_interreflect(const Mesh& mesh, const DirectionSet& set,
-                                          const HitLists& hits, const MatrixXfRow& direct,
-                                          const Basis& exit_basis, const GlossyOperator& glossy,
-                                          int light_size, const std::vector<Frame>& frames,
-                                          int bounces, double albedo, Progress* progress,
-                                          const BounceCheckpoint& checkpoint) {
+BounceFunction glossy_bounce_function(const Mesh& mesh, const DirectionSet& set,
+                                      const HitLists& hits, const Basis& exit_basis,
+                                      const GlossyOperator& glossy, int light_size,
+                                      const std::vector<Frame>& frames, double albedo) {
   if (!(albedo >= 0 && albedo <= 1))
     throw Error("inter-reflection needs an albedo in [0, 1]; got " + std::to_string(albedo));
-  return bounce_passes(
-      direct, bounces,
-      [&](const MatrixXfRow& previous, std::size_t first, std::size_t last) {
-        return glossy_bounce(mesh, set, hits, previous, exit_basis, glossy, light_size, frames,
-                             albedo, first, last);
-      },
-      progress, checkpoint);
+  return [&mesh, &set, &hits, &exit_basis, &glossy, light_size, &frames, albedo](
+             const MatrixXfRow& previous, std::size_t first, std::size_t last) {
+    return glossy_bounce(mesh, set, hits, previous, exit_basis, glossy, light_size, frames,
+                         albedo, first, last);
+  };
 }
 
 }  // namespace prt

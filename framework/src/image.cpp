@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "prt/bake_file.hpp"
 #include "prt/error.hpp"
 #include "prt/output_file.hpp"
 

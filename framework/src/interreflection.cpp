@@ -50,17 +50,14 @@ MatrixXfRow gather_bounce(const Mesh& mesh, const DirectionSet& set, const HitLi
   return next;
 }
 
-Interreflection interreflect(const Mesh& mesh, const DirectionSet& set, const HitLists& hits,
-                             const MatrixXfRow& direct, int bounces, double albedo,
-                             Progress* progress, const BounceCheckpoint& checkpoint) {
+BounceFunction diffuse_bounce(const Mesh& mesh, const DirectionSet& set, const HitLists& hits,
+                              double albedo) {
   if (!(albedo >= 0 && albedo <= 1))
     throw Error("inter-reflection needs an albedo in [0, 1]; got " + std::to_string(albedo));
-  return bounce_passes(
-      direct, bounces,
-      [&](const MatrixXfRow& previous, std::size_t first, std::size_t last) {
-        return gather_bounce(mesh, set, hits, previous, albedo, first, last);
-      },
-      progress, checkpoint);
+  return [&mesh, &set, &hits, albedo](const MatrixXfRow& previous, std::size_t first,
+                                      std::size_t last) {
+    return gather_bounce(mesh, set, hits, previous, albedo, first, last);
+  };
 }
 
 Eigen::MatrixX3f ground_truth_bounces(const Mesh& mesh, const Eigen::MatrixX3f& direct, int bounces,

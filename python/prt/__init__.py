@@ -59,12 +59,15 @@ def trace(scene, *, progress=None, log=None):
         return _prt.trace(scene, quiet=quiet, log=log)
 
 
-def bake(scene, *, output=None, force=False, compress=True, traced=None, progress=None,
-         log=None, timings=None):
+def bake(scene, *, output=None, force=False, restart=False, compress=True, traced=None,
+         progress=None, log=None, timings=None):
     """plan -> rays -> transfer -> compression, as `prt bake` runs it.
 
     output: also write the bake file there (refused if it is one of the
-    scene's inputs, or an existing file that is not a bake, unless force).
+    scene's inputs, or an existing file that is not a bake, unless force),
+    through a checkpoint folder beside it as `prt bake` does: a bake killed
+    or interrupted after it kept a part resumes when rerun (restart=True
+    discards the kept parts).
     compress=False keeps the exact transfer as the compressed form.
     traced: rays from trace(scene), reused instead of traced again.
     progress: None (bars on stderr), False (none), "tqdm", or a callable
@@ -72,8 +75,8 @@ def bake(scene, *, output=None, force=False, compress=True, traced=None, progres
     """
     with progress_to(progress) as quiet:
         data, times = _prt.bake(scene, output=None if output is None else _pathlib.Path(output),
-                                force=force, compress=compress, traced=traced, quiet=quiet,
-                                log=log)
+                                force=force, restart=restart, compress=compress,
+                                traced=traced, quiet=quiet, log=log)
     if timings is not None:
         timings.update(times)
     return data

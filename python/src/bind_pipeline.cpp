@@ -142,23 +142,29 @@ void bind_pipeline(py::module_& m) {
   m.def(
       "bake",
       [](const SceneSpec& scene, std::optional<std::filesystem::path> output, bool force,
-         bool compress, const Traced* traced, bool quiet, const py::object& log) {
+         bool restart, bool compress, const Traced* traced, bool quiet, const py::object& log) {
         if (traced && traced->key != traced_key(scene))
           throw Error(scene.file.string() +
                       ": the rays given (traced=) were traced for another mesh, transport or "
                       "material; trace this scene (prt.trace) or leave traced out");
-        if (output)
-          check_output({*output, FileKind::bake, "bake file", false, kForceKeyword},
-                       scene.input_files(), force);
         RunOptions options = run_options(quiet, log);
         options.compress = compress;
         options.traced = traced ? &traced->result : nullptr;
         StageTimes times;
-        BakeData data = long_call([&] { return bake(scene, registry(), options, times); });
-        if (output) long_call([&] { write_bake(*output, data); });
+        BakeData data = long_call([&] {
+          const BakePlan plan = plan_bake(scene, registry());
+          if (!output) return bake(scene, plan, options, times);
+          // As prt bake: through a checkpoint beside the file, which a rerun resumes.
+          const BakeTarget target{{*output, FileKind::bake, "bake file", false, kForceKeyword},
+                                  force,
+                                  restart,
+                                  "prt.bake " + scene.file.string() + " -> " + output->string()};
+          return bake_to_file(scene, plan, target, options, times);
+        });
         return py::make_tuple(std::move(data), times_dict(times));
       },
       py::arg("scene"), py::kw_only(), py::arg("output") = py::none(), py::arg("force") = false,
+      py::arg("restart") = false,
       py::arg("compress") = true, py::arg("traced") = nullptr, py::arg("quiet") = false,
       py::arg("log") = py::none());
 

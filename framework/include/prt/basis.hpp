@@ -14,7 +14,7 @@ namespace prt {
 
 struct Mesh;
 class VisibilityBits;
-class CheckpointStore;
+class PartKeeper;  // prt/part_keeper.hpp
 
 // What a data-driven basis is fitted to: the mesh, the direction set and the
 // traced visibility (1 bit per vertex and direction). In a distributed bake
@@ -31,7 +31,7 @@ struct FitData {
   const Communicator* comm = nullptr;  // null: solo()
   // Where a long fit may keep its state (rank 0 writes, every rank reads),
   // so that a killed bake resumes inside it; null: nowhere.
-  const CheckpointStore* checkpoint = nullptr;
+  const PartKeeper* checkpoint = nullptr;
 
   Shard rows() const;  // the shard, or the whole mesh by default
   const Communicator& communicator() const { return comm ? *comm : solo(); }

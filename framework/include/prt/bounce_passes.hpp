@@ -7,19 +7,13 @@
 #pragma once
 #include <functional>
 #include <string>
-#include <vector>
 
-#include "prt/transfer.hpp"
+#include "prt/bounce.hpp"
 
 namespace prt {
 
 class CheckpointStore;
 class Progress;
-
-struct BouncedTransfer {
-  MatrixXfRow total;                 // direct + every bounce
-  std::vector<double> bounce_norms;  // Frobenius norm of each bounce's transfer
-};
 
 struct BounceCheckpoint {
   const CheckpointStore* store = nullptr;           // null: nothing kept
@@ -27,10 +21,6 @@ struct BounceCheckpoint {
   std::function<void(const std::string&)> message;  // "resuming: ..."
   std::size_t slab_vertices = 65536;  // within a bounce, rows are kept a slab at a time
 };
-
-// One bounce: the rows [first, last) of the light `previous` sends on.
-using BounceFunction =
-    std::function<MatrixXfRow(const MatrixXfRow& previous, std::size_t first, std::size_t last)>;
 
 BouncedTransfer bounce_passes(const MatrixXfRow& direct, int bounces, const BounceFunction& bounce,
                               Progress* progress, const BounceCheckpoint& checkpoint = {});

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "prt/part_keeper.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt {
@@ -30,7 +31,7 @@ class Digest {
   std::uint64_t hash_ = 0xcbf29ce484222325ull;
 };
 
-class CheckpointStore {
+class CheckpointStore : public PartKeeper {
  public:
   // The folder for `output`, created when missing. `key` identifies the run
   // (a digest of the scene, mesh and plug-ins); `description` is written
@@ -39,7 +40,7 @@ class CheckpointStore {
   // a second process (a distributed run's other ranks share the first's).
   CheckpointStore(const std::filesystem::path& output, const std::string& key,
                   const std::string& description, bool exclusive = true);
-  ~CheckpointStore();
+  ~CheckpointStore() override;
   CheckpointStore(const CheckpointStore&) = delete;
   CheckpointStore& operator=(const CheckpointStore&) = delete;
   static std::filesystem::path folder_for(const std::filesystem::path& output);
@@ -47,23 +48,24 @@ class CheckpointStore {
   static void discard(const std::filesystem::path& output);
 
   const std::filesystem::path& folder() const { return folder_; }
-  bool has(const std::string& name) const;
+  bool has(const std::string& name) const override;
   // Creates the empty marker `name` if no process has: true for the one
   // that did (O_EXCL; ranks share out work this way).
   bool claim(const std::string& name) const;
   // Parts are float, double or int32 matrices; saved whole or not at all.
-  void save(const std::string& name, const MatrixXfRow& matrix) const;
-  void save(const std::string& name, const Eigen::MatrixXd& matrix) const;
-  void save(const std::string& name, const std::vector<std::int32_t>& values) const;
+  void save(const std::string& name, const MatrixXfRow& matrix) const override;
+  void save(const std::string& name, const Eigen::MatrixXd& matrix) const override;
+  void save(const std::string& name, const std::vector<std::int32_t>& values) const override;
   void save_text(const std::string& name, const std::string& text) const;
   std::string load_text(const std::string& name) const;
-  MatrixXfRow load_floats(const std::string& name) const;
-  Eigen::MatrixXd load_doubles(const std::string& name) const;
-  std::vector<std::int32_t> load_ints(const std::string& name) const;
+  MatrixXfRow load_floats(const std::string& name) const override;
+  Eigen::MatrixXd load_doubles(const std::string& name) const override;
+  std::vector<std::int32_t> load_ints(const std::string& name) const override;
   // Names of the parts present, sorted.
   std::vector<std::string> parts() const;
   // Deletes a part superseded by a later one (a bounce's state by the next's).
-  void remove_part(const std::string& name) const;
+  void remove_part(const std::string& name) const override;
+  std::string where() const override { return folder_.string(); }
   // Removes temporaries that killed processes left (".tmp-PID" files).
   void remove_temporaries() const;
   // Deletes the folder (after the output is in place).

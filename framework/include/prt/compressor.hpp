@@ -10,8 +10,8 @@
 
 namespace prt {
 
-class CheckpointStore;
 class RenderedMetric;
+class PartKeeper;  // prt/part_keeper.hpp
 
 // Where a distributed compressor's rows sit (prt-mpi): the signal it is given
 // holds rows [shard.first, shard.last) of the whole; sums over rows go
@@ -24,7 +24,7 @@ struct Distribution {
   // checkpoint folder; a distributed run's ranks share it, so a distributed
   // encode keeps parts named by its shard, decides when to keep on one rank
   // for all, and resumes on every rank or none). Null: nothing is kept.
-  const CheckpointStore* checkpoint = nullptr;
+  const PartKeeper* checkpoint = nullptr;
   double checkpoint_seconds = 60;
   static Distribution whole_signal(Eigen::Index rows) { return {&solo(), whole(rows)}; }
 };

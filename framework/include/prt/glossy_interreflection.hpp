@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "prt/basis.hpp"
-#include "prt/bounce_passes.hpp"
+#include "prt/bounce.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/frame.hpp"
 #include "prt/glossy.hpp"
@@ -33,12 +33,12 @@ MatrixXfRow glossy_bounce(const Mesh& mesh, const DirectionSet& directions, cons
                           const std::vector<Frame>& frames, double albedo, std::size_t first = 0,
                           std::size_t last = static_cast<std::size_t>(-1));
 
-using GlossyInterreflection = BouncedTransfer;
-GlossyInterreflection glossy_interreflect(const Mesh& mesh, const DirectionSet& directions,
-                                          const HitLists& hits, const MatrixXfRow& direct,
-                                          const Basis& exit_basis, const GlossyOperator& glossy,
-                                          int light_size, const std::vector<Frame>& frames,
-                                          int bounces, double albedo, Progress* progress,
-                                          const BounceCheckpoint& checkpoint = {});
+// The same as the kernel that bounce_passes (prt/bounce_passes.hpp) iterates;
+// it refers to its arguments, which must outlive it. Throws unless albedo is
+// in [0, 1].
+BounceFunction glossy_bounce_function(const Mesh& mesh, const DirectionSet& directions,
+                                      const HitLists& hits, const Basis& exit_basis,
+                                      const GlossyOperator& glossy, int light_size,
+                                      const std::vector<Frame>& frames, double albedo);
 
 }  // namespace prt

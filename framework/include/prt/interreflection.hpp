@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "prt/bounce_passes.hpp"
+#include "prt/bounce.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/mesh.hpp"
 #include "prt/transfer.hpp"
@@ -27,10 +27,11 @@ MatrixXfRow gather_bounce(const Mesh& mesh, const DirectionSet& directions, cons
                           const MatrixXfRow& previous, double albedo, std::size_t first = 0,
                           std::size_t last = static_cast<std::size_t>(-1));
 
-using Interreflection = BouncedTransfer;
-Interreflection interreflect(const Mesh& mesh, const DirectionSet& directions, const HitLists& hits,
-                             const MatrixXfRow& direct, int bounces, double albedo,
-                             Progress* progress, const BounceCheckpoint& checkpoint = {});
+// The same as the kernel that bounce_passes (prt/bounce_passes.hpp) iterates;
+// it refers to its arguments, which must outlive it. Throws unless albedo is
+// in [0, 1].
+BounceFunction diffuse_bounce(const Mesh& mesh, const DirectionSet& directions,
+                              const HitLists& hits, double albedo);
 
 // The ground truth's bounces, independent of any basis and of the bake's
 // directions: per vertex `samples` fresh cosine-distributed rays gather the

@@ -13,6 +13,12 @@ double available_memory();
 // container, a Slurm job): what this process may really hold.
 double physical_memory();
 
+// The share of physical memory a bake's default budget takes.
+constexpr double kDefaultMemoryFraction = 0.75;
+// Bytes a bake holds per mesh vertex beside its transfer while it traces
+// (the mesh, its adjacency and Embree's BVH; measured: docs/scale.md).
+constexpr double kMeshBytesPerVertex = 400;
+
 // "640 MB", "3.2 GB".
 std::string gigabytes(double bytes);
 

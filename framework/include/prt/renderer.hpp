@@ -5,13 +5,14 @@
 #include <string>
 
 #include "prt/camera.hpp"
-#include "prt/environment.hpp"
 #include "prt/image.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt {
+
+class Environment;  // prt/environment.hpp: a renderer that draws the background includes it
 
 struct RenderInput {
   const Mesh* mesh = nullptr;

@@ -17,7 +17,7 @@
 #include <random>
 
 #include "prt/basis.hpp"
-#include "prt/checkpoint.hpp"
+#include "prt/part_keeper.hpp"
 #include "prt/log.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
@@ -259,11 +259,11 @@ class Eigentransport final : public Basis {
     // orth(C Z) of that iteration's Z (s x columns, small; the same on every
     // rank, so rank 0 keeps it), and the same bits follow.
     const int resume_after = kept_iteration(data.checkpoint, comm, s, columns);
-    const CheckpointStore* keep = data.checkpoint && comm.rank() == 0 ? data.checkpoint : nullptr;
+    const PartKeeper* keep = data.checkpoint && comm.rank() == 0 ? data.checkpoint : nullptr;
     if (resume_after >= 0) {
       log_info("resuming: the eigentransport fit after power iteration " +
                std::to_string(resume_after + 1) + " of " + std::to_string(power_iterations_) +
-               ", kept in " + data.checkpoint->folder().string());
+               ", kept in " + data.checkpoint->where());
       times_c(data.checkpoint->load_doubles(kept_z_name(resume_after)));
     } else {
       times_c(omega);
@@ -376,7 +376,7 @@ class Eigentransport final : public Basis {
 
   // The last power iteration a killed fit kept (rank 0 reads, and tells
   // every rank), or -1: none, or none that fits this fit's shape.
-  int kept_iteration(const CheckpointStore* store, const Communicator& comm, Eigen::Index s,
+  int kept_iteration(const PartKeeper* store, const Communicator& comm, Eigen::Index s,
                      Eigen::Index columns) const {
     if (!store) return -1;
     std::vector<char> bytes(sizeof(std::int32_t), 0);

@@ -241,7 +241,7 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
   CpcaResult result;
   const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, rows.cols()));
   // A state kept by a killed run of the same encode replaces LBG and the passes it did.
-  const CheckpointStore* keep =
+  const PartKeeper* keep =
       options.method != Method::static_pca ? options.lbg.keep : nullptr;  // reset on a failed write
   const int clusters = static_cast<int>(std::min<Eigen::Index>(options.lbg.clusters, rows.total()));
   std::optional<CpcaState> kept;
@@ -259,7 +259,7 @@ CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
              (adaptive_kept ? "adaptive pass " + std::to_string(kept->iteration + 1)
                             : "component " + std::to_string(kept->component) + ", pass " +
                                   std::to_string(kept->iteration + 1)) +
-             ", kept in " + keep->folder().string());
+             ", kept in " + keep->where());
   if (kept) {
     result.labels = std::move(kept->labels);
     refitter.restore(std::move(kept->models), std::move(kept->fitted_labels));

@@ -13,7 +13,7 @@ std::string labels_part(const char* what, int sequence, const Shard& shard) {
          std::to_string(shard.first) + "-" + std::to_string(shard.last);
 }
 
-void save_labels(const CheckpointStore& store, const char* what, int sequence, const Shard& shard,
+void save_labels(const PartKeeper& store, const char* what, int sequence, const Shard& shard,
                  const std::vector<std::int32_t>& labels) {
   std::vector<std::int32_t> part;
   part.reserve(labels.size() + 1);
@@ -22,7 +22,7 @@ void save_labels(const CheckpointStore& store, const char* what, int sequence, c
   store.save(labels_part(what, sequence, shard), part);
 }
 
-std::optional<std::vector<std::int32_t>> load_labels(const CheckpointStore& store, const char* what,
+std::optional<std::vector<std::int32_t>> load_labels(const PartKeeper& store, const char* what,
                                                      int sequence, const Shard& shard,
                                                      Eigen::Index rows, int k) {
   const std::string name = labels_part(what, sequence, shard);
@@ -34,7 +34,7 @@ std::optional<std::vector<std::int32_t>> load_labels(const CheckpointStore& stor
   return std::vector<std::int32_t>(part.begin() + 1, part.end());
 }
 
-void save_models(const CheckpointStore& store, const CpcaState& s) {
+void save_models(const PartKeeper& store, const CpcaState& s) {
   // Figures, then per model: its direction count, mean, directions and eigenvalues.
   std::vector<double> v{double(s.phase), double(s.component), double(s.iteration),
                         double(s.sequence), double(s.models.size())};
@@ -51,7 +51,7 @@ void save_models(const CheckpointStore& store, const CpcaState& s) {
 
 }  // namespace
 
-bool keep_cpca_state(const CheckpointStore& store, const Rows& rows, const CpcaState& s) {
+bool keep_cpca_state(const PartKeeper& store, const Rows& rows, const CpcaState& s) {
   return keep_on_ranks(
       rows, "CPCA",
       [&] {
@@ -61,7 +61,7 @@ bool keep_cpca_state(const CheckpointStore& store, const Rows& rows, const CpcaS
       [&] { save_models(store, s); });
 }
 
-std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, const Rows& rows, int k) {
+std::optional<CpcaState> kept_cpca_state(const PartKeeper& store, const Rows& rows, int k) {
   const Eigen::Index n = rows.cols();
   if (!store.has("cpca.state")) return std::nullopt;
   const Eigen::MatrixXd part = store.load_doubles("cpca.state");

@@ -7,7 +7,7 @@
 #pragma once
 #include <optional>
 
-#include "prt/checkpoint.hpp"
+#include "prt/part_keeper.hpp"
 #include "prt/clustering.hpp"
 
 namespace prt::clustering {
@@ -26,10 +26,10 @@ struct CpcaState {
 // rank 0 the models and position once every rank's are written. False on
 // every rank when any could not write (a full disk ends the keeping, not the
 // encode).
-bool keep_cpca_state(const CheckpointStore& store, const Rows& rows, const CpcaState& state);
+bool keep_cpca_state(const PartKeeper& store, const Rows& rows, const CpcaState& state);
 
 // The kept state when it fits this run's rows (this rank's shard), k
 // clusters and the rows' columns (else none).
-std::optional<CpcaState> kept_cpca_state(const CheckpointStore& store, const Rows& rows, int k);
+std::optional<CpcaState> kept_cpca_state(const PartKeeper& store, const Rows& rows, int k);
 
 }  // namespace prt::clustering

@@ -12,7 +12,7 @@
 #include <random>
 
 #include "kept_on_ranks.hpp"
-#include "prt/checkpoint.hpp"
+#include "prt/part_keeper.hpp"
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
 #include "prt/log.hpp"
@@ -273,7 +273,7 @@ std::string labels_part(int sequence, const Shard& shard) {
 }
 
 // Keeps the state; false on every rank when a rank could not write its part.
-bool keep_state(const CheckpointStore& store, const Rows& rows, const LbgState& s) {
+bool keep_state(const PartKeeper& store, const Rows& rows, const LbgState& s) {
   return keep_on_ranks(
       rows, "LBG",
       [&] {
@@ -295,7 +295,7 @@ bool keep_state(const CheckpointStore& store, const Rows& rows, const LbgState& 
 }
 
 // The state a killed run kept, when it fits this run (else none).
-std::optional<LbgState> kept_state(const CheckpointStore& store, const Rows& rows, int k) {
+std::optional<LbgState> kept_state(const PartKeeper& store, const Rows& rows, int k) {
   const Eigen::Index n = rows.cols();
   if (!store.has("lbg.state")) return std::nullopt;
   const Eigen::MatrixXd state = store.load_doubles("lbg.state");
@@ -346,12 +346,12 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
     log_warning(std::string("LBG: the kept state is unreadable, starting afresh: ") + e.what());
   }
   if (options.keep && rows.any(!kept)) kept.reset();  // every rank resumes, or none
-  const CheckpointStore* keep = options.keep;  // null once keeping failed, on every rank alike
+  const PartKeeper* keep = options.keep;  // null once keeping failed, on every rank alike
   int sequence = kept ? kept->sequence + 1 : 0;
   if (kept) {
     if (rows.comm.rank() == 0)
       log_info("resuming: LBG at iteration " + std::to_string(kept->next_iteration + 1) +
-               ", kept in " + options.keep->folder().string());
+               ", kept in " + options.keep->where());
     result.means = std::move(kept->means);
     result.labels = std::move(kept->labels);
     previous = kept->previous;

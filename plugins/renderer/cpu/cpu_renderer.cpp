@@ -2,6 +2,7 @@
 // constants, then weighted sums) and a software rasteriser.
 #include <array>
 
+#include "prt/environment.hpp"
 #include "prt/plugin.hpp"
 #include "prt/relight.hpp"
 #include "prt/renderer.hpp"

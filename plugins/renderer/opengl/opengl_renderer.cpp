@@ -9,6 +9,7 @@
 #include <chrono>
 
 #include "gl_context.hpp"
+#include "prt/environment.hpp"
 #include "prt/plugin.hpp"
 #include "prt/relight.hpp"
 #include "prt/renderer.hpp"

@@ -18,7 +18,7 @@
 #include "prt/transfer.hpp"
 
 namespace prt {
-class CheckpointStore;
+class PartKeeper;
 }
 
 namespace prt::clustering {
@@ -98,7 +98,7 @@ struct LbgOptions {
   // Where the iterations keep their state (means, labels, energy), at most
   // every keep_seconds; a rerun finds it and continues from there, with
   // the result an uninterrupted run gives. One process only.
-  const CheckpointStore* keep = nullptr;
+  const PartKeeper* keep = nullptr;
   double keep_seconds = 60;
 };
 

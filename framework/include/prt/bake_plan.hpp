@@ -1,0 +1,60 @@
+// The bake plan: what a bake will do, decided and validated from the scene
+// before any ray is traced.
+#pragma once
+#include <memory>
+#include <string>
+#include "prt/bake_file.hpp"
+#include "prt/basis.hpp"
+#include "prt/brdf.hpp"
+#include "prt/compressor.hpp"
+#include "prt/glossy.hpp"
+#include "prt/plugin_record.hpp"
+#include "prt/registry.hpp"
+#include "prt/rendered_metric.hpp"
+#include "prt/scene.hpp"
+
+namespace prt {
+
+// Everything a bake will do, decided and validated from the scene before any
+// ray is traced: the plug-ins (created, so their parameters are checked),
+// what to keep, fit, project and compress.
+struct BakePlan {
+  std::shared_ptr<Basis> basis;  // light basis (a sphere basis)
+  std::shared_ptr<Basis> exit;   // glossy only: exit basis (a hemisphere basis)
+  std::shared_ptr<Compressor> compressor;
+  PluginRecord basis_record, exit_record, compressor_record;
+  bool glossy = false, subsurface = false, fit = false;
+  int bounces = 0;
+  double bounce_albedo = 1;
+  int sparse_terms = 0;          // > 0: the basis's own sparse approximation replaces compression
+  bool keep_visibility = false;  // fitting and glossy matrices need the bits
+  bool shadowed = true;
+  // Glossy: the BRDF and its incident band limit.
+  Brdf brdf;
+  int incident_order = 0;
+  bool least_squares = true;
+  double cutoff = 1e-10;
+  GlossyMethod glossy_method = GlossyMethod::rotate_sh;
+  GlossyOperator glossy_operator;  // made by plan_bake
+  SubsurfaceMaterial subsurface_material;
+  // Colour channels that need transfers of their own (one group: the scene's
+  // channels agree, and the fields above are its material).
+  MaterialChannels channels;
+};
+BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry);
+
+// What a scene's bake depends on (scene text, mesh bytes, plug-ins, format):
+// the key of its checkpoint.
+std::string bake_key(const SceneSpec& scene, const BakePlan& plan);
+
+// Refuses (located at the key) a `components` budget, given by the user, larger
+// than the transfer's `dimension` coefficients per vertex; a default beyond it
+// is used as far as it goes (the compressor warns).
+void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
+                                 const std::string& compressor);
+
+// The rendered metric of the plan's bases (identity for orthonormal ones and
+// sparse approximations): what compression minimises.
+RenderedMetric rendered_metric(const BakePlan& plan);
+
+}  // namespace prt

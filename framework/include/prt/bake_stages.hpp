@@ -1,0 +1,101 @@
+// The stages of a bake on plain values, and how they are run: whole, slab by
+// slab through a checkpoint, or sharded over ranks.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include "prt/bake_file.hpp"
+#include "prt/bake_plan.hpp"
+#include "prt/frame.hpp"
+#include "prt/run_options.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+class RayCaster;
+class Progress;
+
+// Stages of a bake; each takes plain values and returns one.
+// 1. Rays: visibility (and hits) over the scene's direction set; projects
+//    while tracing when nothing needs the bits.
+TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                            const RunOptions& options);
+// 2. Transfer: fit (data-driven bases), project, bounces, subsurface, glossy
+//    matrices, glossy bounces. Consumes the visibility and hits; metrics
+//    gets its figures; `direct` (optional) the transfer before any bounce.
+TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                              const DirectionSet& set, TransportResult traced,
+                              const RunOptions& options, StageTimes& times,
+                              std::map<std::string, double>& metrics,
+                              TransferSignal* direct = nullptr);
+// 2'. The same per distinct colour-channel material (plan.channels), the
+//    rays traced once; the transfers stacked in each row.
+TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                                 const DirectionSet& set, TransportResult traced,
+                                 const RunOptions& options, StageTimes& times,
+                                 std::map<std::string, double>& metrics,
+                                 TransferSignal* direct = nullptr);
+// 2''. A transfer that each vertex gets alone (no fitted basis, bounces,
+//    subsurface light or per-channel transfers) in slabs of vertices:
+//    vertices [first, last) traced and projected (glossy: their matrices).
+bool per_vertex_transfer(const BakePlan& plan);
+// The same but for a fitted basis: once fitted, each vertex's row is its own.
+bool per_vertex_transfer_after_fit(const BakePlan& plan);
+// A diffuse transfer with a fitted basis and nothing that couples vertices:
+// its visibility is traced in slabs and kept, the basis fitted (with its own
+// checkpoints), and the rows projected (fitted_shard_transfer).
+bool fitted_per_vertex_transfer(const BakePlan& plan);
+// Either: a transfer whose rows are computed (and can be kept) apart.
+bool transfer_by_rows(const BakePlan& plan);
+TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                             const RayCaster* caster, const std::vector<Frame>& frames,
+                             std::size_t first, std::size_t last, std::uint64_t& rays_cast,
+                             Progress* progress = nullptr);
+// Stages 1-2 through options.checkpoint: slab by slab when the transfer is
+// per-vertex, else whole (with the fitted basis); parts already kept are
+// loaded, not computed. Without a checkpoint: trace_stage + transfer_stage.
+// on_disk (a per-vertex transfer only): the rows go to a RowFile in the
+// checkpoint folder instead of memory.
+TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+                                     const DirectionSet& set, const RunOptions& options,
+                                     StageTimes& times, std::map<std::string, double>& metrics,
+                                     TransferSignal* direct, std::uint64_t& rays_cast,
+                                     bool on_disk = false);
+// A distributed bake's stages 1-2: the ranks trace the slabs of a per-vertex
+// transfer as each comes free, into options.checkpoint (a folder every rank
+// sees); then each takes its shard's rows from the slabs. rays_cast: all ranks'.
+TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                              const RunOptions& options, StageTimes& times,
+                              std::uint64_t& rays_cast, const Shard& shard,
+                              const Communicator& comm, bool on_disk = false);
+// The same for a fitted basis (fitted_per_vertex_transfer): each rank traces
+// its shard's visibility in slabs, the ranks fit the basis together
+// (Basis::can_fit_distributed; one process: shard = whole, comm = solo()),
+// and each projects its rows. The bits' slabs, the fit's own state, the
+// fitted basis and each shard's rows are kept in options.checkpoint.
+TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
+                                     const DirectionSet& set, const RunOptions& options,
+                                     StageTimes& times, std::uint64_t& rays_cast,
+                                     const Shard& shard, const Communicator& comm,
+                                     bool on_disk = false);
+// Every rank's rows as rank 0 writes the file: its own from memory, the
+// other ranks' read from the checkpoint's slabs a slab at a time (rank 0
+// never holds the whole transfer). `store` must outlive the result.
+BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,
+                                     std::size_t vertices, std::size_t slab_vertices,
+                                     std::shared_ptr<const TransferSignal> own);
+// The same when each rank kept its shard's rows (fitted_shard_transfer).
+BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const CheckpointStore& store,
+                                           std::size_t vertices, int ranks,
+                                           std::shared_ptr<const TransferSignal> own);
+
+// 3. Compression (or the basis's sparse approximation), in the rendered metric.
+CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
+                                  const Mesh& mesh, const SourceLocation& where,
+                                  const RenderedMetric& metric, const Distribution& shard = {});
+
+// Writes a compression report into bake-file metrics.
+void record(const CompressionReport& report, std::map<std::string, double>& metrics);
+
+}  // namespace prt

@@ -1,0 +1,27 @@
+// The Monte Carlo ground truth of a scene as per-vertex radiance and as an
+// image, and per-vertex error statistics against it.
+#pragma once
+#include "prt/environment.hpp"
+#include "prt/relighting.hpp"
+
+namespace prt {
+
+// Monte Carlo ground truth per vertex (v x 3, albedo included) under
+// `lighting` (the scene's map, or its band-limited reconstruction), toward
+// the camera for glossy materials.
+Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
+                                       const Environment& lighting, const Camera& camera,
+                                       const RunOptions& options);
+// Renders the Monte Carlo ground truth with the scene's renderer, under the
+// scene's light or `lighting` when given.
+Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
+                             const RunOptions& options, StageTimes& times,
+                             const Environment* lighting = nullptr);
+
+// Per-vertex error statistics of `approximation` against `reference` (v x 3).
+struct ErrorStats {
+  double rms = 0, relative_rms = 0, p99 = 0, max = 0;
+};
+ErrorStats vertex_error(const Eigen::MatrixX3f& approximation, const Eigen::MatrixX3f& reference);
+
+}  // namespace prt

@@ -1,0 +1,300 @@
+// The bake driver: a plan run through its stages (whole, slab by slab or
+// sharded), refusing what cannot fit before any ray, into BakeData.
+#include "prt/bake.hpp"
+
+#include <optional>
+
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "coupled_slabs.hpp"
+#include "kept_state.hpp"
+#include "prt/basis.hpp"
+#include "prt/basis_metric.hpp"
+#include "prt/bounce_passes.hpp"
+#include "prt/checkpoint.hpp"
+#include "prt/compressor.hpp"
+#include "prt/environment.hpp"
+#include "prt/glossy.hpp"
+#include "prt/glossy_interreflection.hpp"
+#include "prt/ground_truth.hpp"
+#include "prt/interreflection.hpp"
+#include "prt/log.hpp"
+#include "prt/memory.hpp"
+#include "prt/progress.hpp"
+#include "prt/rendered_metric.hpp"
+#include "prt/renderer.hpp"
+#include "prt/row_file.hpp"
+#include "prt/subsurface.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+namespace {
+
+std::string transport_description(const SceneSpec& scene, const DirectionSet& set) {
+  return set.kind + " " + std::to_string(set.size()) + " directions, " +
+         (scene.transport.get_bool("shadowed") ? "shadowed" : "unshadowed") +
+         ", seed=" + std::to_string(scene.transport.get_int("seed"));
+}
+
+// Refuses, before any ray, a bake whose largest arrays cannot fit: the
+// transfer (twice: exact and decoded; not at all when it is kept on disk),
+// visibility bits (kept, or held for the projection) and bounce hits, and
+// the basis evaluated at every direction (unless it projects by a fast
+// transform).
+void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& mesh,
+                    const DirectionSet& set, bool keep_visibility, bool on_disk) {
+  const double v = double(mesh.vertex_count()), d = double(set.size()),
+               n = double(plan.basis->size());
+  const double rows = plan.glossy ? double(plan.exit->size()) : 1.0;
+  const double groups =
+      std::max<double>(1, double(plan.channels.groups.size()));  // channel transfers
+  const double dimension = rows * n * groups;
+  // The basis at every direction: the projection matrix (unless a fast
+  // transform projects), and glossy transfer's weighted light values.
+  const bool fast = plan.basis->has_fast_projection(set);
+  const double projection = fast ? 0 : d * n * sizeof(double);
+  const double glossy_light = plan.glossy ? d * n * sizeof(double) : 0;
+  // The transfer twice: exact, and its compressed (or exact) form; channel
+  // transfers also hold their parts and direct parts while they are stacked.
+  const double copies = on_disk ? 0 : groups > 1 ? 4 : 2;
+  // Bits not kept are held a window at a time for the projection.
+  const double held_bits = std::min(v, double(kBitsWindow)) * d / 8;
+  const double bytes = copies * v * dimension * sizeof(float) + projection + glossy_light +
+                       // Channel transfers each work on a copy of the rays' results.
+                       (groups > 1 ? 2 : 1) * ((keep_visibility ? v * d / 8
+                                                : fast          ? 0
+                                                                : held_bits) +
+                                               (plan.bounces > 0 ? v * d * 8 : 0));
+  const double available = available_memory();
+  if (bytes > available) {
+    char message[400];
+    std::snprintf(message, sizeof message,
+                  "this bake needs about %.1f GB (%.0f vertices x %.0f coefficients%s, %.0f "
+                  "directions), but %.1f GB are available; lower the basis size, rays or mesh "
+                  "resolution",
+                  bytes / 1e9, v, dimension, rows > 1 ? " per glossy matrix" : "", d,
+                  available / 1e9);
+    throw Error(scene.basis.where, message);
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Whether the transfer's rows go to a file: when the mesh (with its BVH) and
+// the transfer together would exceed the memory budget. Only a per-vertex
+// transfer can; another is held in memory with a warning.
+// rows: this process's (a rank's shard), beside the whole mesh.
+bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
+                      const RunOptions& options) {
+  const double v = double(mesh.vertex_count());
+  const double groups = std::max<double>(1, double(plan.channels.groups.size()));
+  const double transfer = double(rows) * double(plan.glossy ? plan.exit->size() : 1) *
+                          double(plan.basis->size()) * groups * 4;
+  const double resident = kMeshBytesPerVertex * v, budget = options.budget();
+  if (resident + transfer <= budget) return false;
+  // A fitted diffuse transfer projects its rows after the fit: they too can go to a file.
+  if (!transfer_by_rows(plan) || !options.checkpoint || options.traced) {
+    options.warn("the transfer (" + gigabytes(transfer) + ") and mesh (~" + gigabytes(resident) +
+                 ") exceed the memory budget of " + gigabytes(budget) +
+                 "; this transfer couples vertices (or runs without a checkpoint) and is held in "
+                 "memory");
+    return false;
+  }
+  const std::string what =
+      double(rows) < v ? "this rank's rows of the transfer (" : "the transfer (";
+  options.message(what + gigabytes(transfer) + ") and the mesh (~" + gigabytes(resident) +
+                  ") exceed the memory budget of " + gigabytes(budget) +
+                  ": the transfer's rows are kept in " + options.checkpoint->folder().string() +
+                  " and compressed in passes over them");
+  if (resident > budget)
+    options.warn("the mesh and its ray-tracing structure alone (~" + gigabytes(resident) +
+                 ") exceed the memory budget of " + gigabytes(budget) + "; they stay in memory");
+  return true;
+}
+
+// What a distributed bake cannot do yet, refused before any ray.
+void require_distributable(const SceneSpec& scene, const BakePlan& plan,
+                           const RunOptions& options) {
+  if (plan.fit && !plan.basis->can_fit_distributed())
+    throw Error(scene.basis.where,
+                "basis \"" + plan.basis_record.name +
+                    "\" fits to the traced visibility but cannot fit from shards of it (it "
+                    "does not declare can_fit_distributed()): bake it with prt bake");
+  if (plan.fit && plan.glossy)
+    throw Error(scene.basis.where,
+                "a distributed bake fits a basis for diffuse transfer only; this scene is "
+                "glossy: bake it with prt bake");
+  if (!per_vertex_transfer_after_fit(plan))
+    throw Error(scene.basis.where,
+                "a distributed bake needs a transfer each vertex gets alone; this scene's "
+                "couples vertices (bounces, subsurface light or per-channel transfers): bake "
+                "it with prt bake");
+  if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
+  if (options.traced || !options.compress)
+    throw Error("a distributed bake traces and compresses its own shards");
+  if (plan.sparse_terms == 0) {
+    const std::string why = plan.compressor->why_not_distributed();
+    if (!why.empty())
+      throw Error(scene.compressor.where, "compressor \"" + plan.compressor_record.name +
+                                              "\" cannot run distributed: it " + why);
+  }
+}
+
+}  // namespace
+
+BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
+              StageTimes& times) {
+  Stopwatch clock;
+  const BakePlan plan = plan_bake(scene, registry);
+  times.add("load plug-ins", clock.seconds());
+  return bake(scene, plan, options, times);
+}
+
+BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
+              StageTimes& times) {
+  Stopwatch clock;
+  BakeData data;
+  data.mesh = scene.load_mesh();
+  times.add("load mesh", clock.seconds());
+
+  clock = Stopwatch();
+  const DirectionSet set = scene.directions();
+  times.add("directions", clock.seconds());
+
+  const Communicator& comm = options.comm ? *options.comm : solo();
+  const bool distributed = comm.size() > 1;
+  if (distributed) require_distributable(scene, plan, options);
+  const Eigen::Index vertices = static_cast<Eigen::Index>(data.mesh.vertex_count());
+  const Distribution shard = distributed
+                                 ? Distribution{&comm, shard_of(vertices, comm.rank(), comm.size())}
+                                 : Distribution::whole_signal(vertices);
+  Distribution encode_where = shard;  // the compressor keeps its state in the checkpoint
+  encode_where.checkpoint = options.checkpoint;
+  encode_where.checkpoint_seconds = options.checkpoint_seconds;
+  const bool on_disk = transfer_on_disk(plan, data.mesh, shard.shard.rows(), options);
+  if (!distributed)
+    require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
+  std::uint64_t rays_cast = 0;
+  TransferSignal transfer =
+      distributed
+          ? (plan.fit ? fitted_shard_transfer(plan, data.mesh, set, options, times, rays_cast,
+                                              shard.shard, comm, on_disk)
+                      : shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard,
+                                       comm, on_disk))
+          : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
+                                  plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
+
+  clock = Stopwatch();
+  // Compression minimises the error of what is rendered (after a fit: the
+  // fitted basis's metric).
+  const RenderedMetric metric = rendered_metric(plan);
+  data.compressed =
+      options.compress || plan.sparse_terms > 0
+          ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, metric, encode_where)
+          : exact_form(transfer);
+  const double encode_seconds = clock.seconds();
+  times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
+  const CompressionReport report =
+      measure(transfer, data.compressed, &data.mesh, encode_seconds, shard, &metric);
+  if (distributed && comm.rank() != 0) return {};  // rank 0 holds the bake
+  record(report, data.metrics);
+  std::string text = report.text();
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  options.message(text);
+  if (distributed) {  // the file gets the other ranks' rows from their slabs as it is written
+    data.transfer.kind = transfer.kind;
+    data.transfer.exit_rows = transfer.exit_rows;
+    data.transfer.channel_groups = transfer.channel_groups;
+    data.transfer.group_of_channel = transfer.group_of_channel;
+    auto own = std::make_shared<const TransferSignal>(std::move(transfer));
+    data.streamed_transfer =
+        plan.fit ? kept_shard_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
+                                       comm.size(), std::move(own))
+                 : kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
+                                 options.slab_vertices, std::move(own));
+  } else {  // in memory, or in its file (write_bake reads it from there)
+    data.transfer = std::move(transfer);
+  }
+
+  data.scene_file = scene.file.string();
+  data.scene_text = scene.text;
+  data.transport = transport_description(scene, set);
+  data.basis = plan.basis_record;
+  data.compressor = plan.compressor_record;
+  if (!options.compress && plan.sparse_terms == 0) data.compressor = {"exact", "", ""};
+  data.albedo = scene.albedo();
+  data.material = scene.material_description();
+  data.bounces = plan.bounces;
+  data.subsurface = plan.subsurface;
+  data.basis_state = plan.basis->save();
+  if (plan.glossy) {
+    data.exit = plan.exit_record;
+    data.exit_state = plan.exit->save();
+  }
+  data.metrics["rays_cast"] = static_cast<double>(rays_cast);
+  data.metrics["squared_error"] = report.squared_error;
+  data.metrics["stored_floats"] = data.compressed.stored_floats();
+  return data;
+}
+
+TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options) {
+  const Mesh mesh = scene.load_mesh();
+  const DirectionSet set = scene.directions();
+  TransportOptions transport;
+  transport.shadowed = scene.transport.get_bool("shadowed");
+  transport.keep_visibility = true;
+  transport.keep_hits = scene.transport.get_int("bounces") > 0;
+  Progress progress("trace", double(mesh.vertex_count()), transport.shadowed ? "rays" : "",
+                    options.quiet);
+  return diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);
+}
+
+BakeData bake_to_file(const SceneSpec& scene, const BakePlan& plan, const BakeTarget& target,
+                      RunOptions options, StageTimes& times) {
+  const Communicator& comm = options.comm ? *options.comm : solo();
+  const bool root = comm.rank() == 0;
+  if (root) {
+    check_output(target.file, scene.input_files(), target.force);
+    if (target.restart) CheckpointStore::discard(target.file.path);
+  }
+  // Every rank hashes its own scene, plug-ins and mesh file: a rank whose
+  // inputs differ from rank 0's is refused when it opens the checkpoint.
+  const std::string key = bake_key(scene, plan);
+  // Rank 0 makes (or checks) the folder, and holds its lock, before the
+  // others open it.
+  std::optional<CheckpointStore> checkpoint;
+  if (root) {
+    checkpoint.emplace(target.file.path, key, target.description);
+    checkpoint->remove_temporaries();
+  }
+  comm.barrier();
+  if (!root) checkpoint.emplace(target.file.path, key, "", false);
+  options.checkpoint = &*checkpoint;
+  BakeData data;
+  try {
+    data = bake(scene, plan, options, times);
+  } catch (...) {
+    if (root && checkpoint->parts().empty()) checkpoint->remove();  // nothing to resume: no litter
+    throw;
+  }
+  if (root) {
+    Stopwatch clock;
+    write_bake(target.file.path, data);
+    times.add("write bake file", clock.seconds());
+  }
+  comm.barrier();  // every rank is done with the checkpoint
+  if (root) checkpoint->remove();
+  return data;
+}
+
+}  // namespace prt

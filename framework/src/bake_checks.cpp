@@ -1,0 +1,139 @@
+// Checks that a bake file fits the scene and plug-ins that read it, and the
+// bases a bake makes from its own plug-in records.
+#include "prt/bake_checks.hpp"
+
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "coupled_slabs.hpp"
+#include "kept_state.hpp"
+#include "prt/basis.hpp"
+#include "prt/basis_metric.hpp"
+#include "prt/bounce_passes.hpp"
+#include "prt/checkpoint.hpp"
+#include "prt/compressor.hpp"
+#include "prt/environment.hpp"
+#include "prt/glossy.hpp"
+#include "prt/glossy_interreflection.hpp"
+#include "prt/ground_truth.hpp"
+#include "prt/interreflection.hpp"
+#include "prt/log.hpp"
+#include "prt/memory.hpp"
+#include "prt/progress.hpp"
+#include "prt/rendered_metric.hpp"
+#include "prt/renderer.hpp"
+#include "prt/row_file.hpp"
+#include "prt/subsurface.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+namespace {
+
+void check_plugin_matches(const PluginRecord& baked, const PluginChoice& wanted, const char* role) {
+  const std::string parameters = wanted.params.describe();
+  if (same_plugin(baked.name, baked.parameters, wanted.name, parameters)) return;
+  auto first_line = [](const std::string& text) { return text.substr(0, text.find('\n')); };
+  throw Error(wanted.where, std::string("the bake file was made with ") + role + " \"" +
+                                baked.name + "\" (" + first_line(baked.parameters) +
+                                "), but the scene asks for \"" + wanted.name + "\" (" +
+                                first_line(parameters) + "); bake again");
+}
+
+}  // namespace
+
+void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
+  const std::string material = scene.material_description();
+  const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  if (data.material != material || data.bounces != bounces ||
+      data.subsurface != scene.material.get_bool("subsurface") ||
+      data.transfer.glossy() != scene.glossy())
+    throw Error(scene.material.location(),
+                "the bake file was made for material \"" + data.material + "\" with " +
+                    std::to_string(data.bounces) + " bounces" +
+                    (data.subsurface ? " and subsurface" : "") + ", but the scene asks for \"" +
+                    material + "\" with " + std::to_string(bounces) + " bounces; bake again");
+  check_plugin_matches(data.basis, scene.basis, "basis");
+  if (scene.glossy()) check_plugin_matches(data.exit, scene.exit, "exit basis");
+}
+
+void check_bake_dimension(const BakeData& data, const Basis& basis) {
+  const Eigen::Index expected =
+      Eigen::Index(basis.size()) * data.transfer.exit_rows * data.transfer.channel_groups;
+  if (data.transfer.dimension() != expected)
+    throw Error(data.scene_file + ": the bake's transfer has " +
+                std::to_string(data.transfer.dimension()) + " columns, but basis \"" +
+                data.basis.name + "\" has " + std::to_string(basis.size()) + " coefficients" +
+                (data.transfer.glossy()
+                     ? " x " + std::to_string(data.transfer.exit_rows) + " exit rows"
+                     : std::string()) +
+                (data.transfer.channel_groups > 1
+                     ? " x " + std::to_string(data.transfer.channel_groups) + " channel transfers"
+                     : std::string()) +
+                "; the bake file does not match its plug-ins (bake again)");
+}
+
+namespace {
+
+// A bake's basis made again from its plug-in record ("key = value" lines, as
+// Params::describe writes them) and its saved state: what re-compressing a
+// bake file needs, without its scene's mesh or map (a bake may travel alone).
+std::shared_ptr<Basis> basis_of_record(const PluginRecord& record, const BasisState& state,
+                                       PluginRegistry& registry, const std::string& role) {
+  const SourceLocation where{"the bake's " + role + " \"" + record.name + "\""};
+  Params params(where);
+  const auto trim = [](std::string text) {
+    const auto first = text.find_first_not_of(" \t"), last = text.find_last_not_of(" \t");
+    return first == std::string::npos ? std::string() : text.substr(first, last - first + 1);
+  };
+  std::istringstream lines(record.parameters);
+  for (std::string line; std::getline(lines, line);) {
+    const auto equals = line.find('=');
+    if (trim(line).empty()) continue;
+    if (equals == std::string::npos) throw Error(where, "unreadable parameter \"" + line + "\"");
+    parse_assignment(trim(line.substr(0, equals)) + "=" + trim(line.substr(equals + 1)), where,
+                     params);
+  }
+  auto basis = registry.create<Basis>(record.name, params, where);
+  basis->load(state);
+  return basis;
+}
+
+}  // namespace
+
+RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry) {
+  std::shared_ptr<Basis> basis;
+  try {
+    basis = basis_of_record(data.basis, data.basis_state, registry, "basis");
+  } catch (const Error& e) {  // e.g. a basis written in Python, absent from this process
+    log_warning(std::string(e.what()) +
+                "; without the bake's basis its transfer is compressed in coefficient space");
+    return {};
+  }
+  check_bake_dimension(data, *basis);
+  if (!data.transfer.glossy()) return RenderedMetric(*basis, nullptr);
+  const auto exit = basis_of_record(data.exit, data.exit_state, registry, "exit basis");
+  if (exit->size() != data.transfer.exit_rows)
+    throw Error("the bake's transfer has " + std::to_string(data.transfer.exit_rows) +
+                " exit rows, but its exit basis \"" + data.exit.name + "\" has " +
+                std::to_string(exit->size()) + " functions");
+  return RenderedMetric(*basis, exit.get());
+}
+
+void check_encoding(const BakeData& data, const CompressedTransfer& transfer,
+                    const std::string& what, bool finite) {
+  transfer.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()), finite);
+  const Eigen::Index columns =
+      data.transfer.dimension() > 0 ? data.transfer.dimension() : data.compressed.dimension;
+  if (transfer.dimension != columns)
+    throw Error(what + ": the encoding has " + std::to_string(transfer.dimension) +
+                " coefficients per vertex; this bake's transfer has " + std::to_string(columns));
+}
+
+}  // namespace prt

@@ -1,0 +1,67 @@
+// How a run reports (progress, messages) and the stage timings it collects.
+#include "prt/run_options.hpp"
+
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "coupled_slabs.hpp"
+#include "kept_state.hpp"
+#include "prt/basis.hpp"
+#include "prt/basis_metric.hpp"
+#include "prt/bounce_passes.hpp"
+#include "prt/checkpoint.hpp"
+#include "prt/compressor.hpp"
+#include "prt/environment.hpp"
+#include "prt/glossy.hpp"
+#include "prt/glossy_interreflection.hpp"
+#include "prt/ground_truth.hpp"
+#include "prt/interreflection.hpp"
+#include "prt/log.hpp"
+#include "prt/memory.hpp"
+#include "prt/progress.hpp"
+#include "prt/rendered_metric.hpp"
+#include "prt/renderer.hpp"
+#include "prt/row_file.hpp"
+#include "prt/subsurface.hpp"
+#include "prt/transport.hpp"
+
+namespace prt {
+
+std::string StageTimes::table() const {
+  std::string out;
+  double total = 0;
+  char line[160];
+  for (const auto& [name, seconds] : stages) {
+    std::snprintf(line, sizeof line, "  %-28s %9.3f s\n", name.c_str(), seconds);
+    out += line;
+    total += seconds;
+  }
+  std::snprintf(line, sizeof line, "  %-28s %9.3f s\n", "total", total);
+  return out + line;
+}
+
+void RunOptions::message(const std::string& text) const {
+  if (log)
+    log(text);
+  else if (!quiet)
+    log_info(text);
+}
+
+void RunOptions::warn(const std::string& text) const {
+  if (log)
+    log("warning: " + text);
+  else
+    log_warning(text);
+}
+
+double RunOptions::budget() const {
+  return memory_budget > 0 ? memory_budget : kDefaultMemoryFraction * physical_memory();
+}
+
+}  // namespace prt
