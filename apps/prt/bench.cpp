@@ -163,6 +163,242 @@ double median_seconds(int runs, const std::function<void()>& work) {
   return t[t.size() / 2];
 }
 
+namespace {
+
+// The cartesian product of the swept values.
+std::vector<std::vector<Override>> configurations(const std::vector<std::string>& sweeps) {
+  std::vector<std::vector<Override>> configs{{}};
+  for (const std::string& sweep : sweeps) {
+    std::vector<std::vector<Override>> next;
+    for (const auto& config : configs)
+      for (const Override& value : parse_sweep(sweep)) {
+        next.push_back(config);
+        next.back().push_back(value);
+      }
+    configs = std::move(next);
+  }
+  return configs;
+}
+
+// Configurations already in results.jsonl (a line cut by a kill is not a
+// finished configuration: it runs again).
+std::set<std::string> finished_labels(const fs::path& results) {
+  std::set<std::string> done;
+  if (std::ifstream in(results); in)
+    for (std::string line; std::getline(in, line);) {
+      const auto record = nlohmann::json::parse(line, nullptr, false);
+      if (record.is_object() && record.contains("label") && record["label"].is_string())
+        done.insert(record["label"].get<std::string>());
+    }
+  return done;
+}
+
+// Work shared by configurations that differ only in keys it does not read.
+struct Reused {
+  std::map<std::string, TransportResult> traces;
+  std::map<std::string, std::pair<BakeData, double>> projections;  // transfer, seconds
+  std::map<std::string, std::vector<Rendered>> truths;
+  // Ground truth under each light's band-limited reconstruction, per light
+  // basis setting: the error budget's middle term.
+  std::map<std::string, std::vector<Eigen::MatrixX3f>> limited_truths;
+};
+
+// One configuration's bake: rays and projection reused, compression its own.
+struct Baked {
+  BakeData data;
+  double trace_seconds = 0, project_seconds = 0, encode_seconds = 0;
+  double se = 0, bytes = 0, file_bytes = 0;
+};
+
+Baked bake_configuration(const SceneSpec& scene, const BakePlan& plan,
+                         const std::vector<Override>& config, Reused& reused,
+                         const fs::path& out) {
+  static const std::set<std::string> trace_sections{"mesh", "transport"};
+  static const std::set<std::string> shading_sections{"compressor", "camera",   "renderer",
+                                                      "output",     "lighting", "ground_truth"};
+  Baked baked;
+  // 1. Rays, once per mesh and transport setting.
+  const std::string trace_key = key_of(config, trace_sections);
+  if (!reused.traces.count(trace_key))
+    reused.traces.emplace(trace_key, trace_scene(scene, RunOptions{true}));
+  const TransportResult& traced = reused.traces.at(trace_key);
+  baked.trace_seconds = traced.trace_seconds;
+  // 2. Projection (basis, material, bounces), once per such setting: a bake
+  //    with the exact compressor over the stored visibility.
+  const std::string projection_key = key_of(config, shading_sections, true);
+  if (!reused.projections.count(projection_key)) {
+    RunOptions reuse{true, &traced};
+    reuse.compress = false;
+    StageTimes times;
+    Stopwatch clock;
+    BakeData data = bake(scene, plan, reuse, times);
+    reused.projections.emplace(projection_key, std::pair{std::move(data), clock.seconds()});
+  }
+  const auto& [exact_data, project_seconds] = reused.projections.at(projection_key);
+  baked.project_seconds = project_seconds;
+  // 3. Compression.
+  baked.data = exact_data;
+  BakeData& data = baked.data;
+  Stopwatch clock;
+  // An exact compressor keeps the bake's form (sparse for bases that approximate).
+  const RenderedMetric metric = rendered_metric(plan);  // encodes and measures in it
+  if (!plan.compressor->exact())
+    data.compressed =
+        compress_stage(plan, data.transfer, data.mesh, scene.compressor.where, metric);
+  baked.encode_seconds = clock.seconds();
+  data.compressor = plan.compressor_record;
+  const std::vector<double> errors = vertex_errors(data.transfer, data.compressed, &metric);
+  baked.se = std::accumulate(errors.begin(), errors.end(), 0.0);
+  const fs::path bake_file = out / "bake.h5";
+  write_bake(bake_file, data);
+  baked.file_bytes = double(fs::file_size(bake_file));
+  // What rendering needs: the compressed form (the file also keeps the exact transfer).
+  baked.bytes = 4.0 * data.compressed.stored_floats();
+  fs::remove(bake_file);
+  return baked;
+}
+
+// Errors against the ground truth, averaged over the lights, and the images.
+struct Measured {
+  double relight_seconds = 0, gpu_seconds = 0;
+  double rms = 0, p99 = 0, max_error = 0, image_error = 0;
+  double truncation_rms = 0, projection_rms = 0, compression_rms = 0;  // the error budget
+};
+
+// The images of light 0: the configuration's, the truth's, their difference.
+void write_images(const Image& image, const Image& truth_image, const SceneSpec& scene,
+                  const fs::path& out, const std::string& label) {
+  const float exposure = static_cast<float>(scene.camera.get_real("exposure"));
+  write_png(image, out / "images" / (stem_of(label) + ".png"), exposure);
+  write_png(truth_image, out / "images" / "ground_truth.png", exposure);
+  Image difference = image;
+  for (std::size_t k = 0; k < difference.rgb.size(); ++k)
+    difference.rgb[k] = 4.f * std::abs(image.rgb[k] - truth_image.rgb[k]);
+  write_png(difference, out / "images" / (stem_of(label) + ".error.png"), exposure);
+}
+
+// A fresh GPU renderer's draw time (each configuration uploads its own data).
+double gpu_draw_seconds(PluginRegistry& registry, const RenderInput& input) {
+  Params params;
+  params.set("background", false);
+  auto gpu = registry.create<Renderer>("opengl", params);
+  gpu->render(input);  // uploads, compiles
+  gpu->render(input);
+  return gpu->statistics().at("draw_seconds");
+}
+
+// 4. Lights: the scene's and rotated copies; relight time, errors, images.
+Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec& scene,
+                        const BakeData& data, const std::vector<Override>& config,
+                        Reused& reused, const fs::path& out, const std::string& label) {
+  const Relighting relighting(scene, data, context.registry);
+  Environment environment = scene.load_environment();
+  const Eigen::Matrix3d scene_rotation = environment.rotation();
+  const Camera camera = scene.make_camera(data.mesh);
+  const std::string truth_key =
+      key_of(config, {"mesh", "material", "lighting", "camera", "ground_truth", "transport"});
+  const std::string limited_key =
+      truth_key + " " + key_of(config, {"basis", "exit", "transport", "material"});
+  auto cpu = context.registry.create<Renderer>(scene.renderer.name, scene.renderer.params,
+                                               scene.renderer.where);
+  const CompressedTransfer exact_transfer = exact_form(data.transfer);  // for the budget
+  const RelightKernel kernel = relighting.prepare(data.compressed);     // laid out once
+  const RelightKernel exact_kernel = relighting.prepare(exact_transfer);
+  const RunOptions quiet{true};
+  Measured m;
+  for (int light = 0; light < args.lights; ++light) {
+    environment.set_rotation(rotation_about_up(360.0 * light / args.lights) * scene_rotation);
+    const Eigen::MatrixX3d l = relighting.light(environment);
+    Relit relit;
+    m.relight_seconds += median_seconds(3, [&] { relit = relighting.relight(kernel, l, camera); });
+    auto& truth_list = reused.truths[truth_key];
+    if (static_cast<int>(truth_list.size()) <= light) {
+      SceneSpec rotated = scene;
+      rotated.lighting.set("rotation",
+                           scene.lighting.get_real("rotation") + 360.0 * light / args.lights);
+      StageTimes times;
+      truth_list.push_back(render_ground_truth(rotated, data.mesh, context.registry, quiet, times));
+    }
+    const Rendered& truth = truth_list[light];
+    const ErrorStats e = vertex_error(relit.vertex_radiance, truth.vertex_radiance);
+    m.rms += e.rms / args.lights, m.p99 += e.p99 / args.lights;
+    // Error budget: light truncation, transfer projection, compression.
+    auto& limited_list = reused.limited_truths[limited_key];
+    if (static_cast<int>(limited_list.size()) <= light)
+      limited_list.push_back(ground_truth_vertices(
+          scene, data.mesh, environment.band_limited(relighting.basis(), l), camera, quiet));
+    const Eigen::MatrixX3f exact = relighting.relight(exact_kernel, l, camera).vertex_radiance;
+    m.truncation_rms += vertex_error(limited_list[light], truth.vertex_radiance).rms / args.lights;
+    m.projection_rms += vertex_error(exact, limited_list[light]).rms / args.lights;
+    m.compression_rms += vertex_error(relit.vertex_radiance, exact).rms / args.lights;
+    m.max_error = std::max(m.max_error, e.max);
+    RenderInput input = relighting.input(data.compressed, relit, l, camera);
+    input.background = nullptr;
+    const Image image = cpu->render(input);
+    RenderInput truth_input;
+    truth_input.mesh = &data.mesh;
+    truth_input.vertex_radiance = &truth.vertex_radiance;
+    truth_input.camera = camera;
+    const Image truth_image = cpu->render(truth_input);
+    m.image_error += mean_absolute_difference(image, truth_image) / args.lights;
+    if (light != 0) continue;
+    write_images(image, truth_image, scene, out, label);
+    if (args.gpu) m.gpu_seconds = gpu_draw_seconds(context.registry, input);
+  }
+  m.relight_seconds /= args.lights;
+  return m;
+}
+
+nlohmann::ordered_json result_line(const std::string& label, std::size_t index, const Baked& b,
+                                   const Measured& m, int lights) {
+  nlohmann::ordered_json record;
+  record["label"] = label;
+  record["image"] = stem_of(label);
+  record["index"] = index;
+  record["trace_seconds"] = b.trace_seconds;
+  record["project_seconds"] = b.project_seconds;
+  record["encode_seconds"] = b.encode_seconds;
+  record["bake_seconds"] = b.trace_seconds + b.project_seconds + b.encode_seconds;
+  record["bytes"] = b.bytes;
+  record["file_bytes"] = b.file_bytes;
+  record["bytes_per_vertex"] = b.bytes / double(b.data.mesh.vertex_count());
+  record["relight_seconds"] = m.relight_seconds;
+  record["gpu_frame_seconds"] = m.gpu_seconds;
+  record["transfer_se"] = b.se;
+  record["rms"] = m.rms;
+  record["light_truncation_rms"] = m.truncation_rms;
+  record["projection_rms"] = m.projection_rms;
+  record["compression_rms"] = m.compression_rms;
+  record["p99"] = m.p99;
+  record["max"] = m.max_error;
+  record["image_error"] = m.image_error;
+  record["lights"] = lights;
+  return record;
+}
+
+// CSV and JSON of every configuration, in sweep order; then the report.
+void write_summaries(const fs::path& out, const fs::path& results, const SceneSpec& base,
+                     bool report) {
+  std::vector<nlohmann::ordered_json> records;
+  if (std::ifstream in(results); in)
+    for (std::string line; std::getline(in, line);) {
+      auto record = nlohmann::ordered_json::parse(line, nullptr, false);
+      if (record.is_object()) records.push_back(std::move(record));
+    }
+  write_text_file(out / "results.json", nlohmann::ordered_json(records).dump(2) + "\n");
+  write_csv(records, out / "results.csv");
+  std::cout << "results: " << (out / "results.json").string() << " (" << records.size()
+            << " configurations)\n";
+  if (!report) return;
+  const std::string command =
+      "/usr/bin/python3 " + (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
+      " " + out.string() + " \"" + base.file.filename().string() + "\"";
+  if (std::system(command.c_str()) != 0) throw Error("the report script failed: " + command);
+  std::cout << "report: " << (out / "report.md").string() << "\n";
+}
+
+}  // namespace
+
 int bench(Context& context, const BenchArgs& args) {
   Progress::set_enabled(!context.quiet);
   const SceneSpec base = SceneSpec::load(args.scene, context.registry);
@@ -172,18 +408,8 @@ int bench(Context& context, const BenchArgs& args) {
     throw Error(out.string() + ": the bench output folder exists and is not a directory");
   fs::create_directories(out / "images");
 
-  // The cartesian product of the swept values.
-  std::vector<std::vector<Override>> configs{{}};
-  for (const std::string& sweep : args.sweeps) {
-    std::vector<std::vector<Override>> next;
-    for (const auto& config : configs)
-      for (const Override& value : parse_sweep(sweep)) {
-        next.push_back(config);
-        next.back().push_back(value);
-      }
-    configs = std::move(next);
-  }
-  // Validate every configuration before any work; the plans serve compression below.
+  const std::vector<std::vector<Override>> configs = configurations(args.sweeps);
+  // Validate every configuration before any work; each plan serves its bake.
   std::vector<SceneSpec> scenes;
   std::vector<BakePlan> plans;
   for (const auto& config : configs) {
@@ -198,197 +424,28 @@ int bench(Context& context, const BenchArgs& args) {
 
   // Resume: configurations already in results.jsonl are skipped.
   const fs::path results = out / "results.jsonl";
-  std::set<std::string> done;
-  if (std::ifstream in(results); in)
-    for (std::string line; std::getline(in, line);) {
-      // A line cut by a kill is not a finished configuration: it runs again.
-      const auto record = nlohmann::json::parse(line, nullptr, false);
-      if (record.is_object() && record.contains("label") && record["label"].is_string())
-        done.insert(record["label"].get<std::string>());
-    }
+  const std::set<std::string> done = finished_labels(results);
   std::ofstream log(results, std::ios::app);
-
-  const std::set<std::string> trace_sections{"mesh", "transport"};
-  const std::set<std::string> shading_sections{"compressor", "camera",   "renderer",
-                                               "output",     "lighting", "ground_truth"};
-  std::map<std::string, TransportResult> traces;
-  std::map<std::string, std::pair<BakeData, double>> projections;  // transfer, seconds
-  std::map<std::string, std::vector<Rendered>> truths;
-  // Ground truth under each light's band-limited reconstruction, per light
-  // basis setting: the error budget's middle term.
-  std::map<std::string, std::vector<Eigen::MatrixX3f>> limited_truths;
-
+  Reused reused;
   Progress progress("bench", double(configs.size()), "", context.quiet);
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const std::string label = label_of(configs[i]);
-    if (done.count(label)) {
-      progress.add(1);
-      continue;
+    if (!done.count(label)) {
+      const Baked baked = bake_configuration(scenes[i], plans[i], configs[i], reused, out);
+      const Measured measured =
+          measure_lights(context, args, scenes[i], baked.data, configs[i], reused, out, label);
+      log << result_line(label, i, baked, measured, args.lights).dump() << "\n" << std::flush;
+      // A full disk: stop here; the lines before this one are whole, and the
+      // next run resumes after them (a cut last line is run again).
+      if (!log)
+        throw Error(results.string() +
+                    ": cannot append a result (a full disk?); the configurations before it are "
+                    "kept, and the same command resumes after them");
     }
-    SceneSpec& scene = scenes[i];
-    RunOptions quiet{true};
-    // 1. Rays, once per mesh and transport setting.
-    const std::string trace_key = key_of(configs[i], trace_sections);
-    Stopwatch clock;
-    if (!traces.count(trace_key)) traces.emplace(trace_key, trace_scene(scene, quiet));
-    const TransportResult& traced = traces.at(trace_key);
-    const double trace_seconds = traced.trace_seconds;
-    // 2. Projection (basis, material, bounces), once per such setting: a bake
-    //    with the exact compressor over the stored visibility.
-    const std::string projection_key = key_of(configs[i], shading_sections, true);
-    if (!projections.count(projection_key)) {
-      RunOptions reuse{true, &traced};
-      reuse.compress = false;
-      StageTimes times;
-      clock = Stopwatch();
-      BakeData data = bake(scene, context.registry, reuse, times);
-      projections.emplace(projection_key, std::pair{std::move(data), clock.seconds()});
-    }
-    auto& [exact_data, project_seconds] = projections.at(projection_key);
-    // 3. Compression.
-    BakeData data = exact_data;
-    const BakePlan& plan = plans[i];
-    clock = Stopwatch();
-    // An exact compressor keeps the bake's form (sparse for bases that approximate).
-    const RenderedMetric metric = rendered_metric(plan);  // encodes and measures in it
-    if (!plan.compressor->exact())
-      data.compressed =
-          compress_stage(plan, data.transfer, data.mesh, scene.compressor.where, metric);
-    const double encode_seconds = clock.seconds();
-    data.compressor = plan.compressor_record;
-    const std::vector<double> errors = vertex_errors(data.transfer, data.compressed, &metric);
-    const double se = std::accumulate(errors.begin(), errors.end(), 0.0);
-    const fs::path bake_file = out / "bake.h5";
-    write_bake(bake_file, data);
-    const double file_bytes = double(fs::file_size(bake_file));
-    // What rendering needs: the compressed form (the file also keeps the exact transfer).
-    const double bytes = 4.0 * data.compressed.stored_floats();
-    fs::remove(bake_file);
-
-    // 4. Lights: the scene's and rotated copies; relight time, errors, images.
-    const Relighting relighting(scene, data, context.registry);
-    Environment environment = scene.load_environment();
-    const Eigen::Matrix3d scene_rotation = environment.rotation();
-    const Camera camera = scene.make_camera(data.mesh);
-    const std::string truth_key =
-        key_of(configs[i], {"mesh", "material", "lighting", "camera", "ground_truth", "transport"});
-    double relight_seconds = 0, gpu_seconds = 0;
-    double rms = 0, p99 = 0, max_error = 0, image_error = 0;
-    double truncation_rms = 0, projection_rms = 0, compression_rms = 0;  // the error budget
-    const std::string limited_key =
-        truth_key + " " + key_of(configs[i], {"basis", "exit", "transport", "material"});
-    auto cpu = context.registry.create<Renderer>(scene.renderer.name, scene.renderer.params,
-                                                 scene.renderer.where);
-    const CompressedTransfer exact_transfer = exact_form(data.transfer);  // for the budget
-    const RelightKernel kernel = relighting.prepare(data.compressed);     // laid out once
-    const RelightKernel exact_kernel = relighting.prepare(exact_transfer);
-    for (int light = 0; light < args.lights; ++light) {
-      environment.set_rotation(rotation_about_up(360.0 * light / args.lights) * scene_rotation);
-      const Eigen::MatrixX3d l = relighting.light(environment);
-      Relit relit;
-      relight_seconds += median_seconds(3, [&] { relit = relighting.relight(kernel, l, camera); });
-      auto& truth_list = truths[truth_key];
-      if (static_cast<int>(truth_list.size()) <= light) {
-        SceneSpec rotated = scene;
-        rotated.lighting.set("rotation",
-                             scene.lighting.get_real("rotation") + 360.0 * light / args.lights);
-        StageTimes times;
-        truth_list.push_back(
-            render_ground_truth(rotated, data.mesh, context.registry, quiet, times));
-      }
-      const Rendered& truth = truth_list[light];
-      const ErrorStats e = vertex_error(relit.vertex_radiance, truth.vertex_radiance);
-      rms += e.rms / args.lights, p99 += e.p99 / args.lights;
-      // Error budget: light truncation, transfer projection, compression.
-      auto& limited_list = limited_truths[limited_key];
-      if (static_cast<int>(limited_list.size()) <= light)
-        limited_list.push_back(ground_truth_vertices(
-            scene, data.mesh, environment.band_limited(relighting.basis(), l), camera, quiet));
-      const Eigen::MatrixX3f exact = relighting.relight(exact_kernel, l, camera).vertex_radiance;
-      truncation_rms += vertex_error(limited_list[light], truth.vertex_radiance).rms / args.lights;
-      projection_rms += vertex_error(exact, limited_list[light]).rms / args.lights;
-      compression_rms += vertex_error(relit.vertex_radiance, exact).rms / args.lights;
-      max_error = std::max(max_error, e.max);
-      RenderInput input = relighting.input(data.compressed, relit, l, camera);
-      input.background = nullptr;
-      const Image image = cpu->render(input);
-      RenderInput truth_input;
-      truth_input.mesh = &data.mesh;
-      truth_input.vertex_radiance = &truth.vertex_radiance;
-      truth_input.camera = camera;
-      const Image truth_image = cpu->render(truth_input);
-      image_error += mean_absolute_difference(image, truth_image) / args.lights;
-      if (light == 0) {
-        const float exposure = static_cast<float>(scene.camera.get_real("exposure"));
-        write_png(image, out / "images" / (stem_of(label) + ".png"), exposure);
-        write_png(truth_image, out / "images" / "ground_truth.png", exposure);
-        Image difference = image;
-        for (std::size_t k = 0; k < difference.rgb.size(); ++k)
-          difference.rgb[k] = 4.f * std::abs(image.rgb[k] - truth_image.rgb[k]);
-        write_png(difference, out / "images" / (stem_of(label) + ".error.png"), exposure);
-        if (args.gpu) {  // a fresh renderer: each configuration uploads its own data
-          Params params;
-          params.set("background", false);
-          auto gpu = context.registry.create<Renderer>("opengl", params);
-          gpu->render(input);  // uploads, compiles
-          gpu->render(input);
-          gpu_seconds = gpu->statistics().at("draw_seconds");
-        }
-      }
-    }
-    relight_seconds /= args.lights;
-    nlohmann::ordered_json record;
-    record["label"] = label;
-    record["image"] = stem_of(label);
-    record["index"] = i;
-    record["trace_seconds"] = trace_seconds;
-    record["project_seconds"] = project_seconds;
-    record["encode_seconds"] = encode_seconds;
-    record["bake_seconds"] = trace_seconds + project_seconds + encode_seconds;
-    record["bytes"] = bytes;
-    record["file_bytes"] = file_bytes;
-    record["bytes_per_vertex"] = bytes / double(data.mesh.vertex_count());
-    record["relight_seconds"] = relight_seconds;
-    record["gpu_frame_seconds"] = gpu_seconds;
-    record["transfer_se"] = se;
-    record["rms"] = rms;
-    record["light_truncation_rms"] = truncation_rms;
-    record["projection_rms"] = projection_rms;
-    record["compression_rms"] = compression_rms;
-    record["p99"] = p99;
-    record["max"] = max_error;
-    record["image_error"] = image_error;
-    record["lights"] = args.lights;
-    const std::string line = record.dump();
-    log << line << "\n" << std::flush;
-    // A full disk: stop here; the lines before this one are whole, and the
-    // next run resumes after them (a cut last line is run again).
-    if (!log)
-      throw Error(results.string() +
-                  ": cannot append a result (a full disk?); the configurations before it are "
-                  "kept, and the same command resumes after them");
     progress.add(1);
   }
   log.close();
-
-  // CSV and JSON of every configuration, in sweep order.
-  std::vector<nlohmann::ordered_json> records;
-  if (std::ifstream in(results); in)
-    for (std::string line; std::getline(in, line);) {
-      auto record = nlohmann::ordered_json::parse(line, nullptr, false);
-      if (record.is_object()) records.push_back(std::move(record));
-    }
-  write_text_file(out / "results.json", nlohmann::ordered_json(records).dump(2) + "\n");
-  write_csv(records, out / "results.csv");
-  std::cout << "results: " << (out / "results.json").string() << " (" << records.size()
-            << " configurations)\n";
-  if (!args.no_report) {
-    const std::string command =
-        "/usr/bin/python3 " + (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
-        " " + out.string() + " \"" + base.file.filename().string() + "\"";
-    if (std::system(command.c_str()) != 0) throw Error("the report script failed: " + command);
-    std::cout << "report: " << (out / "report.md").string() << "\n";
-  }
+  write_summaries(out, results, base, !args.no_report);
   return 0;
 }
 

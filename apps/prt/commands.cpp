@@ -77,17 +77,66 @@ struct Comparison {
 void print_error_budget(const Comparison& with, const Eigen::MatrixX3f& truth,
                         const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times);
 
+// The scene's renderer, or the one --renderer names with its --renderer-param values.
+void override_renderer(Context& context, const RenderArgs& args, SceneSpec& scene) {
+  if (args.renderer.empty()) return;
+  PluginChoice choice{args.renderer, SourceLocation{"--renderer"}, Params({"--renderer"})};
+  for (std::size_t i = 0; i < args.renderer_parameters.size(); ++i)
+    parse_parameter(args.renderer_parameters[i], i, choice.params);
+  choice.params.validate(
+      context.registry.find(PluginKind::renderer, choice.name, choice.where).schema());
+  scene.renderer = std::move(choice);
+}
+
+// prt render --compare: the render against the Monte Carlo ground truth, then
+// what each part of the approximation costs.
+void compare_with_truth(Context& context, const SceneSpec& scene, const BakeData& data,
+                        const Rendered& result, StageTimes& times) {
+  const Rendered truth =
+      render_ground_truth(scene, data.mesh, context.registry, {context.quiet}, times);
+  const ErrorStats e = vertex_error(result.vertex_radiance, truth.vertex_radiance);
+  std::printf(
+      "error against ground truth (%lld samples/vertex): RMS per vertex %.6g (relative %.4f),"
+      " 99th percentile %.6g, max %.6g\n",
+      static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms, e.p99,
+      e.max);
+  const DarkPixels dark = count_dark_pixels(
+      result.image, truth.image, static_cast<float>(scene.camera.get_real("exposure")));
+  std::printf(
+      "pixels darker than half the ground truth (of %lld with ground-truth luminance > 40 of "
+      "255 at the scene's exposure): %lld\n",
+      dark.lit, dark.dark);
+  // One relighting, light vector and camera for every comparison below.
+  const Relighting relighting(scene, data, context.registry);
+  const Environment environment = scene.load_environment();
+  const Eigen::MatrixX3d light = relighting.light(environment);
+  const Camera camera = scene.make_camera(data.mesh);
+  if (!scene.point_lights.empty()) {  // the nearest-direction rule against its reference
+    Relighting brute(scene, data, context.registry);
+    brute.use_brute_force(256);
+    const Relit reprojected = brute.relight(data.compressed, light, camera);
+    const ErrorStats b = vertex_error(reprojected.vertex_radiance, truth.vertex_radiance);
+    std::printf(
+        "error of brute-force re-projection of the point lights (%s) against the same "
+        "ground truth: RMS per vertex %.6g (relative %.4f)\n",
+        brute.point_light_rule().c_str(), b.rms, b.relative_rms);
+  }
+  if (data.direct.coefficients.size()) {  // what the bounces bring
+    const Relit direct = relighting.relight(exact_form(data.direct), light, camera);
+    const ErrorStats d = vertex_error(direct.vertex_radiance, truth.vertex_radiance);
+    std::printf(
+        "error of the same transfer without its %d bounces (exact, no compression) against "
+        "the same ground truth: RMS per vertex %.6g (relative %.4f)\n",
+        data.bounces, d.rms, d.relative_rms);
+  }
+  print_error_budget({scene, data, relighting, environment, light, camera},
+                     truth.vertex_radiance, result.vertex_radiance, context, times);
+}
+
 int render(Context& context, const RenderArgs& args) {
   Stopwatch clock;
   SceneSpec scene = SceneSpec::load(args.scene, context.registry);
-  if (!args.renderer.empty()) {
-    PluginChoice choice{args.renderer, SourceLocation{"--renderer"}, Params({"--renderer"})};
-    for (std::size_t i = 0; i < args.renderer_parameters.size(); ++i)
-      parse_parameter(args.renderer_parameters[i], i, choice.params);
-    choice.params.validate(
-        context.registry.find(PluginKind::renderer, choice.name, choice.where).schema());
-    scene.renderer = std::move(choice);
-  }
+  override_renderer(context, args, scene);
   StageTimes times;
   times.add("parse + validate scene", clock.seconds());
   const fs::path output = args.output.empty() ? scene.image_path() : fs::path(args.output);
@@ -105,47 +154,7 @@ int render(Context& context, const RenderArgs& args) {
     const BakeData data = read_bake(bake_file);
     times.add("read bake file", clock.seconds());
     result = render(scene, data, context.registry, times, {context.quiet});
-    if (args.compare) {
-      const Rendered truth =
-          render_ground_truth(scene, data.mesh, context.registry, {context.quiet}, times);
-      const ErrorStats e = vertex_error(result.vertex_radiance, truth.vertex_radiance);
-      std::printf(
-          "error against ground truth (%lld samples/vertex): RMS per vertex %.6g (relative %.4f),"
-          " 99th percentile %.6g, max %.6g\n",
-          static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms,
-          e.p99, e.max);
-      const DarkPixels dark = count_dark_pixels(
-          result.image, truth.image, static_cast<float>(scene.camera.get_real("exposure")));
-      std::printf(
-          "pixels darker than half the ground truth (of %lld with ground-truth luminance > 40 of "
-          "255 at the scene's exposure): %lld\n",
-          dark.lit, dark.dark);
-      // One relighting, light vector and camera for every comparison below.
-      const Relighting relighting(scene, data, context.registry);
-      const Environment environment = scene.load_environment();
-      const Eigen::MatrixX3d light = relighting.light(environment);
-      const Camera camera = scene.make_camera(data.mesh);
-      if (!scene.point_lights.empty()) {  // the nearest-direction rule against its reference
-        Relighting brute(scene, data, context.registry);
-        brute.use_brute_force(256);
-        const Relit reprojected = brute.relight(data.compressed, light, camera);
-        const ErrorStats b = vertex_error(reprojected.vertex_radiance, truth.vertex_radiance);
-        std::printf(
-            "error of brute-force re-projection of the point lights (%s) against the same "
-            "ground truth: RMS per vertex %.6g (relative %.4f)\n",
-            brute.point_light_rule().c_str(), b.rms, b.relative_rms);
-      }
-      if (data.direct.coefficients.size()) {  // what the bounces bring
-        const Relit direct = relighting.relight(exact_form(data.direct), light, camera);
-        const ErrorStats d = vertex_error(direct.vertex_radiance, truth.vertex_radiance);
-        std::printf(
-            "error of the same transfer without its %d bounces (exact, no compression) against "
-            "the same ground truth: RMS per vertex %.6g (relative %.4f)\n",
-            data.bounces, d.rms, d.relative_rms);
-      }
-      print_error_budget({scene, data, relighting, environment, light, camera},
-                         truth.vertex_radiance, result.vertex_radiance, context, times);
-    }
+    if (args.compare) compare_with_truth(context, scene, data, result, times);
   }
   clock = Stopwatch();
   const float exposure =

@@ -88,8 +88,16 @@ std::string transport_text(double error, const char* format, const char* absent)
 // basis replaces [basis] (the light basis); a hemisphere basis replaces [exit]
 // (the exit basis of glossy transfer). Everything is validated here, before
 // any ray: the entry's parameters, its domain, and the bake plan it makes.
-SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet& set,
-                    PluginRegistry& registry, bool& exit_role) {
+struct Entry {
+  BasisSpec spec;
+  SceneSpec scene;
+  BakePlan plan;
+  bool exit_role = false;
+};
+
+Entry entry_for(const SceneSpec& scene, BasisSpec spec, const DirectionSet& set,
+                PluginRegistry& registry) {
+  bool exit_role = false;
   const SourceLocation where = spec.params.location();
   const auto& d = registry.find(PluginKind::basis, spec.name, where);
   // A lattice basis's resolution follows the scene's cube map unless given.
@@ -117,76 +125,62 @@ SceneSpec scene_for(const SceneSpec& scene, BasisSpec& spec, const DirectionSet&
                            "glossy [material] brdf, or list sphere bases)");
   }
   try {
-    plan_bake(out, registry);
+    BakePlan plan = plan_bake(out, registry);
+    return {std::move(spec), std::move(out), std::move(plan), exit_role};
   } catch (const Error& e) {  // already located: name the entry in front
     throw Error(where.file + ": " + e.what());
   }
-  return out;
 }
 
-}  // namespace
+// What the scene's single trace, light, camera and truth give every entry.
+struct Shared {
+  const DirectionSet& set;
+  const TransportResult& traced;
+  const Mesh& mesh;
+  const Environment& environment;
+  const Camera& camera;
+  const Eigen::MatrixX3f& truth;
+};
 
-int compare_bases(Context& context, const CompareArgs& args) {
-  const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
-  if (!args.csv.empty())
-    check_output({args.csv, report_kind(args.csv), "table"}, scene.input_files(), args.force);
-  if (!args.json.empty())
-    check_output({args.json, FileKind::json, "table"}, scene.input_files(), args.force);
-  const DirectionSet set = scene.directions();
-  std::vector<BasisSpec> specs;
-  std::stringstream list(args.bases);
-  for (std::string item; std::getline(list, item, ',');) specs.push_back(parse_spec(item));
-  std::vector<SceneSpec> scenes;
-  std::vector<char> exit_role(specs.size());
-  for (std::size_t i = 0; i < specs.size(); ++i) {
-    bool role = false;
-    scenes.push_back(scene_for(scene, specs[i], set, context.registry, role));
-    exit_role[i] = role;
-  }
+// One entry baked over the shared rays (its basis alone: its own sparse
+// approximation, if any), relit and measured.
+Row measure(Context& context, const Entry& entry, const Shared& shared) {
+  Stopwatch clock;
+  RunOptions reuse{true};
+  reuse.traced = &shared.traced;
+  reuse.compress = false;
+  StageTimes times;
+  const BakeData data = bake(entry.scene, entry.plan, reuse, times);
+  const Relighting relighting(entry.scene, data, context.registry);
+  Row row;
+  row.spec = entry.spec.text;
+  row.seconds = clock.seconds();
+  // The entry's own size: the exit basis's rows, or the light basis's
+  // coefficients (kept terms of a sparse approximation).
+  row.coefficients = entry.exit_role             ? data.transfer.exit_rows
+                     : data.compressed.sparse() ? data.compressed.components
+                                                : relighting.basis().size();
+  row.bytes = 4 * data.compressed.stored_floats();
+  if (!data.transfer.glossy() && data.transfer.channel_groups == 1)  // one transport per vertex
+    row.transport_error =
+        transport_error(shared.mesh, shared.set, shared.traced, data, relighting.basis());
+  const Eigen::MatrixX3d light = relighting.light(shared.environment);
+  Eigen::MatrixX3f radiance;
+  row.relight_seconds = median_seconds(3, [&] {
+    radiance = relighting.relight(data.compressed, light, shared.camera).vertex_radiance;
+  });
+  const ErrorStats shading = vertex_error(radiance, shared.truth);
+  row.shading_rms = shading.rms;
+  row.shading_relative = shading.relative_rms;
+  std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g\n", row.spec.c_str(),
+               row.coefficients, entry.exit_role ? "exit functions" : "coefficients",
+               transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(),
+               row.shading_rms);
+  return row;
+}
 
-  const RunOptions quiet{true};
-  const TransportResult traced = trace_scene(scene, {context.quiet});
-  const Mesh mesh = scene.load_mesh();
-  const Environment environment = scene.load_environment();
-  const Camera camera = scene.make_camera(mesh);
-  // The same truth and the same relighting as `prt render --compare`.
-  const Eigen::MatrixX3f truth =
-      ground_truth_vertices(scene, mesh, environment, camera, {context.quiet});
-
-  std::vector<Row> rows;
-  for (std::size_t i = 0; i < specs.size(); ++i) {
-    Stopwatch clock;
-    RunOptions reuse = quiet;
-    reuse.traced = &traced;
-    reuse.compress = false;  // the basis alone (its own sparse approximation, if any)
-    StageTimes times;
-    const BakeData data = bake(scenes[i], context.registry, reuse, times);
-    const Relighting relighting(scenes[i], data, context.registry);
-    Row row;
-    row.spec = specs[i].text;
-    row.seconds = clock.seconds();
-    // The entry's own size: the exit basis's rows, or the light basis's
-    // coefficients (kept terms of a sparse approximation).
-    row.coefficients = exit_role[i]               ? data.transfer.exit_rows
-                       : data.compressed.sparse() ? data.compressed.components
-                                                  : relighting.basis().size();
-    row.bytes = 4 * data.compressed.stored_floats();
-    if (!data.transfer.glossy() && data.transfer.channel_groups == 1)  // one transport per vertex
-      row.transport_error = transport_error(mesh, set, traced, data, relighting.basis());
-    const Eigen::MatrixX3d light = relighting.light(environment);
-    Eigen::MatrixX3f radiance;
-    row.relight_seconds = median_seconds(
-        3, [&] { radiance = relighting.relight(data.compressed, light, camera).vertex_radiance; });
-    const ErrorStats shading = vertex_error(radiance, truth);
-    row.shading_rms = shading.rms;
-    row.shading_relative = shading.relative_rms;
-    rows.push_back(row);
-    std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g\n", row.spec.c_str(),
-                 row.coefficients, exit_role[i] ? "exit functions" : "coefficients",
-                 transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(),
-                 row.shading_rms);
-  }
-
+// The table as CSV and JSON (when asked) and on standard output.
+void write_tables(const std::vector<Row>& rows, const CompareArgs& args) {
   std::ostringstream csv;
   nlohmann::ordered_json json = nlohmann::ordered_json::array();
   csv << "basis,coefficients,bytes,transport_l2_relative,shading_rms,shading_relative_rms,"
@@ -217,6 +211,33 @@ int compare_bases(Context& context, const CompareArgs& args) {
     std::printf("%-28s %6d %12.0f %14s %12.5g %10.4f %8.2f %11.2f\n", r.spec.c_str(),
                 r.coefficients, r.bytes, transport_text(r.transport_error, "%.4f", "-").c_str(),
                 r.shading_rms, r.shading_relative, r.seconds, 1e3 * r.relight_seconds);
+}
+
+}  // namespace
+
+int compare_bases(Context& context, const CompareArgs& args) {
+  const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  if (!args.csv.empty())
+    check_output({args.csv, report_kind(args.csv), "table"}, scene.input_files(), args.force);
+  if (!args.json.empty())
+    check_output({args.json, FileKind::json, "table"}, scene.input_files(), args.force);
+  const DirectionSet set = scene.directions();
+  std::vector<Entry> entries;  // every entry planned before any ray
+  std::stringstream list(args.bases);
+  for (std::string item; std::getline(list, item, ',');)
+    entries.push_back(entry_for(scene, parse_spec(item), set, context.registry));
+
+  const TransportResult traced = trace_scene(scene, {context.quiet});
+  const Mesh mesh = scene.load_mesh();
+  const Environment environment = scene.load_environment();
+  const Camera camera = scene.make_camera(mesh);
+  // The same truth and the same relighting as `prt render --compare`.
+  const Eigen::MatrixX3f truth =
+      ground_truth_vertices(scene, mesh, environment, camera, {context.quiet});
+  const Shared shared{set, traced, mesh, environment, camera, truth};
+  std::vector<Row> rows;
+  for (const Entry& entry : entries) rows.push_back(measure(context, entry, shared));
+  write_tables(rows, args);
   return 0;
 }
 

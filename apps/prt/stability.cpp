@@ -177,18 +177,8 @@ Ringing ringing(const Eigen::VectorXd& coefficients, int order) {
   return out;
 }
 
-}  // namespace
-
-int stability(Context& context, const StabilityArgs& args) {
-  for (int l : args.bands)
-    if (l < 0 || l > 5000) throw Error("--bands: band " + std::to_string(l) + " is not in 0..5000");
-  if (!args.json.empty()) check_output({args.json, FileKind::json, "report"}, {}, args.force);
-  if (!args.figure_data.empty())
-    check_output({args.figure_data, report_kind(args.figure_data), "figure data"}, {}, args.force);
-  Report report;
-  report.markdown = "# Numerical stability report (`prt stability`)\n";
-
-  // 1. SH evaluation.
+// 1. SH evaluation: the highest band of each order.
+void evaluation_by_order(Report& report, const StabilityArgs& args) {
   report.section(
       "SH evaluation: orthonormality of the highest band",
       "| order (bands) | highest l | max abs(Y^T W Y - I) | finite |\n|---|---|---|---|");
@@ -202,6 +192,10 @@ int stability(Context& context, const StabilityArgs& args) {
   }
   report.row(format("\nHighest l within 1e-10 (of those measured): **%d**", highest_evaluation));
   report.value("evaluation_highest_l_1e-10", highest_evaluation);
+}
+
+// SH evaluation of single high bands: the addition theorem.
+void evaluation_of_bands(Report& report, const StabilityArgs& args) {
   report.section("SH evaluation of single high bands: addition theorem",
                  "| l | max relative abs(sum_m y_lm^2 - (2l+1)/4pi) | all values finite |\n"
                  "|---|---|---|");
@@ -215,8 +209,10 @@ int stability(Context& context, const StabilityArgs& args) {
   }
   report.row(format("\nHighest band within 1e-10, all finite: **%d**", highest_band_evaluation));
   report.value("evaluation_band_highest_l_1e-10", highest_band_evaluation);
+}
 
-  // 2. SH rotation.
+// 2. SH rotation (block-diagonal) per order; returns the highest l within 1e-10.
+int rotation_by_order(Report& report, const StabilityArgs& args) {
   report.section(
       "SH rotation (Gumerov-Duraiswami, block-diagonal)",
       "| order | max abs(R R^T - I) | abs(R c - reprojected) for abs(c) = 1 |\n|---|---|---|");
@@ -231,6 +227,11 @@ int stability(Context& context, const StabilityArgs& args) {
     report.value("rotation_orthogonality_l" + std::to_string(order - 1), orthogonality);
     report.value("rotation_reprojection_l" + std::to_string(order - 1), reprojection);
   }
+  return highest_rotation;
+}
+
+// SH rotation of single high bands, then both summaries.
+void rotation_of_bands(Report& report, const StabilityArgs& args, int highest_rotation) {
   int highest_band_rotation = 0;
   report.section("SH rotation of single high bands (beta from 1e-9 to pi)",
                  "| l | max abs(B B^T - I) | max relative abs(B c - c(R^T .)) pointwise | "
@@ -252,8 +253,10 @@ int stability(Context& context, const StabilityArgs& args) {
   report.row(
       format("\nHighest single band within 1e-10 for rotation: **%d**", highest_band_rotation));
   report.value("rotation_band_highest_l_1e-10", highest_band_rotation);
+}
 
-  // 3. The hemispherical Gram matrix.
+// 3. The hemispherical Gram matrix.
+void hemisphere_gram(Report& report, const StabilityArgs& args) {
   report.section(
       "Hemispherical SH: Gram matrix A and least squares (cut-off 1e-10)",
       "| order | condition number of A | discarded | LS worst | LS average | "
@@ -267,8 +270,10 @@ int stability(Context& context, const StabilityArgs& args) {
                       ls.discarded, ls_error.worst, ls_error.average, zero.worst, zero.average));
     report.value("hemisphere_condition_order" + std::to_string(order), condition);
   }
+}
 
-  // 4. Compressors on degenerate inputs.
+// 4. Compressors on degenerate inputs.
+void degenerate_compression(Report& report, PluginRegistry& registry) {
   report.section("Compressors on degenerate inputs",
                  "| compressor | input | SE | relative SE | finite |\n|---|---|---|---|---|");
   struct Case {
@@ -287,14 +292,16 @@ int stability(Context& context, const StabilityArgs& args) {
   cases.push_back({"all zero", MatrixXfRow::Zero(500, 25)});
   cases.push_back({"values 1e-30", MatrixXfRow::Random(500, 25) * 1e-30f});
   cases.push_back({"values 1e+30", MatrixXfRow::Random(500, 25) * 1e30f});
-  for (const char* name : {"pca", "cpca", "vq"}) {
+  // Every compressor found that approximates (an exact one has nothing to lose).
+  for (const std::string& name : registry.names(PluginKind::compressor)) {
     // The conventional budget parameters, where the compressor has them.
     Params params;
-    for (const auto& spec : context.registry.find(PluginKind::compressor, name).schema().specs) {
+    for (const auto& spec : registry.find(PluginKind::compressor, name).schema().specs) {
       if (std::string(spec.name) == "clusters") params.set("clusters", std::int64_t(4));
       if (std::string(spec.name) == "components") params.set("components", std::int64_t(8));
     }
-    auto compressor = context.registry.create<Compressor>(name, params);
+    auto compressor = registry.create<Compressor>(name, params);
+    if (compressor->exact()) continue;
     for (const Case& c : cases) {
       TransferSignal signal;
       signal.coefficients = c.data;
@@ -302,12 +309,14 @@ int stability(Context& context, const StabilityArgs& args) {
       const MatrixXfRow decoded = out.decode();
       const double se = squared_error(signal.coefficients, decoded);
       const double energy = signal.coefficients.cast<double>().squaredNorm();
-      report.row(format("| %s | %s | %.3g | %.3g | %s |", name, c.name, se,
+      report.row(format("| %s | %s | %.3g | %.3g | %s |", name.c_str(), c.name, se,
                         energy > 0 ? se / energy : 0.0, decoded.allFinite() ? "yes" : "NO"));
     }
   }
+}
 
-  // 5. Float storage of the compressed form.
+// 5. Float storage of the compressed form.
+void float_storage(Report& report) {
   report.section("Float storage: radiance error bound from rounding the stored transfer",
                  "| transfer | max over vertices of 2^-24 sum abs(t_j l_j) / abs(t . l) | median "
                  "|\n|---|---|---|");
@@ -329,8 +338,10 @@ int stability(Context& context, const StabilityArgs& args) {
                       bound[bound.size() / 2]));
     report.value("float_bound_diffuse", bound.back());
   }
+}
 
-  // 6. HDR extremes: a sun 10^5 times the sky.
+// 6. HDR extremes: a sun 10^5 times the sky.
+void hdr_ringing(Report& report, const StabilityArgs& args) {
   report.section("SH ringing of a sun 10^5 times brighter than the sky",
                  "| order | window | negative solid angle (fraction of sphere) | most negative "
                  "radiance (sky = 1) |\n|---|---|---|---|");
@@ -344,15 +355,12 @@ int stability(Context& context, const StabilityArgs& args) {
         if (d.dot(sun) > std::cos(3.0 * M_PI / 180))
           for (int c = 0; c < 3; ++c) pixels[3 * (std::size_t(y) * width + x) + c] = 1e5f;
       }
-    const Environment env = Environment::from_pixels(width, height, pixels);
     std::ostringstream curve;
     const bool figure = !args.figure_data.empty();
     if (figure) curve << "order,window,angle_degrees,radiance\n";
     for (int order : {5, 10, 15, 20}) {
-      Params params;
-      params.set("order", std::int64_t(order));
-      auto basis = context.registry.create<Basis>("sh", params);
-      const Eigen::VectorXd coefficients = env.project(*basis).col(0);
+      const Eigen::VectorXd coefficients =
+          sh::project_equirect(order, width, height, pixels.data()).col(0);
       for (const char* kind : {"none", "hanning", "lanczos"}) {
         const Eigen::VectorXd windowed = sh::window(order, kind).cwiseProduct(coefficients);
         const Ringing r = ringing(windowed, order);
@@ -376,6 +384,26 @@ int stability(Context& context, const StabilityArgs& args) {
     }
     if (figure) write_text_file(args.figure_data, curve.str());
   }
+}
+
+}  // namespace
+
+int stability(Context& context, const StabilityArgs& args) {
+  for (int l : args.bands)
+    if (l < 0 || l > 5000) throw Error("--bands: band " + std::to_string(l) + " is not in 0..5000");
+  if (!args.json.empty()) check_output({args.json, FileKind::json, "report"}, {}, args.force);
+  if (!args.figure_data.empty())
+    check_output({args.figure_data, report_kind(args.figure_data), "figure data"}, {}, args.force);
+  Report report;
+  report.markdown = "# Numerical stability report (`prt stability`)\n";
+  evaluation_by_order(report, args);
+  evaluation_of_bands(report, args);
+  const int highest_rotation = rotation_by_order(report, args);
+  rotation_of_bands(report, args, highest_rotation);
+  hemisphere_gram(report, args);
+  degenerate_compression(report, context.registry);
+  float_storage(report);
+  hdr_ringing(report, args);
   std::printf("%s", report.markdown.c_str());
   if (!args.json.empty()) {
     write_text_file(args.json, report.json.dump(2) + "\n");

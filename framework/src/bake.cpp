@@ -150,6 +150,43 @@ void require_distributable(const SceneSpec& scene, const BakePlan& plan,
   }
 }
 
+// A distributed bake's file gets the other ranks' rows from their slabs as
+// it is written; rank 0 keeps its own shard.
+void stream_from_slabs(const BakePlan& plan, const RunOptions& options, int ranks,
+                       TransferSignal transfer, BakeData& data) {
+  data.transfer.kind = transfer.kind;
+  data.transfer.exit_rows = transfer.exit_rows;
+  data.transfer.channel_groups = transfer.channel_groups;
+  data.transfer.group_of_channel = transfer.group_of_channel;
+  auto own = std::make_shared<const TransferSignal>(std::move(transfer));
+  data.streamed_transfer =
+      plan.fit ? kept_shard_transfer(plan, *options.checkpoint, data.mesh.vertex_count(), ranks,
+                                     std::move(own))
+               : kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
+                               options.slab_vertices, std::move(own));
+}
+
+// What the file says of how it was made: scene, transport, plug-ins and
+// their fitted states, material.
+void describe(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& set,
+              const RunOptions& options, BakeData& data) {
+  data.scene_file = scene.file.string();
+  data.scene_text = scene.text;
+  data.transport = transport_description(scene, set);
+  data.basis = plan.basis_record;
+  data.compressor = plan.compressor_record;
+  if (!options.compress && plan.sparse_terms == 0) data.compressor = {"exact", "", ""};
+  data.albedo = scene.albedo();
+  data.material = scene.material_description();
+  data.bounces = plan.bounces;
+  data.subsurface = plan.subsurface;
+  data.basis_state = plan.basis->save();
+  if (plan.glossy) {
+    data.exit = plan.exit_record;
+    data.exit_state = plan.exit->save();
+  }
+}
+
 }  // namespace
 
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
@@ -211,36 +248,11 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   std::string text = report.text();
   if (!text.empty() && text.back() == '\n') text.pop_back();
   options.message(text);
-  if (distributed) {  // the file gets the other ranks' rows from their slabs as it is written
-    data.transfer.kind = transfer.kind;
-    data.transfer.exit_rows = transfer.exit_rows;
-    data.transfer.channel_groups = transfer.channel_groups;
-    data.transfer.group_of_channel = transfer.group_of_channel;
-    auto own = std::make_shared<const TransferSignal>(std::move(transfer));
-    data.streamed_transfer =
-        plan.fit ? kept_shard_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
-                                       comm.size(), std::move(own))
-                 : kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
-                                 options.slab_vertices, std::move(own));
-  } else {  // in memory, or in its file (write_bake reads it from there)
+  if (distributed)
+    stream_from_slabs(plan, options, comm.size(), std::move(transfer), data);
+  else  // in memory, or in its file (write_bake reads it from there)
     data.transfer = std::move(transfer);
-  }
-
-  data.scene_file = scene.file.string();
-  data.scene_text = scene.text;
-  data.transport = transport_description(scene, set);
-  data.basis = plan.basis_record;
-  data.compressor = plan.compressor_record;
-  if (!options.compress && plan.sparse_terms == 0) data.compressor = {"exact", "", ""};
-  data.albedo = scene.albedo();
-  data.material = scene.material_description();
-  data.bounces = plan.bounces;
-  data.subsurface = plan.subsurface;
-  data.basis_state = plan.basis->save();
-  if (plan.glossy) {
-    data.exit = plan.exit_record;
-    data.exit_state = plan.exit->save();
-  }
+  describe(scene, plan, set, options, data);
   data.metrics["rays_cast"] = static_cast<double>(rays_cast);
   data.metrics["squared_error"] = report.squared_error;
   data.metrics["stored_floats"] = data.compressed.stored_floats();

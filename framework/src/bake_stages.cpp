@@ -44,10 +44,8 @@ TransferSignal transfer_from_rays(const BakePlan& plan, const SceneSpec& scene, 
   rays_cast = traced.rays_cast;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
   if (plan.channels.groups.size() <= 1)
-    return transfer_stage(plan, scene, mesh, set, std::move(traced), options, times, metrics,
-                          direct);
-  return channel_transfers(plan, scene, mesh, set, std::move(traced), options, times, metrics,
-                           direct);
+    return transfer_stage(plan, mesh, set, std::move(traced), options, times, metrics, direct);
+  return channel_transfers(plan, mesh, set, std::move(traced), options, times, metrics, direct);
 }
 
 // Stages 1-2 as they run without a checkpoint.

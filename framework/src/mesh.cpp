@@ -171,6 +171,85 @@ bool read_openmesh(OMesh& om, const std::filesystem::path& file, OpenMesh::IO::O
   return OpenMesh::IO::read_mesh(om, text, ".obj", options);
 }
 
+// The mesh file through OpenMesh; its log (what OpenMesh said of the file) is
+// returned for the checks that follow.
+std::string read_with_openmesh(const std::filesystem::path& file, OMesh& om,
+                               OpenMesh::IO::Options& options) {
+  om.request_vertex_normals();
+  options = OpenMesh::IO::Options::VertexNormal;
+  OpenMeshLogCapture capture;
+  const bool ok = read_openmesh(om, file, options);
+  const std::string log = capture.text();
+  if (!ok) {
+    const std::string detail = log.substr(0, log.find('\n'));
+    throw Error(file.string() + ": cannot read mesh" +
+                (detail.empty() ? "" : " (" + detail + ")"));
+  }
+  return log;
+}
+
+// Readers drop some bad faces without a word (binary PLY indices out of
+// range or negative): what was read must account for what was declared.
+void check_read_counts(const std::filesystem::path& file, const OMesh& om,
+                       const DeclaredMeshSize& declared, const std::string& log,
+                       std::size_t skipped) {
+  const std::string source = file.string();
+  if (log.find("invalid vertex index") != std::string::npos)
+    throw Error(source + ": " +
+                std::to_string(count_lines_containing(log, "invalid vertex index")) +
+                " face(s) use a vertex index out of range (the file has " +
+                std::to_string(om.n_vertices()) + " vertices)");
+  if (declared.known && om.n_vertices() < declared.vertices)
+    throw Error(source + ": read " + std::to_string(om.n_vertices()) + " of the " +
+                std::to_string(declared.vertices) + " vertices its header declares");
+  if (declared.known && om.n_faces() + skipped < declared.faces) {
+    // STL stores corners, not indices: a dropped facet there repeats a corner
+    // (after OpenMesh merges equal positions) or cannot join the surface.
+    const bool corners = lowercase_extension(file).rfind(".stl", 0) == 0;
+    throw Error(source + ": " + std::to_string(declared.faces - om.n_faces() - skipped) +
+                " of its " + std::to_string(declared.faces) + " faces could not be read (" +
+                (corners ? "facets whose corners coincide, or that would make an edge shared "
+                           "by more than two faces?"
+                         : "vertex indices out of range or negative?") +
+                ")");
+  }
+}
+
+// Triangles with a non-zero area; the others are counted as skipped.
+void add_triangles(const OMesh& om, Mesh& mesh) {
+  for (auto fh : om.faces()) {
+    std::array<std::uint32_t, 3> t{};
+    int k = 0;
+    for (auto vh : om.fv_range(fh)) t[k++] = static_cast<std::uint32_t>(vh.idx());
+    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
+                          c = mesh.positions[t[2]];
+    if (!((b - a).cross(c - a).squaredNorm() > 0.f)) {
+      ++mesh.skipped_degenerate_faces;
+      continue;
+    }
+    mesh.triangles.push_back(t);
+  }
+}
+
+// The file's normals when every one is usable (finite, not zero), normalised;
+// else none (the mesh computes its own).
+void add_file_normals(const OMesh& om, const OpenMesh::IO::Options& options, Mesh& mesh) {
+  if (!options.check(OpenMesh::IO::Options::VertexNormal)) return;
+  for (auto vh : om.vertices()) {
+    const auto& n = om.normal(vh);
+    mesh.normals.emplace_back(n[0], n[1], n[2]);
+  }
+  bool usable = true;
+  for (auto& n : mesh.normals) {
+    const float length = n.norm();
+    if (!std::isfinite(length) || length < 1e-12f)
+      usable = false;
+    else
+      n /= length;
+  }
+  if (!usable) mesh.normals.clear();
+}
+
 }  // namespace
 
 Mesh load_mesh(const std::filesystem::path& file) {
@@ -185,18 +264,8 @@ Mesh load_mesh(const std::filesystem::path& file) {
   const DeclaredMeshSize declared = check_mesh_file(file);
   reject_non_finite_text(file);
   OMesh om;
-  om.request_vertex_normals();
-  OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexNormal;
-  std::string log;
-  {
-    OpenMeshLogCapture capture;
-    const bool ok = read_openmesh(om, file, options);
-    log = capture.text();
-    if (!ok) {
-      const std::string detail = log.substr(0, log.find('\n'));
-      throw Error(source + ": cannot read mesh" + (detail.empty() ? "" : " (" + detail + ")"));
-    }
-  }
+  OpenMesh::IO::Options options;
+  const std::string log = read_with_openmesh(file, om, options);
   Mesh mesh;
   mesh.positions.reserve(om.n_vertices());
   for (auto vh : om.vertices()) {
@@ -206,60 +275,14 @@ Mesh load_mesh(const std::filesystem::path& file) {
   for (std::size_t v = 0; v < mesh.positions.size(); ++v)
     if (!mesh.positions[v].allFinite())
       throw Error(source + ": vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
-  if (log.find("invalid vertex index") != std::string::npos)
-    throw Error(source + ": " +
-                std::to_string(count_lines_containing(log, "invalid vertex index")) +
-                " face(s) use a vertex index out of range (the file has " +
-                std::to_string(om.n_vertices()) + " vertices)");
   // Faces OpenMesh refused (a vertex repeated) count as degenerate.
   mesh.skipped_degenerate_faces = count_lines_containing(log, "ImporterT: Face");
-  // Readers drop some bad faces without a word (binary PLY indices out of
-  // range or negative): what was read must account for what was declared.
-  if (declared.known && om.n_vertices() < declared.vertices)
-    throw Error(source + ": read " + std::to_string(om.n_vertices()) + " of the " +
-                std::to_string(declared.vertices) + " vertices its header declares");
-  if (declared.known && om.n_faces() + mesh.skipped_degenerate_faces < declared.faces) {
-    // STL stores corners, not indices: a dropped facet there repeats a corner
-    // (after OpenMesh merges equal positions) or cannot join the surface.
-    const bool corners = lowercase_extension(file).rfind(".stl", 0) == 0;
-    throw Error(source + ": " +
-                std::to_string(declared.faces - om.n_faces() - mesh.skipped_degenerate_faces) +
-                " of its " + std::to_string(declared.faces) + " faces could not be read (" +
-                (corners ? "facets whose corners coincide, or that would make an edge shared "
-                           "by more than two faces?"
-                         : "vertex indices out of range or negative?") +
-                ")");
-  }
+  check_read_counts(file, om, declared, log, mesh.skipped_degenerate_faces);
   if (const auto complex = count_lines_containing(log, "complex"))
     log_warning(source + ": " + std::to_string(complex) +
                 " non-manifold face(s); OpenMesh duplicated their vertices");
-  for (auto fh : om.faces()) {
-    std::array<std::uint32_t, 3> t{};
-    int k = 0;
-    for (auto vh : om.fv_range(fh)) t[k++] = static_cast<std::uint32_t>(vh.idx());
-    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
-                          c = mesh.positions[t[2]];
-    if (!((b - a).cross(c - a).squaredNorm() > 0.f)) {
-      ++mesh.skipped_degenerate_faces;
-      continue;
-    }
-    mesh.triangles.push_back(t);
-  }
-  if (options.check(OpenMesh::IO::Options::VertexNormal)) {
-    for (auto vh : om.vertices()) {
-      const auto& n = om.normal(vh);
-      mesh.normals.emplace_back(n[0], n[1], n[2]);
-    }
-    bool usable = true;
-    for (auto& n : mesh.normals) {
-      const float length = n.norm();
-      if (!std::isfinite(length) || length < 1e-12f)
-        usable = false;
-      else
-        n /= length;
-    }
-    if (!usable) mesh.normals.clear();
-  }
+  add_triangles(om, mesh);
+  add_file_normals(om, options, mesh);
   if (mesh.normals.empty()) mesh.compute_normals();
   mesh.validate(source);
   if (mesh.skipped_degenerate_faces > 0)

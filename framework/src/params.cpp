@@ -155,80 +155,84 @@ void Params::fail(const std::string& key, const std::string& message) const {
   throw Error(location(key), "parameter \"" + key + "\": " + message);
 }
 
-void Params::validate(const ParamSchema& schema) {
-  std::vector<std::string> valid;
-  for (const auto& spec : schema.specs) valid.push_back(spec.name);
+namespace {
 
-  // Type, range and choice of one value (given, or the schema's default).
-  auto check = [&](const std::string& key, ParamEntry& entry) {
-    const ParamSpecRecord* spec = schema.find(key);
-    if (!spec) {
-      std::string message =
-          schema.owner + ": unknown parameter \"" + elide(key) + "\"; valid: " + join(valid, ", ");
-      const std::string suggestion = closest_match(key, valid);
-      if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
-      throw Error(entry.where, message);
-    }
-    const std::string what = schema.owner + ": parameter \"" + key + "\"";
-    auto wrong_type = [&] {
-      throw Error(entry.where, what + " must be " +
-                                   (spec->type == ParamType::reals
-                                        ? std::string("a number or a list of ") +
-                                              std::to_string(spec->list_length) + " numbers"
-                                        : article(to_string(spec->type)) + to_string(spec->type)) +
-                                   ", got " + value_type_name(entry.value) + " " +
-                                   describe_value(entry.value));
-    };
-    auto check_range = [&](double x) {
-      if (!std::isfinite(x) || x < spec->min || x > spec->max)
-        throw Error(entry.where, what + " = " + describe_value(entry.value) + " is out of range " +
-                                     range_text(*spec));
-    };
-    switch (spec->type) {
-      case ParamType::boolean:
-        if (!std::holds_alternative<bool>(entry.value)) wrong_type();
-        break;
-      case ParamType::integer:
-        if (!std::holds_alternative<std::int64_t>(entry.value)) wrong_type();
-        check_range(static_cast<double>(std::get<std::int64_t>(entry.value)));
-        break;
-      case ParamType::real:
-        if (auto* i = std::get_if<std::int64_t>(&entry.value))
-          entry.value = static_cast<double>(*i);  // TOML "1" for a real is fine
-        if (!std::holds_alternative<double>(entry.value)) wrong_type();
-        check_range(std::get<double>(entry.value));
-        break;
-      case ParamType::reals: {
-        if (auto* i = std::get_if<std::int64_t>(&entry.value))
-          entry.value = static_cast<double>(*i);
-        if (auto* d = std::get_if<double>(&entry.value))
-          entry.value = std::vector<double>(std::max<std::uint32_t>(spec->list_length, 1), *d);
-        auto* list = std::get_if<std::vector<double>>(&entry.value);
-        if (!list) wrong_type();
-        if (spec->list_length && list->size() != spec->list_length) wrong_type();
-        for (double x : *list) check_range(x);
-        break;
-      }
-      case ParamType::string:
-      case ParamType::path: {
-        if (!std::holds_alternative<std::string>(entry.value)) wrong_type();
-        const std::string& text = std::get<std::string>(entry.value);
-        if (spec->choices[0] != '\0') {
-          const auto choices = split(spec->choices, '|');
-          if (std::find(choices.begin(), choices.end(), text) == choices.end()) {
-            std::string message =
-                what + " = \"" + text + "\" is not one of: " + join(choices, ", ");
-            const std::string suggestion = closest_match(text, choices);
-            if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
-            throw Error(entry.where, message);
-          }
-        }
-        break;
-      }
-    }
+// A string among its spec's choices (when it has any).
+void check_choice(const ParamSpecRecord& spec, const std::string& what, const ParamEntry& entry) {
+  if (spec.choices[0] == '\0') return;
+  const std::string& text = std::get<std::string>(entry.value);
+  const auto choices = split(spec.choices, '|');
+  if (std::find(choices.begin(), choices.end(), text) != choices.end()) return;
+  std::string message = what + " = \"" + text + "\" is not one of: " + join(choices, ", ");
+  const std::string suggestion = closest_match(text, choices);
+  if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
+  throw Error(entry.where, message);
+}
+
+// Type, range and choice of one value (given, or the schema's default); a
+// whole number for a real becomes a real, one number for a list a list.
+void check_value(const ParamSchema& schema, const std::string& key, ParamEntry& entry) {
+  const ParamSpecRecord* spec = schema.find(key);
+  if (!spec) {
+    std::vector<std::string> valid;
+    for (const auto& s : schema.specs) valid.push_back(s.name);
+    std::string message =
+        schema.owner + ": unknown parameter \"" + elide(key) + "\"; valid: " + join(valid, ", ");
+    const std::string suggestion = closest_match(key, valid);
+    if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
+    throw Error(entry.where, message);
+  }
+  const std::string what = schema.owner + ": parameter \"" + key + "\"";
+  auto wrong_type = [&] {
+    throw Error(entry.where, what + " must be " +
+                                 (spec->type == ParamType::reals
+                                      ? std::string("a number or a list of ") +
+                                            std::to_string(spec->list_length) + " numbers"
+                                      : article(to_string(spec->type)) + to_string(spec->type)) +
+                                 ", got " + value_type_name(entry.value) + " " +
+                                 describe_value(entry.value));
   };
-  for (auto& [key, entry] : entries_) check(key, entry);
+  auto check_range = [&](double x) {
+    if (!std::isfinite(x) || x < spec->min || x > spec->max)
+      throw Error(entry.where, what + " = " + describe_value(entry.value) + " is out of range " +
+                                   range_text(*spec));
+  };
+  switch (spec->type) {
+    case ParamType::boolean:
+      if (!std::holds_alternative<bool>(entry.value)) wrong_type();
+      break;
+    case ParamType::integer:
+      if (!std::holds_alternative<std::int64_t>(entry.value)) wrong_type();
+      check_range(static_cast<double>(std::get<std::int64_t>(entry.value)));
+      break;
+    case ParamType::real:
+      if (auto* i = std::get_if<std::int64_t>(&entry.value))
+        entry.value = static_cast<double>(*i);  // TOML "1" for a real is fine
+      if (!std::holds_alternative<double>(entry.value)) wrong_type();
+      check_range(std::get<double>(entry.value));
+      break;
+    case ParamType::reals: {
+      if (auto* i = std::get_if<std::int64_t>(&entry.value)) entry.value = static_cast<double>(*i);
+      if (auto* d = std::get_if<double>(&entry.value))
+        entry.value = std::vector<double>(std::max<std::uint32_t>(spec->list_length, 1), *d);
+      auto* list = std::get_if<std::vector<double>>(&entry.value);
+      if (!list) wrong_type();
+      if (spec->list_length && list->size() != spec->list_length) wrong_type();
+      for (double x : *list) check_range(x);
+      break;
+    }
+    case ParamType::string:
+    case ParamType::path:
+      if (!std::holds_alternative<std::string>(entry.value)) wrong_type();
+      check_choice(*spec, what, entry);
+      break;
+  }
+}
 
+}  // namespace
+
+void Params::validate(const ParamSchema& schema) {
+  for (auto& [key, entry] : entries_) check_value(schema, key, entry);
   for (const auto& spec : schema.specs) {
     if (entries_.count(spec.name)) continue;
     if (spec.required)
@@ -239,7 +243,7 @@ void Params::validate(const ParamSchema& schema) {
       ParamEntry entry{parse_default(spec), section_, false};
       if (spec.default_value[0] != '\0') {  // an empty string default means "not given"
         try {
-          check(spec.name, entry);
+          check_value(schema, spec.name, entry);
         } catch (const Error& e) {
           throw Error(std::string(e.what()) + " (this is the schema's own default: a bug in " +
                       schema.owner + ")");

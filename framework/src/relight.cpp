@@ -432,6 +432,73 @@ void RelightKernel::for_each_cluster(const Eigen::MatrixX3f& l, std::size_t scra
   });
 }
 
+namespace {
+
+// One cluster's vertices: the per-cluster constants C_i (N_r x 3 per stored
+// vector), its vertices and their weights (n'_k per vertex, cluster-major).
+struct ClusterInput {
+  const float* constants;
+  const std::int32_t* vertices;
+  std::int64_t size;
+  const float* weights;
+  int components;
+};
+
+constexpr int kDotGroup = 8;  // dots kept in registers at once
+
+// Glossy, fused: d_i(p) = y(v_p) . C_i (3 floats per stored vector), then
+// d_0 + sum_i w_pi d_i, for 16 vertices at a time, one per lane: each lane
+// sums over its own exit values in a fixed order, so a vertex's result does
+// not depend on which vertices share its packet (a block product rounds a
+// row by the block's shape, and the blocks depend on how the mesh is split).
+void glossy_cluster(const ClusterInput& in, int rows, const MatrixXfRow& y, float* buffer,
+                    float* red, float* green, float* blue) {
+  const int n_k = in.components;
+  const Eigen::Index width = (3 * (n_k + 1) + kDotGroup - 1) / kDotGroup * kDotGroup;
+  // C as N_r x 3 (n'_k + 1), padded with zero columns to whole groups:
+  // column 3 i + c is C_i's channel c.
+  float* c_by_row = buffer;
+  float* lanes = buffer + rows * width;              // N_r x 16: lane j is vertex j's values
+  float* dots = lanes + std::size_t(rows) * kLanes;  // width x 16
+  std::fill(c_by_row, c_by_row + rows * width, 0.f);
+  for (int i = 0; i <= n_k; ++i)
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < 3; ++c)
+        c_by_row[r * width + 3 * i + c] = in.constants[3 * rows * i + 3 * r + c];
+  for (std::int64_t j0 = 0; j0 < in.size; j0 += kLanes) {
+    const int count = static_cast<int>(std::min<std::int64_t>(kLanes, in.size - j0));
+    // The next packet's exit values (rows scattered over the mesh):
+    // requested now, they arrive while this packet's dots run.
+    for (std::int64_t j = j0 + kLanes; j < std::min<std::int64_t>(in.size, j0 + 2 * kLanes); ++j) {
+      const char* next = reinterpret_cast<const char*>(y.row(in.vertices[j]).data());
+      for (int line = 0; line < rows * int(sizeof(float)); line += 64) __builtin_prefetch(next + line);
+    }
+    for (int j = 0; j < kLanes; ++j) {
+      const float* values = y.row(in.vertices[j0 + std::min(j, count - 1)]).data();
+      for (int r = 0; r < rows; ++r) lanes[r * kLanes + j] = values[r];
+    }
+    for (Eigen::Index o = 0; o < width; o += kDotGroup) {
+      Lanes sums[kDotGroup] = {};
+      for (int r = 0; r < rows; ++r) {
+        const Lanes e = load_lanes(lanes + r * kLanes);
+        const float* c = c_by_row + r * width + o;
+        for (int g = 0; g < kDotGroup; ++g) sums[g] += e * c[g];
+      }
+      std::memcpy(dots + o * kLanes, sums, sizeof sums);
+    }
+    Lanes rgb[3];
+    for (int c = 0; c < 3; ++c) rgb[c] = load_lanes(dots + c * kLanes);
+    for (int i = 0; i < n_k; ++i) {
+      // Past `count`, the weights' padding or the next vector's: unused lanes.
+      const Lanes w = load_lanes(in.weights + i * in.size + j0);
+      for (int c = 0; c < 3; ++c) rgb[c] += w * load_lanes(dots + (3 * (i + 1) + c) * kLanes);
+    }
+    store_packet(rgb, in.vertices + j0, count, red, green, blue);
+  }
+}
+
+}  // namespace
+
 Eigen::MatrixX3f RelightKernel::radiance(const Eigen::MatrixX3d& light,
                                          const MatrixXfRow* exit_values) const {
   Eigen::MatrixX3f out;
@@ -470,65 +537,16 @@ void RelightKernel::radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* e
                      });
     return;
   }
-  // Glossy, fused: d_i(p) = y(v_p) . C_i (3 floats per stored vector), then
-  // d_0 + sum_i w_pi d_i, for 16 vertices at a time, one per lane: each
-  // lane sums over its own exit values in a fixed order, so a vertex's
-  // result does not depend on which vertices share its packet (a block
-  // product rounds a row by the block's shape, and the blocks depend on how
-  // the mesh is split).
-  const MatrixXfRow& y = *exit_values;
-  constexpr int kGroup = 8;                    // dots kept in registers at once
+  // Glossy, fused (glossy_cluster).
   const Eigen::Index most = t.components + 1;  // stored vectors of the largest cluster
-  const Eigen::Index widest = (3 * most + kGroup - 1) / kGroup * kGroup;
+  const Eigen::Index widest = (3 * most + kDotGroup - 1) / kDotGroup * kDotGroup;
   const std::size_t scratch = std::size_t(rows_ * widest + (rows_ + widest) * kLanes);
   for_each_cluster(
       l, scratch,
       [&](Eigen::Index k, const float* constants, const std::int32_t* vertices, std::int64_t size,
           const float* weights, float* buffer) {
-        const int n_k = t.components_of(k);
-        const Eigen::Index width = (3 * (n_k + 1) + kGroup - 1) / kGroup * kGroup;
-        // C as N_r x 3 (n'_k + 1), padded with zero columns to whole groups:
-        // column 3 i + c is C_i's channel c.
-        float* c_by_row = buffer;
-        float* lanes = buffer + rows_ * width;              // N_r x 16: lane j is vertex j's values
-        float* dots = lanes + std::size_t(rows_) * kLanes;  // width x 16
-        std::fill(c_by_row, c_by_row + rows_ * width, 0.f);
-        for (int i = 0; i <= n_k; ++i)
-          for (int r = 0; r < rows_; ++r)
-            for (int c = 0; c < 3; ++c)
-              c_by_row[r * width + 3 * i + c] = constants[3 * rows_ * i + 3 * r + c];
-        for (std::int64_t j0 = 0; j0 < size; j0 += kLanes) {
-          const int count = static_cast<int>(std::min<std::int64_t>(kLanes, size - j0));
-          // The next packet's exit values (rows scattered over the mesh):
-          // requested now, they arrive while this packet's dots run.
-          for (std::int64_t j = j0 + kLanes; j < std::min<std::int64_t>(size, j0 + 2 * kLanes);
-               ++j) {
-            const char* next = reinterpret_cast<const char*>(y.row(vertices[j]).data());
-            for (int line = 0; line < rows_ * int(sizeof(float)); line += 64)
-              __builtin_prefetch(next + line);
-          }
-          for (int j = 0; j < kLanes; ++j) {
-            const float* values = y.row(vertices[j0 + std::min(j, count - 1)]).data();
-            for (int r = 0; r < rows_; ++r) lanes[r * kLanes + j] = values[r];
-          }
-          for (Eigen::Index o = 0; o < width; o += kGroup) {
-            Lanes sums[kGroup] = {};
-            for (int r = 0; r < rows_; ++r) {
-              const Lanes e = load_lanes(lanes + r * kLanes);
-              const float* c = c_by_row + r * width + o;
-              for (int g = 0; g < kGroup; ++g) sums[g] += e * c[g];
-            }
-            std::memcpy(dots + o * kLanes, sums, sizeof sums);
-          }
-          Lanes rgb[3];
-          for (int c = 0; c < 3; ++c) rgb[c] = load_lanes(dots + c * kLanes);
-          for (int i = 0; i < n_k; ++i) {
-            // Past `count`, the weights' padding or the next vector's: unused lanes.
-            const Lanes w = load_lanes(weights + i * size + j0);
-            for (int c = 0; c < 3; ++c) rgb[c] += w * load_lanes(dots + (3 * (i + 1) + c) * kLanes);
-          }
-          store_packet(rgb, vertices + j0, count, red, green, blue);
-        }
+        glossy_cluster({constants, vertices, size, weights, t.components_of(k)}, rows_,
+                       *exit_values, buffer, red, green, blue);
       });
 }
 

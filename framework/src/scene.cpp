@@ -14,6 +14,7 @@
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
 #include "prt/sh.hpp"
+#include "scene_ascii.hpp"
 #include "toml_checked.hpp"
 
 namespace prt {
@@ -222,162 +223,6 @@ void resolve_paths(Params& params, const ParamSchema& schema, const SceneSpec& s
   }
 }
 
-// toml++ 3.3 has undefined behaviour on non-ASCII text: its whitespace test
-// reaches __builtin_unreachable for most non-ASCII code points (e.g. U+00E9,
-// U+FCFF), and it may test any character of a malformed value. So toml++ is
-// handed ASCII only, with the same meaning: non-ASCII characters in basic
-// strings become \u escapes, literal strings holding them become basic
-// strings, comments lose them, and anywhere else they are refused (TOML's keys
-// and bare values are ASCII). The text is also checked to be valid UTF-8
-// without control characters, brackets to pair up and table headers to start
-// with a key (toml++ assumes both). Errors say where, in the original text.
-std::string ascii_scene_text(const std::string& text, const fs::path& file) {
-  enum class Context { code, comment, basic, literal, multiline_basic, multiline_literal };
-  Context context = Context::code;
-  int line = 1, column = 1;
-  auto fail = [&](const std::string& what) {
-    throw Error(SourceLocation{file.string(), line, column}, what);
-  };
-  auto starts = [&](std::size_t i, const char* token) { return text.compare(i, 3, token) == 0; };
-  auto require_table_key = [&](std::size_t i) {
-    std::size_t k = i + 1;
-    if (k < text.size() && text[k] == '[') ++k;
-    while (k < text.size() && (text[k] == ' ' || text[k] == '\t')) ++k;
-    const char next = k < text.size() ? text[k] : '\n';
-    if (!(std::isalnum(static_cast<unsigned char>(next)) || next == '_' || next == '-' ||
-          next == '"' || next == '\'' || next == ']'))
-      fail("a table header must start with a key, e.g. [mesh]");
-  };
-  std::string out;
-  out.reserve(text.size());
-  // A literal string is copied as is, unless it holds a non-ASCII character:
-  // then it is rewritten as a basic string from its opening quote.
-  std::size_t literal_start = 0;
-  bool literal_rewritten = false, after_backslash = false, at_line_start = true;
-  std::string brackets;  // the '[' and '{' open in code
-  auto rewrite_literal = [&] {
-    const bool multiline = context == Context::multiline_literal;
-    const std::string body = out.substr(literal_start + (multiline ? 3 : 1));
-    out.resize(literal_start);
-    out += multiline ? "\"\"\"" : "\"";
-    for (char ch : body) {
-      if (ch == '\\' || ch == '"') out += '\\';
-      out += ch;
-    }
-    literal_rewritten = true;
-  };
-  for (std::size_t i = 0; i < text.size();) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    if (c >= 0x80) {
-      const int length = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc0 ? 2 : 0;
-      if (length == 0 || c > 0xf4 || c == 0xc0 || c == 0xc1 || i + length > text.size())
-        fail("invalid UTF-8 byte; a scene is UTF-8 text");
-      std::uint32_t code = c & (0xff >> (length + 1));
-      for (int k = 1; k < length; ++k) {
-        const auto next = static_cast<unsigned char>(text[i + k]);
-        if ((next & 0xc0) != 0x80) fail("invalid UTF-8 sequence; a scene is UTF-8 text");
-        code = (code << 6) | (next & 0x3f);
-      }
-      const std::uint32_t smallest[5] = {0, 0, 0x80, 0x800, 0x10000};
-      if (code < smallest[length] || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff))
-        fail("invalid UTF-8 sequence; a scene is UTF-8 text");
-      if (context == Context::code)
-        fail(
-            "non-ASCII character outside a string or comment (keys and values are ASCII; "
-            "quote it)");
-      if (after_backslash) fail("invalid escape sequence in a string");
-      if ((context == Context::literal || context == Context::multiline_literal) &&
-          !literal_rewritten)
-        rewrite_literal();
-      if (context == Context::comment) {
-        out += '?';
-      } else {
-        char escape[12];
-        std::snprintf(escape, sizeof escape, code > 0xffff ? "\\U%08X" : "\\u%04X",
-                      static_cast<unsigned>(code));
-        out += escape;
-      }
-      at_line_start = false;
-      ++column, i += length;
-      continue;
-    }
-    if ((c < 0x20 && c != '\t' && c != '\r' && c != '\n') || c == 0x7f)
-      fail("control character 0x" + std::string(1, "0123456789abcdef"[c >> 4]) +
-           std::string(1, "0123456789abcdef"[c & 15]) + "; a scene is UTF-8 text");
-    std::size_t step = 1;
-    const bool in_literal = context == Context::literal || context == Context::multiline_literal;
-    switch (context) {
-      case Context::code:
-        // Brackets must pair up: toml++ assumes a ']' or '}' closes what it opened.
-        if (c == '[') {
-          if (brackets.empty() && at_line_start) require_table_key(i);
-          brackets.push_back('[');
-        }
-        if (c == '{') brackets.push_back('{');
-        if (c == ']' || c == '}') {
-          if (brackets.empty() || brackets.back() != (c == ']' ? '[' : '{'))
-            fail(std::string("unmatched '") + char(c) + "'");
-          brackets.pop_back();
-        }
-        if (c == '#') context = Context::comment;
-        if (c == '"') {
-          const bool three = starts(i, "\"\"\"");
-          step = three ? 3 : 1;
-          context = three ? Context::multiline_basic : Context::basic;
-        }
-        if (c == '\'') {
-          const bool three = starts(i, "'''");
-          step = three ? 3 : 1;
-          literal_start = out.size(), literal_rewritten = false;
-          context = three ? Context::multiline_literal : Context::literal;
-        }
-        break;
-      case Context::basic:
-      case Context::multiline_basic:
-        if (after_backslash) {
-          after_backslash = false;
-        } else if (c == '\\') {
-          after_backslash = true;
-        } else if (context == Context::basic && c == '"') {
-          context = Context::code;
-        } else if (context == Context::multiline_basic && starts(i, "\"\"\"")) {
-          step = 3, context = Context::code;
-        }
-        break;
-      case Context::literal:
-        if (c == '\'') context = Context::code;
-        break;
-      case Context::multiline_literal:
-        if (starts(i, "'''")) step = 3, context = Context::code;
-        break;
-      case Context::comment:
-        break;
-    }
-    // Inside a rewritten literal, quotes and backslashes are escaped and the
-    // closing quotes become double quotes.
-    if (in_literal && literal_rewritten) {
-      if (context == Context::code) {
-        out += step == 3 ? "\"\"\"" : "\"";
-      } else {
-        if (c == '\\' || c == '"') out += '\\';
-        out += static_cast<char>(c);
-      }
-    } else {
-      out.append(text, i, step);
-    }
-    if (c == '\n') {
-      if (context == Context::comment || context == Context::basic || context == Context::literal)
-        context = Context::code;  // single-line contexts end with the line
-      ++line, column = 1, at_line_start = true, after_backslash = false;
-    } else {
-      if (c != ' ' && c != '\t' && c != '\r') at_line_start = false;
-      column += static_cast<int>(step);
-    }
-    i += step;
-  }
-  return out;
-}
-
 PluginChoice read_plugin(const toml::table& root, const std::string& section,
                          const std::string& default_name, PluginKind kind,
                          const PluginRegistry& registry, const SceneSpec& scene) {
@@ -459,20 +304,20 @@ std::vector<PointLight> read_point_lights(const toml::table* lighting, const fs:
 
 }  // namespace
 
-SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
-                           const PluginRegistry& registry) {
-  SceneSpec scene;
-  scene.file = file;
-  scene.text = text;
+namespace {
+
+toml::table parse_toml(const std::string& text, const fs::path& file) {
   const std::string ascii = ascii_scene_text(text, file);
-  toml::table root;
   try {
-    root = toml::parse(ascii, file.string());
+    return toml::parse(ascii, file.string());
   } catch (const toml::parse_error& e) {
     throw Error(location_of(e.source(), file), std::string(e.description()));
   } catch (const Error& e) {  // a broken parser assumption: no position is known
     throw Error(SourceLocation{file.string()}, e.what());
   }
+}
+
+void check_sections(const toml::table& root, const fs::path& file) {
   std::vector<std::string> valid(kSections.begin(), kSections.end());
   for (const auto& [key, node] : root) {
     const std::string name(key.str());
@@ -487,18 +332,6 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     }
     if (!node.is_table()) throw Error(where, "[" + name + "] must be a table");
   }
-
-  auto section = [&](const std::string& name, const ParamSchema& schema,
-                     const std::string& skip = "") {
-    const toml::table* table = root[name].as_table();
-    // A missing section's errors point at the file's start.
-    const SourceLocation where =
-        table ? location_of(table->source(), file) : SourceLocation{file.string(), 1, 1};
-    Params params = read_table(table, where, file, skip);
-    params.validate(schema);
-    resolve_paths(params, schema, scene);
-    return params;
-  };
   // The exit basis was a set of [material] keys before it became a plug-in.
   if (const toml::table* material = root["material"].as_table())
     for (const char* old : {"exit_order", "exit_reduced"})
@@ -507,8 +340,23 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                     std::string("section [material]: \"") + old +
                         "\" is now a parameter of the exit basis: write [exit] plugin = \"hsh\", "
                         "order = 5, reduced = true");
-  scene.mesh = section("mesh", mesh_schema());
-  scene.material = section("material", material_schema());
+}
+
+Params read_section(const toml::table& root, const std::string& name, const ParamSchema& schema,
+                    const SceneSpec& scene, const std::string& skip = "") {
+  const toml::table* table = root[name].as_table();
+  // A missing section's errors point at the file's start.
+  const SourceLocation where = table ? location_of(table->source(), scene.file)
+                                     : SourceLocation{scene.file.string(), 1, 1};
+  Params params = read_table(table, where, scene.file, skip);
+  params.validate(schema);
+  resolve_paths(params, schema, scene);
+  return params;
+}
+
+void read_sections(const toml::table& root, SceneSpec& scene) {
+  scene.mesh = read_section(root, "mesh", mesh_schema(), scene);
+  scene.material = read_section(root, "material", material_schema(), scene);
   if (!scene.material.get_string("preset").empty()) {  // measured coefficients replace the keys
     const toml::table* table = root["material"].as_table();
     for (const char* key : {"sigma_a", "sigma_s"})
@@ -517,13 +365,16 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
                     std::string("section [material]: give preset or ") + key + ", not both");
     if (!table->get("eta")) scene.material.set("eta", 1.3);  // Jensen et al.'s measurements
   }
-  scene.transport = section("transport", transport_schema());
-  scene.lighting = section("lighting", lighting_schema(), "point");
-  scene.point_lights = read_point_lights(root["lighting"].as_table(), file);
-  scene.camera = section("camera", camera_schema());
-  scene.output = section("output", output_schema());
-  scene.ground_truth = section("ground_truth", ground_truth_schema());
+  scene.transport = read_section(root, "transport", transport_schema(), scene);
+  scene.lighting = read_section(root, "lighting", lighting_schema(), scene, "point");
+  scene.point_lights = read_point_lights(root["lighting"].as_table(), scene.file);
+  scene.camera = read_section(root, "camera", camera_schema(), scene);
+  scene.output = read_section(root, "output", output_schema(), scene);
+  scene.ground_truth = read_section(root, "ground_truth", ground_truth_schema(), scene);
+}
 
+// Keys that are each valid but not together.
+void check_combinations(const SceneSpec& scene) {
   const bool has_file = !scene.mesh.get_string("file").empty();
   const bool has_generated = !scene.mesh.get_string("generate").empty();
   if (has_file == has_generated)
@@ -537,7 +388,6 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     throw Error(scene.lighting.location(),
                 "section [lighting]: give \"environment\", \"constant\" or [[lighting.point]] "
                 "lights");
-
   const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
   if (!scene.point_lights.empty() && bounces > 0)
     throw Error(scene.transport.location("bounces"),
@@ -552,7 +402,19 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
     throw Error(scene.transport.location("bounces"),
                 "section [transport]: bounces gather light from the shadow rays' hits; they need "
                 "shadowed = true");
+}
 
+}  // namespace
+
+SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
+                           const PluginRegistry& registry) {
+  SceneSpec scene;
+  scene.file = file;
+  scene.text = text;
+  const toml::table root = parse_toml(text, file);
+  check_sections(root, file);
+  read_sections(root, scene);
+  check_combinations(scene);
   scene.basis = read_plugin(root, "basis", "sh", PluginKind::basis, registry, scene);
   // The exit basis serves glossy materials; a lambert one still has it
   // checked (a sweep may vary the BRDF over one scene file).

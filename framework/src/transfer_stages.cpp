@@ -134,10 +134,87 @@ void add_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set
 
 }  // namespace
 
-TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
-                              const DirectionSet& set, TransportResult result,
-                              const RunOptions& options, StageTimes& times,
-                              std::map<std::string, double>& metrics, TransferSignal* direct) {
+namespace {
+
+// The glossy matrices M_p of every vertex (slab by slab through a checkpoint).
+TransferSignal glossy_matrices(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                               const TransportResult& result, const std::vector<Frame>& frames,
+                               const RunOptions& options, StageTimes& times) {
+  Stopwatch clock;
+  Progress progress("glossy matrices", double(mesh.vertex_count()), "", options.quiet);
+  TransferSignal transfer =
+      slabbed_glossy_transfer(plan, mesh, set, result.visibility, frames, options, &progress);
+  times.add("glossy matrices (" + std::to_string(plan.glossy_operator.rows()) + "x" +
+                std::to_string(plan.basis->size()) + ")",
+            clock.seconds());
+  return transfer;
+}
+
+// Glossy inter-reflection over the shadow pass's hits, added to `transfer`;
+// each bounce's share of the direct transfer is reported and kept in metrics.
+void add_glossy_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                        const TransportResult& result, const std::vector<Frame>& frames,
+                        TransferSignal& transfer, const RunOptions& options, StageTimes& times,
+                        std::map<std::string, double>& metrics) {
+  Stopwatch clock;
+  Progress bounce_progress("glossy inter-reflection", plan.bounces, "", options.quiet);
+  BouncedTransfer light = bounce_passes(
+      transfer.coefficients, plan.bounces,
+      glossy_bounce_function(mesh, set, result.hits, *plan.exit, plan.glossy_operator,
+                             plan.basis->size(), frames, plan.bounce_albedo),
+      &bounce_progress, bounce_checkpoint(options));
+  const double direct_norm = transfer.coefficients.cast<double>().norm();
+  transfer.coefficients = std::move(light.total);
+  char line[200];
+  std::snprintf(line, sizeof line, "glossy inter-reflection: %d bounces", plan.bounces);
+  std::string text = line;
+  for (std::size_t b = 0; b < light.bounce_norms.size(); ++b) {
+    metrics["bounce_" + std::to_string(b + 1) + "_norm"] = light.bounce_norms[b];
+    std::snprintf(line, sizeof line, "%s bounce %zu %.2f%%", b ? "," : ";", b + 1,
+                  100 * light.bounce_norms[b] / std::max(direct_norm, 1e-300));
+    text += line;
+  }
+  options.message(text + " of the direct transfer's norm");
+  times.add("glossy inter-reflection (" + std::to_string(plan.bounces) + " bounces)",
+            clock.seconds());
+}
+
+// The subsurface term is view-independent exit radiance: the constant
+// function's exit coefficients times the scattered transfer vector. It is
+// added after the bounces: subsurface light does not bounce (nor in the
+// ground truth).
+void add_glossy_subsurface(const GlossyOperator& glossy, const MatrixXfRow& scattered,
+                           TransferSignal& t) {
+  if (scattered.size() == 0) return;
+  const Eigen::Index n_i = scattered.cols();
+  for (int r = 0; r < glossy.rows(); ++r)
+    t.coefficients.middleCols(r * n_i, n_i) += static_cast<float>(glossy.constant[r]) * scattered;
+}
+
+// Glossy transfer: matrices, bounces, then the subsurface term.
+TransferSignal glossy_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                            const TransportResult& result, const MatrixXfRow& scattered,
+                            const RunOptions& options, StageTimes& times,
+                            std::map<std::string, double>& metrics, TransferSignal* direct) {
+  const std::vector<Frame> frames = tangent_frames(mesh);
+  TransferSignal transfer = glossy_matrices(plan, mesh, set, result, frames, options, times);
+  if (plan.bounces > 0) {
+    if (direct) {
+      *direct = transfer;
+      add_glossy_subsurface(plan.glossy_operator, scattered, *direct);
+    }
+    add_glossy_bounces(plan, mesh, set, result, frames, transfer, options, times, metrics);
+  }
+  add_glossy_subsurface(plan.glossy_operator, scattered, transfer);
+  return transfer;
+}
+
+}  // namespace
+
+TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                              TransportResult result, const RunOptions& options,
+                              StageTimes& times, std::map<std::string, double>& metrics,
+                              TransferSignal* direct) {
   Stopwatch clock;
   if (plan.fit) fit_basis(plan, mesh, set, result.visibility, options, times);
   // Projected from the bits when they were kept (or traced before by a sweep).
@@ -166,58 +243,10 @@ TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, cons
                                    options, "subsurface");
     times.add("subsurface (hierarchical diffusion)", clock.seconds());
   }
-  if (!plan.glossy) {
-    if (plan.subsurface) result.transfer.coefficients += scattered;
-    return std::move(result.transfer);
-  }
-  const GlossyOperator& glossy = plan.glossy_operator;
-  clock = Stopwatch();
-  Progress progress("glossy matrices", double(mesh.vertex_count()), "", options.quiet);
-  const std::vector<Frame> frames = tangent_frames(mesh);
-  TransferSignal transfer =
-      slabbed_glossy_transfer(plan, mesh, set, result.visibility, frames, options, &progress);
-  times.add("glossy matrices (" + std::to_string(glossy.rows()) + "x" +
-                std::to_string(plan.basis->size()) + ")",
-            clock.seconds());
-  // The subsurface term is view-independent exit radiance: the constant
-  // function's exit coefficients times the scattered transfer vector. It is
-  // added after the bounces: subsurface light does not bounce (nor in the
-  // ground truth).
-  auto add_subsurface = [&](TransferSignal& t) {
-    if (!plan.subsurface) return;
-    const Eigen::Index n_i = scattered.cols();
-    for (int r = 0; r < glossy.rows(); ++r)
-      t.coefficients.middleCols(r * n_i, n_i) += static_cast<float>(glossy.constant[r]) * scattered;
-  };
-  if (plan.bounces > 0) {
-    if (direct) {
-      *direct = transfer;
-      add_subsurface(*direct);
-    }
-    clock = Stopwatch();
-    Progress bounce_progress("glossy inter-reflection", plan.bounces, "", options.quiet);
-    BouncedTransfer light = bounce_passes(
-        transfer.coefficients, plan.bounces,
-        glossy_bounce_function(mesh, set, result.hits, *plan.exit, glossy, plan.basis->size(),
-                               frames, plan.bounce_albedo),
-        &bounce_progress, bounce_checkpoint(options));
-    const double direct_norm = transfer.coefficients.cast<double>().norm();
-    transfer.coefficients = std::move(light.total);
-    char line[200];
-    std::snprintf(line, sizeof line, "glossy inter-reflection: %d bounces", plan.bounces);
-    std::string text = line;
-    for (std::size_t b = 0; b < light.bounce_norms.size(); ++b) {
-      metrics["bounce_" + std::to_string(b + 1) + "_norm"] = light.bounce_norms[b];
-      std::snprintf(line, sizeof line, "%s bounce %zu %.2f%%", b ? "," : ";", b + 1,
-                    100 * light.bounce_norms[b] / std::max(direct_norm, 1e-300));
-      text += line;
-    }
-    options.message(text + " of the direct transfer's norm");
-    times.add("glossy inter-reflection (" + std::to_string(plan.bounces) + " bounces)",
-              clock.seconds());
-  }
-  add_subsurface(transfer);
-  return transfer;
+  if (plan.glossy)
+    return glossy_stage(plan, mesh, set, result, scattered, options, times, metrics, direct);
+  if (plan.subsurface) result.transfer.coefficients += scattered;
+  return std::move(result.transfer);
 }
 
 namespace {
@@ -241,7 +270,7 @@ TransferSignal stack_channels(const std::vector<TransferSignal>& parts,
 
 }  // namespace
 
-TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh,
                                  const DirectionSet& set, TransportResult traced,
                                  const RunOptions& options, StageTimes& times,
                                  std::map<std::string, double>& metrics, TransferSignal* direct) {
@@ -290,7 +319,7 @@ TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, c
     } else {
       // The rays are traced once; every channel but the last works on a copy.
       TransportResult rays = g + 1 < channels.groups.size() ? traced : std::move(traced);
-      parts.push_back(transfer_stage(channel, scene, mesh, set, std::move(rays), channel_options,
+      parts.push_back(transfer_stage(channel, mesh, set, std::move(rays), channel_options,
                                      times, metrics, direct ? &channel_direct : nullptr));
       if (store) {
         if (direct) store->save(prefix + "direct", channel_direct.coefficients);

@@ -24,14 +24,14 @@ TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const Direct
 // 2. Transfer: fit (data-driven bases), project, bounces, subsurface, glossy
 //    matrices, glossy bounces. Consumes the visibility and hits; metrics
 //    gets its figures; `direct` (optional) the transfer before any bounce.
-TransferSignal transfer_stage(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh,
                               const DirectionSet& set, TransportResult traced,
                               const RunOptions& options, StageTimes& times,
                               std::map<std::string, double>& metrics,
                               TransferSignal* direct = nullptr);
 // 2'. The same per distinct colour-channel material (plan.channels), the
 //    rays traced once; the transfers stacked in each row.
-TransferSignal channel_transfers(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
+TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh,
                                  const DirectionSet& set, TransportResult traced,
                                  const RunOptions& options, StageTimes& times,
                                  std::map<std::string, double>& metrics,

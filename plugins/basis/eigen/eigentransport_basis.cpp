@@ -142,6 +142,48 @@ Eigen::RowVectorXd column_sums_of_rows(const Eigen::MatrixXd& m, const Shard& sh
   return Eigen::Map<const Eigen::RowVectorXd>(sum.data(), m.cols());
 }
 
+// C = T W - 1 mean (W = diag(sqrt(w))) in products, never built:
+// C X = T (W X) - 1 (mean X) and C^T Y = W T^T Y - mean^T (1^T Y), where the
+// products with T visit only the visible (vertex, direction) pairs. The
+// vertices x columns buffers are kept across passes (fresh pages are slow).
+class CentredTransport {
+ public:
+  CentredTransport(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
+                   const TransposedVisibility& transposed, const Eigen::VectorXd& root_weights,
+                   const Eigen::RowVectorXd& mean, const Shard& shard, const Communicator& comm)
+      : mesh_(mesh), set_(set), visibility_(visibility), transposed_(transposed),
+        root_weights_(root_weights), mean_(mean), shard_(shard), comm_(comm) {}
+
+  // q = C right: this shard's rows.
+  void times(const Eigen::MatrixXd& right, Eigen::MatrixXd& q) {
+    padded_right_.assign(root_weights_.asDiagonal() * right);
+    visible_times(mesh_, set_, visibility_, padded_right_, padded_out_, std::size_t(shard_.first));
+    const Eigen::RowVectorXd shift = mean_ * right;
+    q = padded_out_.matrix_view();
+    q.rowwise() -= shift;
+  }
+  // C^T left (s x columns), summed over the ranks.
+  Eigen::MatrixXd transpose_times(const Eigen::MatrixXd& left) {
+    padded_left_.assign(left);
+    Eigen::MatrixXd product =
+        root_weights_.asDiagonal() *
+        visible_transpose_sum(mesh_, set_, transposed_, padded_left_, shard_, comm_);
+    product.noalias() -= mean_.transpose() * column_sums_of_rows(left, shard_, comm_);
+    return product;
+  }
+
+ private:
+  const Mesh& mesh_;
+  const DirectionSet& set_;
+  const VisibilityBits& visibility_;
+  const TransposedVisibility& transposed_;
+  const Eigen::VectorXd& root_weights_;
+  const Eigen::RowVectorXd& mean_;
+  const Shard& shard_;
+  const Communicator& comm_;
+  PaddedRows padded_right_, padded_left_, padded_out_;
+};
+
 }  // namespace
 
 class Eigentransport final : public Basis {
@@ -221,56 +263,48 @@ class Eigentransport final : public Basis {
                   " vertices for a shard of " + std::to_string(shard.rows()) + " of a mesh of " +
                   std::to_string(mesh.vertex_count()));
     const Eigen::Index v = shard.total;
-    const Eigen::Index columns = std::min<Eigen::Index>({max_d_ + oversampling_, s, v});
-    const auto first = std::size_t(shard.first);
-
-    // Passes over the visibility bits with C = T W - 1 mean (W = diag(sqrt(w))),
-    // never built: C X = T (W X) - 1 (mean X) and C^T Y = W T^T Y -
-    // mean^T (1^T Y), where the products with T visit only the visible
-    // (vertex, direction) pairs.
     const TransposedVisibility transposed(visibility);
     double transport_energy = 0;  // ||T W||_F^2
     mean_ = column_sums(mesh, set, transposed, shard, comm, transport_energy) / double(v);
+    CentredTransport c(mesh, set, visibility, transposed, root_weights_, mean_, shard, comm);
+    const Eigen::MatrixXd q = range_of(c, data, std::min<Eigen::Index>({max_d_ + oversampling_, s, v}));
+    // ||C||_F^2 = ||T W||_F^2 - v ||mean||^2 (C's rows are centred). It loses
+    // digits when the mean holds nearly all the energy (the error is ~eps
+    // ||T W||^2); below 1e-12 ||T W||^2 the rows are the same up to rounding,
+    // there is no variance, and the singular values are rounding noise.
+    const double total_energy = transport_energy - double(v) * mean_.squaredNorm();
+    const Eigen::MatrixXd small = c.transpose_times(q).transpose();  // Q^T C
+    Eigen::BDCSVD<Eigen::MatrixXd> svd(small, Eigen::ComputeThinV);
+    keep_functions(svd, total_energy, !(total_energy > 1e-12 * transport_energy));
+  }
 
-    std::mt19937_64 rng(seed_);
-    std::normal_distribution<double> gaussian;
-    Eigen::MatrixXd omega(s, columns);
-    for (auto& x : omega.reshaped()) x = gaussian(rng);
-    // Y = C Omega; Q = orth(Y); then power iterations Q <- orth(C orth(C^T Q)).
-    // The vertices x columns buffers are kept across passes (fresh pages are slow).
-    PaddedRows padded_right, padded_left, padded_out;
+  // Randomized range finder: Y = C Omega, Q = orth(Y), then power iterations
+  // Q <- orth(C orth(C^T Q)). A killed bake resumes after the last power
+  // iteration it kept: Q is orth(C Z) of that iteration's Z (s x columns,
+  // small; the same on every rank, so rank 0 keeps it), and the same bits
+  // follow. Returns this shard's rows of Q.
+  Eigen::MatrixXd range_of(CentredTransport& c, const FitData& data, Eigen::Index columns) const {
+    const Shard shard = data.rows();
+    const Communicator& comm = data.communicator();
+    const Eigen::Index s = data.directions->size();
     Eigen::MatrixXd q(shard.rows(), columns);
-    auto times_c = [&](const Eigen::MatrixXd& right) {  // q = C * right: this shard's rows
-      padded_right.assign(root_weights_.asDiagonal() * right);
-      visible_times(mesh, set, visibility, padded_right, padded_out, first);
-      const Eigen::RowVectorXd shift = mean_ * right;
-      q = padded_out.matrix_view();
-      q.rowwise() -= shift;
-    };
-    auto c_transpose_times = [&](const Eigen::MatrixXd& left) {  // C^T left: s x columns
-      padded_left.assign(left);
-      Eigen::MatrixXd product =
-          root_weights_.asDiagonal() *
-          visible_transpose_sum(mesh, set, transposed, padded_left, shard, comm);
-      product.noalias() -= mean_.transpose() * column_sums_of_rows(left, shard, comm);
-      return product;
-    };
-    // A killed bake resumes after the last power iteration it kept: Q is
-    // orth(C Z) of that iteration's Z (s x columns, small; the same on every
-    // rank, so rank 0 keeps it), and the same bits follow.
     const int resume_after = kept_iteration(data.checkpoint, comm, s, columns);
     const PartKeeper* keep = data.checkpoint && comm.rank() == 0 ? data.checkpoint : nullptr;
     if (resume_after >= 0) {
       log_info("resuming: the eigentransport fit after power iteration " +
                std::to_string(resume_after + 1) + " of " + std::to_string(power_iterations_) +
                ", kept in " + data.checkpoint->where());
-      times_c(data.checkpoint->load_doubles(kept_z_name(resume_after)));
+      c.times(data.checkpoint->load_doubles(kept_z_name(resume_after)), q);
     } else {
-      times_c(omega);
+      std::mt19937_64 rng(seed_);
+      std::normal_distribution<double> gaussian;
+      Eigen::MatrixXd omega(s, columns);
+      for (auto& x : omega.reshaped()) x = gaussian(rng);
+      c.times(omega, q);
     }
     orthonormalize_rows(q, shard, comm);
     for (int i = resume_after + 1; i < power_iterations_; ++i) {
-      Eigen::MatrixXd z = c_transpose_times(q);
+      Eigen::MatrixXd z = c.transpose_times(q);
       orthonormalize(z);
       if (keep) try {
           keep->save(kept_z_name(i), z);
@@ -279,18 +313,16 @@ class Eigentransport final : public Basis {
           log_warning(std::string("eigentransport: cannot keep the fit's state: ") + e.what());
           keep = nullptr;
         }
-      times_c(z);
+      c.times(z, q);
       orthonormalize_rows(q, shard, comm);
     }
-    // ||C||_F^2 = ||T W||_F^2 - v ||mean||^2 (C's rows are centred). It loses
-    // digits when the mean holds nearly all the energy (the error is ~eps
-    // ||T W||^2); below 1e-12 ||T W||^2 the rows are the same up to rounding,
-    // there is no variance, and the singular values are rounding noise.
-    const double total_energy = transport_energy - double(v) * mean_.squaredNorm();
-    const bool no_variance = !(total_energy > 1e-12 * transport_energy);
-    const Eigen::MatrixXd small = c_transpose_times(q).transpose();  // Q^T C
-    Eigen::BDCSVD<Eigen::MatrixXd> svd(small, Eigen::ComputeThinV);
+    return q;
+  }
 
+  // The eigentransports from the SVD of Q^T C: d functions (max_d, or fewer
+  // by captured variance).
+  void keep_functions(const Eigen::BDCSVD<Eigen::MatrixXd>& svd, double total_energy,
+                      bool no_variance) {
     const Eigen::VectorXd sigma = svd.singularValues();
     int d = static_cast<int>(std::min<Eigen::Index>(max_d_, sigma.size()));
     if (variance_ > 0) {
@@ -311,7 +343,7 @@ class Eigentransport final : public Basis {
     const Eigen::MatrixXd pcs = svd.matrixV().leftCols(components).transpose();
     Eigen::RowVectorXd outside = mean_ - (mean_ * pcs.transpose()) * pcs;
     const bool with_mean = d > 1 && outside.norm() > 1e-12 * std::max(1.0, mean_.norm());
-    eigen_.resize(with_mean ? d : components, s);
+    eigen_.resize(with_mean ? d : components, svd.matrixV().rows());
     if (with_mean) {
       eigen_.row(0) = outside / outside.norm();
       eigen_.bottomRows(components) = pcs;

@@ -234,122 +234,157 @@ class Refitter {
   std::vector<std::int32_t> labels_;
 };
 
-}  // namespace
+// One CPCA encode (Sloan et al. 2003, section 4): LBG clusters, then passes
+// that refit each cluster's PCA and reclassify every point by the error of
+// its approximation, one component at a time (iterative), then with a
+// per-cluster component count from a storage budget (adaptive). The state at
+// the start of a pass is kept (options.lbg.keep) so a killed encode resumes.
+class CpcaRun {
+ public:
+  CpcaRun(const Rows& rows, const CpcaOptions& options)
+      : rows_(rows),
+        options_(options),
+        n_prime_(static_cast<int>(std::min<Eigen::Index>(options.components, rows.cols()))),
+        k_(static_cast<int>(std::min<Eigen::Index>(options.lbg.clusters, rows.total()))),
+        keep_(options.method != Method::static_pca ? options.lbg.keep : nullptr),
+        refitter_(rows, k_),
+        errors_(std::size_t(rows.local()), 0.0) {}
 
-CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
-  if (options.components < 0) throw Error("CPCA: negative component count");
-  CpcaResult result;
-  const int n_prime = static_cast<int>(std::min<Eigen::Index>(options.components, rows.cols()));
-  // A state kept by a killed run of the same encode replaces LBG and the passes it did.
-  const PartKeeper* keep =
-      options.method != Method::static_pca ? options.lbg.keep : nullptr;  // reset on a failed write
-  const int clusters = static_cast<int>(std::min<Eigen::Index>(options.lbg.clusters, rows.total()));
-  std::optional<CpcaState> kept;
-  try {
-    if (keep) kept = kept_cpca_state(*keep, rows, clusters);
-  } catch (const Error& e) {  // a damaged part: start afresh rather than fail every rerun
-    log_warning(std::string("CPCA: the kept state is unreadable, starting afresh: ") + e.what());
+  CpcaResult run() {
+    resume_or_cluster();
+    since_kept_ = Stopwatch();  // the first state is kept keep_seconds after LBG
+    if (options_.method != Method::static_pca) iterative_passes();
+    if (options_.method == Method::adaptive) return adaptive_passes();
+    result_.models =
+        truncated(refitter_.fit(result_.labels, n_prime_), std::vector<int>(k_, n_prime_));
+    return std::move(result_);
   }
-  if (keep && rows.any(!kept)) kept.reset();  // every rank resumes, or none
-  Refitter refitter(rows, clusters);
-  int first_component = 1, first_iteration = 0, sequence = 0;
-  const bool adaptive_kept = kept && kept->phase == 1;
-  if (kept && rows.comm.rank() == 0)
-    log_info("resuming: CPCA at " +
-             (adaptive_kept ? "adaptive pass " + std::to_string(kept->iteration + 1)
-                            : "component " + std::to_string(kept->component) + ", pass " +
-                                  std::to_string(kept->iteration + 1)) +
-             ", kept in " + keep->where());
-  if (kept) {
-    result.labels = std::move(kept->labels);
-    refitter.restore(std::move(kept->models), std::move(kept->fitted_labels));
-    first_component = kept->component;
-    first_iteration = kept->iteration;
-    sequence = kept->sequence + 1;
-  } else {
-    Clusters vq = lbg(rows, options.lbg);
-    result.log = vq.log;
-    result.labels = std::move(vq.labels);
-  }
-  const int k = clusters;
-  std::vector<double> errors(std::size_t(rows.local()), 0.0);
-  // Keeps the state at the start of a pass (once a fit has been made), at
-  // most every keep_seconds.
-  Stopwatch since_kept;
-  // Rank 0's clock decides for every rank, so that all keep the same pass.
-  const auto keep_before_pass = [&](int phase, int component, int iteration) {
-    if (!keep || refitter.models().empty() ||
-        !rows.any(rows.comm.rank() == 0 && since_kept.seconds() >= options.lbg.keep_seconds))
+
+ private:
+  // A state kept by a killed run of the same encode replaces LBG and the
+  // passes it did.
+  void resume_or_cluster() {
+    std::optional<CpcaState> kept;
+    try {
+      if (keep_) kept = kept_cpca_state(*keep_, rows_, k_);
+    } catch (const Error& e) {  // a damaged part: start afresh rather than fail every rerun
+      log_warning(std::string("CPCA: the kept state is unreadable, starting afresh: ") + e.what());
+    }
+    if (keep_ && rows_.any(!kept)) kept.reset();  // every rank resumes, or none
+    if (!kept) {
+      Clusters vq = lbg(rows_, options_.lbg);
+      result_.log = vq.log;
+      result_.labels = std::move(vq.labels);
       return;
-    if (!keep_cpca_state(*keep, rows,
-                         {phase, component, iteration, sequence++, result.labels, refitter.labels(),
-                          refitter.models()}))
-      keep = nullptr;
-    since_kept = Stopwatch();
-  };
+    }
+    resumed_ = true;
+    adaptive_kept_ = kept->phase == 1;
+    if (rows_.comm.rank() == 0)
+      log_info("resuming: CPCA at " +
+               (adaptive_kept_ ? "adaptive pass " + std::to_string(kept->iteration + 1)
+                               : "component " + std::to_string(kept->component) + ", pass " +
+                                     std::to_string(kept->iteration + 1)) +
+               ", kept in " + keep_->where());
+    result_.labels = std::move(kept->labels);
+    refitter_.restore(std::move(kept->models), std::move(kept->fitted_labels));
+    first_component_ = kept->component;
+    first_iteration_ = kept->iteration;
+    sequence_ = kept->sequence + 1;
+  }
 
-  std::optional<Progress> progress;
-  if (options.method != Method::static_pca) {
-    const int passes = n_prime * options.iterations_per_component +
-                       (options.method == Method::adaptive ? options.adaptive_iterations : 0);
-    progress.emplace(options.method == Method::adaptive ? "adaptive CPCA" : "iterative CPCA",
-                     passes, "passes");
-    if (kept)
-      progress->add(adaptive_kept ? n_prime * options.iterations_per_component + first_iteration
-                                  : (first_component - 1) * options.iterations_per_component +
-                                        first_iteration,
-                    0);
+  // Keeps the state at the start of a pass (once a fit has been made), at
+  // most every keep_seconds; rank 0's clock decides for every rank, so that
+  // all keep the same pass.
+  void keep_before_pass(int phase, int component, int iteration) {
+    if (!keep_ || refitter_.models().empty() ||
+        !rows_.any(rows_.comm.rank() == 0 && since_kept_.seconds() >= options_.lbg.keep_seconds))
+      return;
+    if (!keep_cpca_state(*keep_, rows_,
+                         {phase, component, iteration, sequence_++, result_.labels,
+                          refitter_.labels(), refitter_.models()}))
+      keep_ = nullptr;
+    since_kept_ = Stopwatch();
+  }
+
+  // Components one at a time; classification by approximation error.
+  void iterative_passes() {
+    const int per_component = options_.iterations_per_component;
+    const int passes = n_prime_ * per_component +
+                       (options_.method == Method::adaptive ? options_.adaptive_iterations : 0);
+    progress_.emplace(options_.method == Method::adaptive ? "adaptive CPCA" : "iterative CPCA",
+                      passes, "passes");
+    if (resumed_)
+      progress_->add(adaptive_kept_
+                         ? n_prime_ * per_component + first_iteration_
+                         : (first_component_ - 1) * per_component + first_iteration_,
+                     0);
     KeptErrors kept_errors;
-    // Components one at a time; classification by approximation error.
-    for (int c = adaptive_kept ? n_prime + 1 : first_component; c <= n_prime; ++c) {
-      for (int iteration = c == first_component ? first_iteration : 0;
-           iteration < options.iterations_per_component; ++iteration) {
+    for (int c = adaptive_kept_ ? n_prime_ + 1 : first_component_; c <= n_prime_; ++c) {
+      for (int iteration = c == first_component_ ? first_iteration_ : 0;
+           iteration < per_component; ++iteration) {
         Progress::check_interrupt();
         keep_before_pass(0, c, iteration);
         Stopwatch clock;
-        const auto& models = refitter.fit(result.labels, c);
-        const std::vector<std::int32_t> before = result.labels;
-        const double energy = classify(rows, models, c, result.labels, errors, &kept_errors);
-        const bool refilled = refill_empty(rows, result.labels, errors, k);
-        result.log.push_back(gemm_log(rows, models, c, clock.seconds(), energy, "iterative"));
-        progress->add(1, 1);
-        if (!refilled && !rows.any(before != result.labels)) {  // LBG: no point switched
-          progress->add(options.iterations_per_component - iteration - 1, 0);
+        const auto& models = refitter_.fit(result_.labels, c);
+        const std::vector<std::int32_t> before = result_.labels;
+        const double energy = classify(rows_, models, c, result_.labels, errors_, &kept_errors);
+        const bool refilled = refill_empty(rows_, result_.labels, errors_, k_);
+        result_.log.push_back(gemm_log(rows_, models, c, clock.seconds(), energy, "iterative"));
+        progress_->add(1, 1);
+        if (!refilled && !rows_.any(before != result_.labels)) {  // LBG: no point switched
+          progress_->add(per_component - iteration - 1, 0);
           break;
         }
       }
     }
   }
-  std::vector<int> count(k, n_prime);
-  if (options.method == Method::adaptive) {
-    const int widest = static_cast<int>(std::min<Eigen::Index>(rows.cols(), 2 * n_prime + 8));
-    // Storage of fixed n' beyond the means: v n' weights + k n' n representatives.
-    const double budget = double(rows.total()) * n_prime + double(k) * n_prime * rows.cols();
+
+  // Components per cluster from the budget of fixed n' (v n' weights + k n' n
+  // representatives beyond the means), refit and reclassified each pass.
+  CpcaResult adaptive_passes() {
+    const int widest = static_cast<int>(std::min<Eigen::Index>(rows_.cols(), 2 * n_prime_ + 8));
+    const double budget =
+        double(rows_.total()) * n_prime_ + double(k_) * n_prime_ * rows_.cols();
     std::vector<double> sizes;
-    for (int iteration = adaptive_kept ? first_iteration : 0;
-         iteration < options.adaptive_iterations; ++iteration) {
+    for (int iteration = adaptive_kept_ ? first_iteration_ : 0;
+         iteration < options_.adaptive_iterations; ++iteration) {
       Progress::check_interrupt();
-      keep_before_pass(1, n_prime, iteration);
+      keep_before_pass(1, n_prime_, iteration);
       Stopwatch clock;
-      auto models = truncated(refitter.fit(result.labels, widest, &sizes),
-                              std::vector<int>(std::size_t(k), widest));
-      count = allocate(models, sizes, budget, rows.cols());
-      truncate(models, count);
-      const double energy = classify(rows, models, widest, result.labels, errors);
-      refill_empty(rows, result.labels, errors, k);
-      result.log.push_back(gemm_log(rows, models, widest, clock.seconds(), energy, "adaptive"));
-      progress->add(1, 1);
+      auto models = truncated(refitter_.fit(result_.labels, widest, &sizes),
+                              std::vector<int>(std::size_t(k_), widest));
+      truncate(models, allocate(models, sizes, budget, rows_.cols()));
+      const double energy = classify(rows_, models, widest, result_.labels, errors_);
+      refill_empty(rows_, result_.labels, errors_, k_);
+      result_.log.push_back(gemm_log(rows_, models, widest, clock.seconds(), energy, "adaptive"));
+      progress_->add(1, 1);
     }
     // Final representatives for the final classification, same allocation.
-    auto models = truncated(refitter.fit(result.labels, widest, &sizes),
-                            std::vector<int>(std::size_t(k), widest));
-    count = allocate(models, sizes, budget, rows.cols());
-    truncate(models, count);
-    result.models = std::move(models);
-    return result;
+    auto models = truncated(refitter_.fit(result_.labels, widest, &sizes),
+                            std::vector<int>(std::size_t(k_), widest));
+    truncate(models, allocate(models, sizes, budget, rows_.cols()));
+    result_.models = std::move(models);
+    return std::move(result_);
   }
-  result.models = truncated(refitter.fit(result.labels, n_prime), count);
-  return result;
+
+  const Rows& rows_;
+  const CpcaOptions& options_;
+  const int n_prime_, k_;
+  const PartKeeper* keep_;  // null once keeping failed, on every rank alike
+  Refitter refitter_;
+  std::vector<double> errors_;
+  CpcaResult result_;
+  bool resumed_ = false, adaptive_kept_ = false;
+  int first_component_ = 1, first_iteration_ = 0, sequence_ = 0;
+  Stopwatch since_kept_;
+  std::optional<Progress> progress_;
+};
+
+}  // namespace
+
+CpcaResult cpca(const Rows& rows, const CpcaOptions& options) {
+  if (options.components < 0) throw Error("CPCA: negative component count");
+  return CpcaRun(rows, options).run();
 }
 
 }  // namespace prt::clustering

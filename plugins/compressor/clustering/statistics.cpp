@@ -177,6 +177,85 @@ std::map<int, MatrixXfRow> gathered_rows(const Rows& rows,
 // kGroupBytes (the tree holds a few partials per thread at once).
 constexpr std::size_t kGroupBytes = std::size_t(64) << 20;
 
+// The segment's rows [begin, end) of each wanted cluster, in row order:
+// cluster j's are sorted[start[j], start[j + 1]) (a counting sort: a map of
+// vectors per segment was most of the serial time of the scatter).
+struct SegmentMembers {
+  std::vector<std::size_t> start;
+  std::vector<Eigen::Index> sorted;
+};
+
+SegmentMembers segment_members(const std::vector<std::int32_t>& labels,
+                               const std::vector<bool>& wanted, Eigen::Index begin,
+                               Eigen::Index end) {
+  const std::size_t k = wanted.size();
+  SegmentMembers m{std::vector<std::size_t>(k + 1, 0), {}};
+  for (Eigen::Index p = begin; p < end; ++p) {
+    const std::int32_t l = labels[std::size_t(p)];
+    if (l >= 0 && wanted[std::size_t(l)]) ++m.start[std::size_t(l) + 1];
+  }
+  for (std::size_t j = 0; j < k; ++j) m.start[j + 1] += m.start[j];
+  m.sorted.resize(m.start[k]);
+  std::vector<std::size_t> next(m.start.begin(), m.start.end() - 1);
+  for (Eigen::Index p = begin; p < end; ++p) {
+    const std::int32_t l = labels[std::size_t(p)];
+    if (l >= 0 && wanted[std::size_t(l)]) m.sorted[next[std::size_t(l)]++] = p;
+  }
+  return m;
+}
+
+struct ScatterScratch {
+  Eigen::MatrixXd centred, sum;
+};
+
+// One cluster's scatter over `count` members, as its lower triangle column
+// by column (half the bytes to add and send): one rank update of its members
+// in row order, the same bits on any thread.
+void lower_scatter(const Rows& rows, const Eigen::Index* members, std::size_t count,
+                   const Eigen::RowVectorXd& mean, ScatterScratch& scratch,
+                   std::vector<double>& block) {
+  const Eigen::Index n = rows.cols();
+  scratch.centred.resize(n, static_cast<Eigen::Index>(count));
+  for (std::size_t j = 0; j < count; ++j)
+    scratch.centred.col(Eigen::Index(j)) =
+        (rows.x.row(members[j]).cast<double>() - mean).transpose();
+  scratch.sum.setZero(n, n);
+  scratch.sum.selfadjointView<Eigen::Lower>().rankUpdate(scratch.centred);
+  block.resize(std::size_t(n * (n + 1) / 2));
+  std::size_t at = 0;
+  for (Eigen::Index c = 0; c < n; ++c)
+    for (Eigen::Index r = c; r < n; ++r) block[at++] = scratch.sum(r, c);
+}
+
+// The blocks of one segment: the clusters of a segment run on every core, as
+// a signal has few segments (5 for the bunny). The blocks are made first, so
+// that the tasks only fill them.
+Blocks segment_scatter(const Rows& rows, const std::vector<std::int32_t>& labels,
+                       const RowMatrixXd& means, const std::vector<bool>& wanted, Eigen::Index s,
+                       tbb::enumerable_thread_specific<ScatterScratch>& scratch) {
+  const auto [begin, end] = rows.segment_rows(s);
+  const SegmentMembers m = segment_members(labels, wanted, begin, end);
+  Blocks out;
+  struct Task {
+    std::int32_t cluster;
+    const Eigen::Index* members;
+    std::size_t count;
+    std::vector<double>* block;
+  };
+  std::vector<Task> tasks;
+  for (std::size_t j = 0; j + 1 < m.start.size(); ++j)
+    if (m.start[j + 1] > m.start[j])
+      tasks.push_back({std::int32_t(j), &m.sorted[m.start[j]], m.start[j + 1] - m.start[j],
+                       &out[std::int64_t(j)]});
+  tbb::parallel_for(std::size_t(0), tasks.size(), [&](std::size_t i) {
+    const Task& task = tasks[i];
+    lower_scatter(rows, task.members, task.count, means.row(task.cluster), scratch.local(),
+                  *task.block);
+  });
+  rows.release(begin, end);
+  return out;
+}
+
 std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
                                                const std::vector<std::int32_t>& labels,
                                                const RowMatrixXd& means,
@@ -192,73 +271,15 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
     if (!gathered[i]) scattered.push_back(int(i));
   Blocks total;
   std::vector<bool> wanted(static_cast<std::size_t>(means.rows()), false);
-  struct ScatterScratch {
-    Eigen::MatrixXd centred, sum;
-  };
-  tbb::enumerable_thread_specific<ScatterScratch> scatter_scratch;
+  tbb::enumerable_thread_specific<ScatterScratch> scratch;
   for (std::size_t start = 0; start < scattered.size(); start += group) {
     std::fill(wanted.begin(), wanted.end(), false);
     for (std::size_t i = start; i < std::min(scattered.size(), start + group); ++i)
       wanted[std::size_t(which[std::size_t(scattered[i])])] = true;
-    Blocks part = segment_sum_blocks(
+    total.merge(segment_sum_blocks(
         rows.shard,
-        [&](Eigen::Index s) {
-          const auto [begin, end] = rows.segment_rows(s);
-          // The segment's rows of each wanted cluster, in row order (a
-          // counting sort: a map of vectors per segment was most of the
-          // serial time of the scatter).
-          const std::size_t k = wanted.size();
-          std::vector<std::size_t> start(k + 1, 0);
-          for (Eigen::Index p = begin; p < end; ++p) {
-            const std::int32_t l = labels[std::size_t(p)];
-            if (l >= 0 && wanted[std::size_t(l)]) ++start[std::size_t(l) + 1];
-          }
-          for (std::size_t j = 0; j < k; ++j) start[j + 1] += start[j];
-          std::vector<Eigen::Index> sorted(start[k]);
-          std::vector<std::size_t> next(start.begin(), start.end() - 1);
-          for (Eigen::Index p = begin; p < end; ++p) {
-            const std::int32_t l = labels[std::size_t(p)];
-            if (l >= 0 && wanted[std::size_t(l)]) sorted[next[std::size_t(l)]++] = p;
-          }
-          // A cluster's block is one rank update of its members in row order
-          // (the same bits on any thread); the clusters of a segment run on
-          // every core, as a signal has few segments (5 for the bunny). The
-          // blocks are made first, so that the tasks only fill them.
-          Blocks out;
-          struct Task {
-            std::int32_t cluster;
-            const Eigen::Index* members;
-            std::size_t count;
-            std::vector<double>* block;
-          };
-          std::vector<Task> tasks;
-          for (std::size_t j = 0; j < k; ++j)
-            if (start[j + 1] > start[j])
-              tasks.push_back({std::int32_t(j), &sorted[start[j]], start[j + 1] - start[j],
-                               &out[std::int64_t(j)]});
-          tbb::parallel_for(std::size_t(0), tasks.size(), [&](std::size_t i) {
-            const std::int32_t cluster = tasks[i].cluster;
-            const Eigen::Index* list = tasks[i].members;
-            const std::size_t count = tasks[i].count;
-            ScatterScratch& scratch = scatter_scratch.local();
-            scratch.centred.resize(n, static_cast<Eigen::Index>(count));
-            for (std::size_t j = 0; j < count; ++j)
-              scratch.centred.col(Eigen::Index(j)) =
-                  (rows.x.row(list[j]).cast<double>() - means.row(cluster)).transpose();
-            scratch.sum.setZero(n, n);
-            scratch.sum.selfadjointView<Eigen::Lower>().rankUpdate(scratch.centred);
-            // The lower triangle, column by column: half the bytes to add and send.
-            std::vector<double>& block = *tasks[i].block;
-            block.resize(std::size_t(n * (n + 1) / 2));
-            std::size_t at = 0;
-            for (Eigen::Index c = 0; c < n; ++c)
-              for (Eigen::Index r = c; r < n; ++r) block[at++] = scratch.sum(r, c);
-          });
-          rows.release(begin, end);
-          return out;
-        },
-        rows.comm);
-    total.merge(part);
+        [&](Eigen::Index s) { return segment_scatter(rows, labels, means, wanted, s, scratch); },
+        rows.comm));
   }
   std::map<int, Eigen::MatrixXd> scatter;
   for (int i : scattered) {
@@ -388,15 +409,15 @@ std::vector<std::vector<std::size_t>> solve_batches(std::vector<std::size_t> sol
 
 }  // namespace
 
-std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::int32_t>& labels,
-                                     int k, const std::vector<int>& components,
-                                     std::vector<double>* counts, const FitReuse* reuse) {
-  const Eigen::Index n = rows.cols();
-  const ClusterSums sums = cluster_sums(rows, labels, k);
-  std::vector<ClusterModel> models(static_cast<std::size_t>(k));
-  RowMatrixXd means = RowMatrixXd::Zero(k, n);
+namespace {
+
+// Each cluster's mean, and a zero model sized for its components; a model
+// whose members did not change is reused. Returns the clusters left to solve.
+std::vector<int> start_models(const ClusterSums& sums, const std::vector<int>& components,
+                              const FitReuse* reuse, Eigen::Index n,
+                              std::vector<ClusterModel>& models, RowMatrixXd& means) {
   std::vector<int> which;
-  for (int j = 0; j < k; ++j) {
+  for (int j = 0; j < int(models.size()); ++j) {
     const int c = std::max(0, components[std::size_t(j)]);
     if (reuse && !reuse->changed[std::size_t(j)] &&
         (*reuse->previous)[std::size_t(j)].basis.rows() >= std::min(c, reuse->minimum)) {
@@ -410,6 +431,111 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     models[std::size_t(j)].mean = means.row(j);
     if (c > 0) which.push_back(j);
   }
+  return which;
+}
+
+// Per thread, kept from batch to batch: the batch's centred members and
+// their matrices (a scatter of the last batch's size is reused without a
+// new allocation; a Gram matrix of another size is reallocated).
+struct BatchScratch {
+  std::vector<AlignedDoubles> centred;
+  std::vector<Eigen::MatrixXd> matrices;
+};
+
+// What solving the clusters' models needs, made once per refit.
+struct ClusterSolve {
+  const Rows& rows;
+  const std::vector<int>& which;  // the clusters to solve
+  const std::vector<bool>& gram;  // from the Gram matrix (else the scatter)
+  const std::vector<bool>& gathered;  // members gathered (else the scatter summed over segments)
+  const std::vector<std::vector<std::uint32_t>>& members;
+  const std::map<int, MatrixXfRow>& gathered_members;  // ranks: the members gathered here
+  const std::map<int, Eigen::MatrixXd>& summed;         // scatters summed over segments
+  std::vector<ClusterModel>& models;
+
+  // One batch of clusters: their matrices, one batched eigen-solve, their models.
+  void solve(const std::vector<std::size_t>& batch, BatchScratch& scratch) const {
+    const Eigen::Index count = models[std::size_t(which[batch.front()])].basis.rows();
+    scratch.centred.resize(std::max(scratch.centred.size(), batch.size()));
+    scratch.matrices.resize(std::max(scratch.matrices.size(), batch.size()));
+    std::vector<CentredMembers> centred(batch.size());
+    std::vector<const Eigen::MatrixXd*> matrices;
+    for (std::size_t q = 0; q < batch.size(); ++q) {
+      const std::size_t i = batch[q];
+      if (!gathered[i]) {
+        matrices.push_back(&summed.at(int(i)));
+        continue;
+      }
+      centred[q] = centre(i, scratch.centred[q]);
+      lower_product(centred[q].a, centred[q].depth, centred[q].width, centred[q].stride,
+                    scratch.matrices[q]);
+      matrices.push_back(&scratch.matrices[q]);
+    }
+    const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
+    for (std::size_t q = 0; q < batch.size(); ++q) {
+      ClusterModel& model = models[std::size_t(which[batch[q]])];
+      if (gram[batch[q]])
+        directions_from_gram(centred[q], pairs[q], model);
+      else
+        keep_directions(pairs[q].values, pairs[q].vectors, model);
+    }
+  }
+
+  // Cluster i's members less its mean, from where they lie (or were gathered).
+  CentredMembers centre(std::size_t i, AlignedDoubles& storage) const {
+    const ClusterModel& model = models[std::size_t(which[i])];
+    if (rows.distributed()) {
+      const MatrixXfRow& y = gathered_members.at(int(i));
+      return centre_members(
+          y.rows(), [&](Eigen::Index p) { return y.row(p); }, model.mean, gram[i], storage);
+    }
+    const std::vector<std::uint32_t>& list = members[std::size_t(which[i])];
+    CentredMembers out = centre_members(
+        Eigen::Index(list.size()),
+        [&](Eigen::Index p) { return rows.x.row(list[std::size_t(p)]); }, model.mean, gram[i],
+        storage);
+    // Its members' pages go at once (most clusters are small for wide rows).
+    for (std::uint32_t p : list) rows.release(p, p + 1);
+    return out;
+  }
+};
+
+// Each rank solved every size-th cluster: the ranks share their models.
+void share_models(const Rows& rows, const std::vector<int>& which,
+                  std::vector<ClusterModel>& models) {
+  const int rank = rows.comm.rank(), ranks = rows.comm.size();
+  std::vector<double> mine;
+  for (std::size_t i = std::size_t(rank); i < which.size(); i += std::size_t(ranks)) {
+    const ClusterModel& m = models[std::size_t(which[i])];
+    mine.insert(mine.end(), m.basis.data(), m.basis.data() + m.basis.size());
+    mine.insert(mine.end(), m.eigenvalues.data(), m.eigenvalues.data() + m.eigenvalues.size());
+  }
+  const auto all = allgather(rows.comm, mine);
+  for (int r = 0; r < ranks; ++r) {
+    std::size_t at = 0;
+    for (std::size_t i = std::size_t(r); i < which.size(); i += std::size_t(ranks)) {
+      ClusterModel& m = models[std::size_t(which[i])];
+      const std::size_t size = std::size_t(m.basis.size()),
+                        values = std::size_t(m.eigenvalues.size());
+      if (at + size + values > all[std::size_t(r)].size())
+        throw Error("clustering: rank " + std::to_string(r) + " sent too few model values");
+      std::copy_n(&all[std::size_t(r)][at], size, m.basis.data());
+      std::copy_n(&all[std::size_t(r)][at + size], values, m.eigenvalues.data());
+      at += size + values;
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::int32_t>& labels,
+                                     int k, const std::vector<int>& components,
+                                     std::vector<double>* counts, const FitReuse* reuse) {
+  const Eigen::Index n = rows.cols();
+  const ClusterSums sums = cluster_sums(rows, labels, k);
+  std::vector<ClusterModel> models(static_cast<std::size_t>(k));
+  RowMatrixXd means = RowMatrixXd::Zero(k, n);
+  const std::vector<int> which = start_models(sums, components, reuse, n, models, means);
   // Small clusters from their Gram matrix, the others from their scatter;
   // both from the members gathered where the cluster is solved, in global
   // row order, except clusters too large to gather, whose scatter is summed
@@ -439,80 +565,15 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     mine.push_back(i);
   const std::vector<std::vector<std::size_t>> batches =
       solve_batches(std::move(mine), which, gram, sums.counts, models, n);
-  // Per thread, kept from batch to batch: the batch's centred members and
-  // their matrices (a scatter of the last batch's size is reused without a
-  // new allocation; a Gram matrix of another size is reallocated).
-  struct BatchScratch {
-    std::vector<AlignedDoubles> centred;
-    std::vector<Eigen::MatrixXd> matrices;
-  };
+  const ClusterSolve solve{rows,   which,           gram,   gathered, members,
+                           gathered_members, summed, models};
   tbb::enumerable_thread_specific<BatchScratch> batch_scratch;
   tbb::parallel_for(std::size_t(0), batches.size(), [&](std::size_t b) {
     Progress::check_interrupt();  // eight eigen-solves may take a while (glossy rows)
-    const std::vector<std::size_t>& batch = batches[b];
-    const Eigen::Index count = models[std::size_t(which[batch.front()])].basis.rows();
-    BatchScratch& scratch = batch_scratch.local();
-    scratch.centred.resize(std::max(scratch.centred.size(), batch.size()));
-    scratch.matrices.resize(std::max(scratch.matrices.size(), batch.size()));
-    std::vector<CentredMembers> centred(batch.size());
-    std::vector<const Eigen::MatrixXd*> matrices;
-    for (std::size_t q = 0; q < batch.size(); ++q) {
-      const std::size_t i = batch[q];
-      if (!gathered[i]) {
-        matrices.push_back(&summed.at(int(i)));
-        continue;
-      }
-      const ClusterModel& model = models[std::size_t(which[i])];
-      if (rows.distributed()) {
-        const MatrixXfRow& y = gathered_members.at(int(i));
-        centred[q] = centre_members(
-            y.rows(), [&](Eigen::Index p) { return y.row(p); }, model.mean, gram[i],
-            scratch.centred[q]);
-      } else {
-        const std::vector<std::uint32_t>& list = members[std::size_t(which[i])];
-        centred[q] = centre_members(
-            Eigen::Index(list.size()),
-            [&](Eigen::Index p) { return rows.x.row(list[std::size_t(p)]); }, model.mean, gram[i],
-            scratch.centred[q]);
-        // Its members' pages go at once (most clusters are small for wide rows).
-        for (std::uint32_t p : list) rows.release(p, p + 1);
-      }
-      lower_product(centred[q].a, centred[q].depth, centred[q].width, centred[q].stride,
-                    scratch.matrices[q]);
-      matrices.push_back(&scratch.matrices[q]);
-    }
-    const std::vector<Eigenpairs> pairs = largest_eigenpairs_batch(matrices, count);
-    for (std::size_t q = 0; q < batch.size(); ++q) {
-      ClusterModel& model = models[std::size_t(which[batch[q]])];
-      if (gram[batch[q]])
-        directions_from_gram(centred[q], pairs[q], model);
-      else
-        keep_directions(pairs[q].values, pairs[q].vectors, model);
-    }
+    solve.solve(batches[b], batch_scratch.local());
   });
   rows.release_all();  // the gathered clusters' members, read where they lie
-  if (ranks > 1) {
-    std::vector<double> mine;
-    for (std::size_t i = std::size_t(rank); i < which.size(); i += std::size_t(ranks)) {
-      const ClusterModel& m = models[std::size_t(which[i])];
-      mine.insert(mine.end(), m.basis.data(), m.basis.data() + m.basis.size());
-      mine.insert(mine.end(), m.eigenvalues.data(), m.eigenvalues.data() + m.eigenvalues.size());
-    }
-    const auto all = allgather(rows.comm, mine);
-    for (int r = 0; r < ranks; ++r) {
-      std::size_t at = 0;
-      for (std::size_t i = std::size_t(r); i < which.size(); i += std::size_t(ranks)) {
-        ClusterModel& m = models[std::size_t(which[i])];
-        const std::size_t size = std::size_t(m.basis.size()),
-                          values = std::size_t(m.eigenvalues.size());
-        if (at + size + values > all[std::size_t(r)].size())
-          throw Error("clustering: rank " + std::to_string(r) + " sent too few model values");
-        std::copy_n(&all[std::size_t(r)][at], size, m.basis.data());
-        std::copy_n(&all[std::size_t(r)][at + size], values, m.eigenvalues.data());
-        at += size + values;
-      }
-    }
-  }
+  if (ranks > 1) share_models(rows, which, models);
   if (counts) *counts = sums.counts;
   return models;
 }
