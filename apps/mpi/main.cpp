@@ -6,7 +6,6 @@
 // others (local assignment, sums over a fixed tree of segments); rank 0
 // writes the file, equal to the one `prt bake` writes. docs/scale.md.
 #include <mpi.h>
-#include <sys/resource.h>
 #include <tbb/global_control.h>
 
 #include <CLI/CLI.hpp>
@@ -16,9 +15,11 @@
 #include <string>
 #include <vector>
 
+#include "../common/bake_command.hpp"
 #include "mpi_communicator.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/error.hpp"
+#include "prt/memory.hpp"
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
@@ -29,55 +30,28 @@ namespace {
 namespace fs = std::filesystem;
 
 struct Args {
-  std::string scene, output;
-  bool force = false, restart = false, quiet = false;
-  std::size_t slab_vertices = 65536;
-  std::uint64_t memory = 0;  // per rank, bytes (0: the default share of RAM)
+  prt::cli::BakeArgs bake;  // the budget is per rank
+  bool quiet = false;
   int threads = 0;
-  double checkpoint_seconds = 60;
 };
 
-double peak_memory_gb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return double(usage.ru_maxrss) * 1024.0 / 1e9;
-}
-
-int bake(const Args& args, const prt::MpiCommunicator& comm) {
+// Each rank's peak memory and bytes received, and rank 0's report.
+void report(const prt::BakeData& data, const prt::StageTimes& times,
+            const prt::MpiCommunicator& comm, const std::filesystem::path& output) {
   using namespace prt;
-  const bool root = comm.rank() == 0;
-  Progress::set_enabled(root && !args.quiet);
-  PluginRegistry registry(PluginRegistry::default_directories());
-  const SceneSpec scene = SceneSpec::load(args.scene, registry);
-  StageTimes times;
-  const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
-  const BakePlan plan = plan_bake(scene, registry);
-  const BakeTarget target{{output, FileKind::bake, "bake file", args.output.empty()},
-                          args.force,
-                          args.restart,
-                          "prt-mpi bake " + scene.file.string() + " -> " + output.string() +
-                              " on " + std::to_string(comm.size()) + " ranks"};
-  RunOptions options{!root || args.quiet};
-  options.slab_vertices = args.slab_vertices;
-  options.memory_budget = double(args.memory);
-  options.checkpoint_seconds = args.checkpoint_seconds;
-  options.comm = &comm;
-  if (!root) options.log = [](const std::string&) {};
-  BakeData data = bake_to_file(scene, plan, target, options, times);
-  const double peak = peak_memory_gb();
   std::vector<double> peaks, received;  // per rank (received: before this exchange)
   const double mine_received = comm.bytes_received();
-  for (const auto& p : allgather(comm, {peak, mine_received})) {
+  for (const auto& p : allgather(comm, {peak_resident_bytes() / 1e9, mine_received})) {
     peaks.push_back(p[0]);
     received.push_back(p[1]);
   }
-  if (!root) return 0;
+  if (comm.rank() != 0) return;
   std::cout << "baked " << data.mesh.vertex_count() << " vertices x "
             << (data.streamed_transfer.rows ? data.streamed_transfer.cols
                                             : data.transfer.dimension())
             << " coefficients (" << data.basis.name << ", " << data.transport << ") on "
             << comm.size() << " ranks -> " << output.string() << "\n"
-            << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
+            << "rays cast: " << static_cast<std::uint64_t>(data.metrics.at("rays_cast")) << "\n";
   std::printf("peak memory per rank (GB):");
   for (double p : peaks) std::printf(" %.2f", p);
   std::printf(
@@ -88,6 +62,23 @@ int bake(const Args& args, const prt::MpiCommunicator& comm) {
   for (double r : received) std::printf(" %.1f", r / 1e6);
   std::printf("\n");
   std::cout << "timings (rank 0):\n" << times.table();
+}
+
+int bake(const Args& args, const prt::MpiCommunicator& comm) {
+  using namespace prt;
+  const bool root = comm.rank() == 0;
+  Progress::set_enabled(root && !args.quiet);
+  PluginRegistry registry(PluginRegistry::default_directories());
+  const SceneSpec scene = SceneSpec::load(args.bake.scene, registry);
+  StageTimes times;
+  const BakePlan plan = plan_bake(scene, registry);
+  BakeTarget target = cli::bake_target(scene, args.bake, "prt-mpi bake");
+  target.description += " on " + std::to_string(comm.size()) + " ranks";
+  RunOptions options = cli::bake_run_options(args.bake, !root || args.quiet);
+  options.comm = &comm;
+  if (!root) options.log = [](const std::string&) {};
+  const BakeData data = bake_to_file(scene, plan, target, options, times);
+  report(data, times, comm, target.file.path);
   return 0;
 }
 
@@ -107,31 +98,12 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   Args args;
   app.add_flag("-q,--quiet", args.quiet, "no progress bars");
-  auto* bake_cmd = app.add_subcommand("bake", "trace, project and compress a scene's transfer");
-  bake_cmd->add_option("scene", args.scene, "scene description (.toml)")->required();
-  bake_cmd->add_option("-o,--output", args.output, "bake file (default: from the scene)");
-  bake_cmd->add_flag("--force", args.force,
-                     "replace an existing output file of another kind (never an input)");
-  bake_cmd->add_flag("--restart", args.restart,
-                     "discard the checkpoint an interrupted run left (default: resume from it)");
-  bake_cmd
-      ->add_option("--slab-vertices", args.slab_vertices,
-                   "vertices traced per checkpointed slab, rounded up to a multiple of 256 for a "
-                   "per-vertex transfer (a killed bake loses at most one)")
-      ->capture_default_str()
-      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
-  bake_cmd
-      ->add_option("--memory", args.memory,
-                   "memory budget per rank, e.g. 8G (default: 3/4 of RAM); a larger shard of the "
-                   "transfer is kept on disk and compressed in passes")
-      ->transform(CLI::AsSizeValue(false))
-      ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
-  bake_cmd
-      ->add_option("--checkpoint-seconds", args.checkpoint_seconds,
-                   "compression keeps its state (each rank's labels, rank 0's means or models) "
-                   "in the checkpoint at most this often")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1e9));
+  auto* bake_cmd = prt::cli::add_bake_command(
+      app, args.bake,
+      "memory budget per rank, e.g. 8G (default: 3/4 of RAM); a larger shard of the transfer is "
+      "kept on disk and compressed in passes",
+      "compression keeps its state (each rank's labels, rank 0's means or models) in the "
+      "checkpoint at most this often");
   bake_cmd->add_option("--threads", args.threads, "threads per rank (default: every core)")
       ->check(CLI::Range(1, 4096));
   try {

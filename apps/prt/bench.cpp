@@ -287,6 +287,16 @@ double gpu_draw_seconds(PluginRegistry& registry, const RenderInput& input) {
   return gpu->statistics().at("draw_seconds");
 }
 
+// Per-vertex radiance drawn by `renderer` (the ground truth's image).
+Image render_radiance(Renderer& renderer, const Mesh& mesh, const Eigen::MatrixX3f& radiance,
+                      const Camera& camera) {
+  RenderInput input;
+  input.mesh = &mesh;
+  input.vertex_radiance = &radiance;
+  input.camera = camera;
+  return renderer.render(input);
+}
+
 // 4. Lights: the scene's and rotated copies; relight time, errors, images.
 Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec& scene,
                         const BakeData& data, const std::vector<Override>& config,
@@ -299,7 +309,8 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
       key_of(config, {"mesh", "material", "lighting", "camera", "ground_truth", "transport"});
   const std::string limited_key =
       truth_key + " " + key_of(config, {"basis", "exit", "transport", "material"});
-  auto cpu = context.registry.create<Renderer>(scene.renderer.name, scene.renderer.params,
+  Params renderer_params = scene.renderer.params;
+  auto cpu = context.registry.create<Renderer>(scene.renderer.name, renderer_params,
                                                scene.renderer.where);
   const CompressedTransfer exact_transfer = exact_form(data.transfer);  // for the budget
   const RelightKernel kernel = relighting.prepare(data.compressed);     // laid out once
@@ -335,11 +346,7 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
     RenderInput input = relighting.input(data.compressed, relit, l, camera);
     input.background = nullptr;
     const Image image = cpu->render(input);
-    RenderInput truth_input;
-    truth_input.mesh = &data.mesh;
-    truth_input.vertex_radiance = &truth.vertex_radiance;
-    truth_input.camera = camera;
-    const Image truth_image = cpu->render(truth_input);
+    const Image truth_image = render_radiance(*cpu, data.mesh, truth.vertex_radiance, camera);
     m.image_error += mean_absolute_difference(image, truth_image) / args.lights;
     if (light != 0) continue;
     write_images(image, truth_image, scene, out, label);

@@ -7,6 +7,7 @@
 #include "prt/bake_file.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
+#include "prt/memory.hpp"
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
@@ -36,19 +37,13 @@ int bake(Context& context, const BakeArgs& args) {
   const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
   StageTimes times;
   times.add("parse + validate scene", clock.seconds());
-  const fs::path output = args.output.empty() ? scene.bake_path() : fs::path(args.output);
+  const fs::path output = bake_output(scene, args);
   clock = Stopwatch();
   const BakePlan plan = plan_bake(scene, context.registry);
   times.add("load plug-ins", clock.seconds());
   // A killed bake rerun with the same command resumes from its checkpoint.
-  const BakeTarget target{{output, FileKind::bake, "bake file", args.output.empty()},
-                          args.force,
-                          args.restart,
-                          "prt bake " + scene.file.string() + " -> " + output.string()};
-  RunOptions options{context.quiet};
-  options.slab_vertices = args.slab_vertices;
-  options.memory_budget = double(args.memory);
-  options.checkpoint_seconds = args.checkpoint_seconds;
+  const BakeTarget target = bake_target(scene, args, "prt bake");
+  const RunOptions options = bake_run_options(args, context.quiet);
   BakeData data = bake_to_file(scene, plan, target, options, times);
   const Eigen::Index columns =
       data.streamed_transfer.rows > 0 ? data.streamed_transfer.cols : data.transfer.dimension();

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/bake_command.hpp"
 #include "prt/registry.hpp"
 
 namespace prt::cli {
@@ -15,14 +16,6 @@ struct Context {
   bool quiet = false;
 };
 
-struct BakeArgs {
-  std::string scene, output;
-  bool force = false;                 // replace an existing output of another kind
-  bool restart = false;               // discard a checkpoint left by an earlier run
-  std::size_t slab_vertices = 65536;  // vertices per checkpointed slab
-  std::uint64_t memory = 0;           // memory budget in bytes (0: the default share of RAM)
-  double checkpoint_seconds = 60;     // how often compression keeps its state
-};
 int bake(Context& context, const BakeArgs& args);
 
 struct RenderArgs {

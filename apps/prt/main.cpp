@@ -25,30 +25,11 @@ struct Command {
 // prt bake
 Command bake_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::BakeArgs>();
-  auto* command = app.add_subcommand("bake", "trace, project and compress a scene's transfer");
-  command->add_option("scene", args->scene, "scene description (.toml)")->required();
-  command->add_option("-o,--output", args->output, "bake file (default: from the scene)");
-  command->add_flag("--force", args->force, kForceHelp);
-  command->add_flag("--restart", args->restart,
-                     "discard the checkpoint an interrupted run left (default: resume from it)");
-  command
-      ->add_option("--slab-vertices", args->slab_vertices,
-                   "vertices traced per checkpointed slab, rounded up to a multiple of 256 for a "
-                   "per-vertex transfer (a killed bake loses at most one)")
-      ->capture_default_str()
-      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 40));
-  command
-      ->add_option("--memory", args->memory,
-                   "memory budget, e.g. 8G or 512M (default: 3/4 of RAM); a larger transfer is "
-                   "kept on disk and compressed in passes")
-      ->transform(CLI::AsSizeValue(false))
-      ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
-
-  command
-      ->add_option("--checkpoint-seconds", args->checkpoint_seconds,
-                   "compression keeps its state in the checkpoint at most this often")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1e9));
+  auto* command = prt::cli::add_bake_command(
+      app, *args,
+      "memory budget, e.g. 8G or 512M (default: 3/4 of RAM); a larger transfer is kept on disk "
+      "and compressed in passes",
+      "compression keeps its state in the checkpoint at most this often");
   return {command, [args](prt::cli::Context& context) { return prt::cli::bake(context, *args); }};
 }
 

@@ -82,39 +82,79 @@ void apply(prt::view::Viewer& viewer, const prt::view::Input& input, bool& quit,
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"prt-view: interactive viewer of compressed radiance transfer"};
-  prt::view::Options options;
-  int frames = 0;
+// What the command line asks beside the viewer's options: a scripted run.
+struct Script {
+  int frames = 0;  // 0: interactive
   double light_step = -1, orbit_step = 0;
+  std::vector<double> point_step;
   std::string screenshot_file = "prt-view.png";
+  bool no_panel = false, no_background = false;
+};
+
+void add_options(CLI::App& app, prt::view::Options& options, Script& script) {
   app.add_option("scene", options.scene, "scene description (.toml)")->required();
   app.add_option(
-         "--frames", frames,
+         "--frames", script.frames,
          "render this many frames with a scripted light rotation, then exit (0: interactive)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--light-step", light_step,
+  app.add_option("--light-step", script.light_step,
                  "scripted light rotation per frame, degrees (default 360 / frames)");
-  app.add_option("--orbit-step", orbit_step, "scripted camera orbit per frame, degrees");
-  std::vector<double> point_step;
-  app.add_option("--point-step", point_step,
+  app.add_option("--orbit-step", script.orbit_step, "scripted camera orbit per frame, degrees");
+  app.add_option("--point-step", script.point_step,
                  "scripted move of the first point light per frame: x y z, in key presses "
                  "(5% of the mesh's size each)")
       ->expected(3);
-  bool no_panel = false;
-  app.add_flag("--no-panel", no_panel, "hide the ImGui panel");
-  app.add_option("--screenshot", screenshot_file, "PNG written after the scripted frames (or P)");
+  app.add_flag("--no-panel", script.no_panel, "hide the ImGui panel");
+  app.add_option("--screenshot", script.screenshot_file,
+                 "PNG written after the scripted frames (or P)");
   app.add_option("--method", options.method, "single-pass or per-cluster")
       ->check(CLI::IsMember({"single-pass", "per-cluster"}));
   app.add_flag("--heatmap", options.heatmap, "start in the error heat-map view");
   app.add_flag("--exact", options.exact, "start with the uncompressed transfer");
   app.add_flag("-q,--quiet", options.quiet, "no progress bars");
-  bool no_background = false;
-  app.add_flag("--no-background", no_background, "black behind the mesh instead of the map");
+  app.add_flag("--no-background", script.no_background,
+               "black behind the mesh instead of the map");
+}
+
+// Frame after frame until the window closes, Q, or the script's last frame.
+void run(prt::view::Viewer& viewer, prt::view::Window& window, Script& script, bool quiet) {
+  const int frames = script.frames;
+  if (frames > 0 && script.light_step < 0) script.light_step = 360.0 / frames;
+  bool quit = false, screenshot = false;
+  for (int frame = 0; window.open() && !quit; ++frame) {
+    if (frames > 0) {
+      if (frame == frames) break;
+      if (frame > 0) {
+        viewer.rotate_light(script.light_step), viewer.orbit(script.orbit_step, 0);
+        if (!script.point_step.empty())
+          viewer.move_point_light(
+              {script.point_step[0], script.point_step[1], script.point_step[2]});
+      }
+    }
+    const prt::Image image = viewer.render();
+    if (script.no_panel)
+      window.show(image, viewer.exposure());
+    else
+      window.show(image, viewer.exposure(), [&] { prt::view::draw_panel(viewer); });
+    apply(viewer, window.poll(), quit, screenshot);
+    if (frames > 0 && !quiet) std::cout << viewer.status() << "\n";
+    if (screenshot || (frames > 0 && frame == frames - 1)) {
+      prt::write_png(image, script.screenshot_file, viewer.exposure());
+      std::cout << "screenshot -> " << script.screenshot_file << "\n";
+      screenshot = false;
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"prt-view: interactive viewer of compressed radiance transfer"};
+  prt::view::Options options;
+  Script script;
+  add_options(app, options, script);
   CLI11_PARSE(app, argc, argv);
-  options.background = !no_background;
+  options.background = !script.no_background;
   prt::Progress::set_enabled(!options.quiet);
   try {
     prt::PluginRegistry registry(prt::PluginRegistry::default_directories());
@@ -124,37 +164,14 @@ int main(int argc, char** argv) {
     const prt::SceneSpec scene = prt::SceneSpec::load(options.scene, registry);
     std::vector<std::filesystem::path> inputs = scene.input_files();
     inputs.push_back(scene.bake_path());
-    prt::check_output({screenshot_file, prt::FileKind::png, "screenshot"}, inputs);
+    prt::check_output({script.screenshot_file, prt::FileKind::png, "screenshot"}, inputs);
     const auto& camera = scene.camera;
     prt::view::Window window(static_cast<int>(camera.get_int("width")),
                              static_cast<int>(camera.get_int("height")),
                              "prt-view  " + scene.file.filename().string());
     if (!options.quiet) std::cout << "OpenGL: " << window.renderer() << "\n";
     prt::view::Viewer viewer(registry, options);
-    if (frames > 0 && light_step < 0) light_step = 360.0 / frames;
-    bool quit = false, screenshot = false;
-    for (int frame = 0; window.open() && !quit; ++frame) {
-      if (frames > 0) {
-        if (frame == frames) break;
-        if (frame > 0) {
-          viewer.rotate_light(light_step), viewer.orbit(orbit_step, 0);
-          if (!point_step.empty())
-            viewer.move_point_light({point_step[0], point_step[1], point_step[2]});
-        }
-      }
-      const prt::Image image = viewer.render();
-      if (no_panel)
-        window.show(image, viewer.exposure());
-      else
-        window.show(image, viewer.exposure(), [&] { prt::view::draw_panel(viewer); });
-      apply(viewer, window.poll(), quit, screenshot);
-      if (frames > 0 && !options.quiet) std::cout << viewer.status() << "\n";
-      if (screenshot || (frames > 0 && frame == frames - 1)) {
-        prt::write_png(image, screenshot_file, viewer.exposure());
-        std::cout << "screenshot -> " << screenshot_file << "\n";
-        screenshot = false;
-      }
-    }
+    run(viewer, window, script, options.quiet);
     return 0;
   } catch (...) {
     std::cerr << "prt-view: " << prt::current_error_line() << "\n";

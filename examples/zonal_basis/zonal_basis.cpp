@@ -11,12 +11,11 @@ class ZonalHarmonics final : public prt::Basis {
  public:
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description = "zonal harmonics y_l0 about +z (example)";
-  static constexpr auto parameters() {
-    return std::array{prt::schema::integer("order", "8", 1, 64, "number of bands")};
-  }
+  // Each parameter declared once: its schema record and its typed reader.
+  static constexpr auto kOrder = prt::param::integer("order", "8", 1, 64, "number of bands");
+  static constexpr auto parameters() { return prt::param::records(kOrder); }
 
-  explicit ZonalHarmonics(const prt::Params& params)
-      : order_(static_cast<int>(params.get_int("order"))) {}
+  explicit ZonalHarmonics(const prt::Params& params) : order_(static_cast<int>(kOrder(params))) {}
 
   int size() const override { return order_; }
   bool orthonormal() const override { return true; }

@@ -150,6 +150,21 @@ void require_distributable(const SceneSpec& scene, const BakePlan& plan,
   }
 }
 
+// Stages 1-2 as this run makes them: sharded over ranks (fitted or not), or
+// through the checkpoint in one process (the direct part kept for bounces).
+TransferSignal transfer_of(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& set,
+                           const RunOptions& options, const Shard& shard, bool on_disk,
+                           StageTimes& times, std::uint64_t& rays_cast, BakeData& data) {
+  const Communicator& comm = options.comm ? *options.comm : solo();
+  if (comm.size() > 1)
+    return plan.fit ? fitted_shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard,
+                                            comm, on_disk)
+                    : shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard, comm,
+                                     on_disk);
+  return checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
+                               plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
+}
+
 // A distributed bake's file gets the other ranks' rows from their slabs as
 // it is written; rank 0 keeps its own shard.
 void stream_from_slabs(const BakePlan& plan, const RunOptions& options, int ranks,
@@ -222,15 +237,8 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
   std::uint64_t rays_cast = 0;
-  TransferSignal transfer =
-      distributed
-          ? (plan.fit ? fitted_shard_transfer(plan, data.mesh, set, options, times, rays_cast,
-                                              shard.shard, comm, on_disk)
-                      : shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard.shard,
-                                       comm, on_disk))
-          : checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
-                                  plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
-
+  TransferSignal transfer = transfer_of(scene, plan, set, options, shard.shard, on_disk, times,
+                                        rays_cast, data);
   clock = Stopwatch();
   // Compression minimises the error of what is rendered (after a fit: the
   // fitted basis's metric).

@@ -98,7 +98,34 @@ void check_orthonormal_claim(const Basis& basis, const PluginChoice& choice) {
   }
 }
 
+// Glossy transfer's part of the plan: the exit basis (a fixed hemisphere
+// basis), the BRDF and its operator, made before any ray (it depends only on
+// the BRDF and the exit basis).
+void plan_glossy(const SceneSpec& scene, PluginRegistry& registry, BakePlan& plan) {
+  PluginChoice exit = scene.exit;
+  plan.exit = registry.create<Basis>(exit.name, exit.params, exit.where);
+  plan.exit_record = record_of(scene.exit, registry, PluginKind::basis);
+  if (plan.exit->domain() != Domain::hemisphere)
+    throw Error(exit.where, domain_error(exit, "exit", Domain::hemisphere));
+  check_orthonormal_claim(*plan.exit, exit);
+  if (plan.exit->can_fit())
+    throw Error(exit.where, "[exit] basis \"" + exit.name +
+                                "\" is data-driven (fits to traced visibility); an exit basis "
+                                "must be fixed before the bake");
+  plan.brdf = scene.brdf();
+  plan.incident_order = scene.incident_order(*plan.basis);
+  plan.least_squares = scene.material.get_string("projection") == "least-squares";
+  plan.cutoff = scene.material.get_real("cutoff");
+  try {
+    plan.glossy_operator = GlossyOperator::make(plan.brdf, *plan.exit, plan.incident_order,
+                                                plan.least_squares, plan.cutoff);
+  } catch (const Error& e) {
+    throw Error(exit.where, e.what());
+  }
+}
+
 }  // namespace
+
 
 void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
                                  const std::string& compressor) {
@@ -152,29 +179,7 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   plan.bounce_albedo = scene.bounce_albedo();
   plan.shadowed = scene.transport.get_bool("shadowed");
   plan.fit = plan.basis->can_fit();
-  if (plan.glossy) {
-    PluginChoice exit = scene.exit;
-    plan.exit = registry.create<Basis>(exit.name, exit.params, exit.where);
-    plan.exit_record = record_of(scene.exit, registry, PluginKind::basis);
-    if (plan.exit->domain() != Domain::hemisphere)
-      throw Error(exit.where, domain_error(exit, "exit", Domain::hemisphere));
-    check_orthonormal_claim(*plan.exit, exit);
-    if (plan.exit->can_fit())
-      throw Error(exit.where, "[exit] basis \"" + exit.name +
-                                  "\" is data-driven (fits to traced visibility); an exit basis "
-                                  "must be fixed before the bake");
-    plan.brdf = scene.brdf();
-    plan.incident_order = scene.incident_order(*plan.basis);
-    plan.least_squares = scene.material.get_string("projection") == "least-squares";
-    plan.cutoff = scene.material.get_real("cutoff");
-    // Made here, before any ray: it depends only on the BRDF and the exit basis.
-    try {
-      plan.glossy_operator = GlossyOperator::make(plan.brdf, *plan.exit, plan.incident_order,
-                                                  plan.least_squares, plan.cutoff);
-    } catch (const Error& e) {
-      throw Error(exit.where, e.what());
-    }
-  }
+  if (plan.glossy) plan_glossy(scene, registry, plan);
   plan.subsurface_material = scene.subsurface();
   plan.channels = scene.channels();
   plan.keep_visibility = plan.fit || plan.glossy;

@@ -58,4 +58,10 @@ std::string gigabytes(double bytes) {
   return text;
 }
 
+double peak_resident_bytes() {
+  rusage usage{};
+  ::getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) * 1024.0;  // kilobytes on Linux
+}
+
 }  // namespace prt

@@ -30,6 +30,16 @@ bool is_blank_or_comment(const std::string& line) {
   return at == std::string::npos || line[at] == '#';
 }
 
+// A PLY element as its header declares it.
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  long double min_bytes = 0;
+  std::vector<std::string> scalars;  // scalar property names
+  int lists = 0;
+  std::vector<bool> is_list;  // each property in order: a list or a scalar
+};
+
 class Checker {
  public:
   explicit Checker(const fs::path& file) : file_(file), in_(file, std::ios::binary) {
@@ -107,8 +117,16 @@ class Checker {
   }
 
   DeclaredMeshSize off();
+  void off_body(const DeclaredMeshSize& size);
   DeclaredMeshSize obj();
   DeclaredMeshSize ply();
+  // The header, checked strictly line by line; returns the format.
+  std::string ply_header(std::vector<PlyElement>& elements);
+  void ply_property(const std::vector<std::string>& tokens, const std::string& line,
+                    PlyElement& element);
+  // ASCII: one line per element, every token a number, each list's count
+  // within the line.
+  void ply_ascii_body(const std::vector<PlyElement>& elements, const std::string& what);
   DeclaredMeshSize stl();
 
  private:
@@ -152,9 +170,14 @@ DeclaredMeshSize Checker::off() {
   require_room(
       6.0L * size.vertices + 8.0L * size.faces,
       std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) + " faces");
-  // Line by line (OpenMesh reserves what a face line's count says): a vertex
-  // line has 3 coordinates or more, a face line "k i_1 .. i_k" with 3 <= k.
+  off_body(size);
+  return size;
+}
 
+// Line by line (OpenMesh reserves what a face line's count says): a vertex
+// line has 3 coordinates or more, a face line "k i_1 .. i_k" with 3 <= k.
+void Checker::off_body(const DeclaredMeshSize& size) {
+  std::string line;
   std::uint64_t vertices = 0, faces = 0;
   while (faces < size.faces && next_data_line(line, false)) {
     std::istringstream stream(line);
@@ -177,27 +200,39 @@ DeclaredMeshSize Checker::off() {
     fail("truncated: the header declares " + std::to_string(size.vertices) + " vertices and " +
          std::to_string(size.faces) + " faces, but the file ends after " +
          std::to_string(vertices) + " vertices and " + std::to_string(faces) + " faces");
-  return size;
 }
 
-DeclaredMeshSize Checker::ply() {
-  static const std::map<std::string, int> type_bytes{
-      {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
-      {"ushort", 2}, {"uint16", 2},  {"int", 4},    {"int32", 4},  {"uint", 4},  {"uint32", 4},
-      {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
-  struct Element {
-    std::string name;
-    std::uint64_t count = 0;
-    long double min_bytes = 0;
-    std::vector<std::string> scalars;  // scalar property names
-    int lists = 0;
-    std::vector<bool> is_list;  // each property in order: a list or a scalar
-  };
-  std::vector<Element> elements;
+namespace {
+const std::map<std::string, int> kPlyTypeBytes{
+    {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
+    {"ushort", 2}, {"uint16", 2},  {"int", 4},    {"int32", 4},  {"uint", 4},  {"uint32", 4},
+    {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
+}  // namespace
+
+void Checker::ply_property(const std::vector<std::string>& tokens, const std::string& line,
+                           PlyElement& e) {
+  if (tokens.size() == 5 && tokens[1] == "list") {
+    if (!kPlyTypeBytes.count(tokens[2]) || !kPlyTypeBytes.count(tokens[3]))
+      fail("unknown PLY property type in \"" + line.substr(0, 60) + "\"");
+    // A face lists at least 3 vertices; other lists may be empty.
+    const int items = e.name == "face" ? 3 : 0;
+    e.min_bytes += kPlyTypeBytes.at(tokens[2]) + items * kPlyTypeBytes.at(tokens[3]);
+    ++e.lists;
+    e.is_list.push_back(true);
+  } else if (tokens.size() == 3 && tokens[1] != "list") {
+    if (!kPlyTypeBytes.count(tokens[1])) fail("unknown PLY property type \"" + tokens[1] + "\"");
+    e.min_bytes += kPlyTypeBytes.at(tokens[1]);
+    e.scalars.push_back(tokens[2]);
+    e.is_list.push_back(false);
+  } else {
+    fail("malformed PLY header line \"" + line.substr(0, 60) + "\"");
+  }
+}
+
+std::string Checker::ply_header(std::vector<PlyElement>& elements) {
   std::string line, format;
   bool ended = false;
-  // The header is checked strictly, line by line: OpenMesh's PLY reader loops
-  // forever on some malformed headers.
+  // OpenMesh's PLY reader loops forever on some malformed headers.
   while (!ended && std::getline(in_, line)) {
     ++line_;
     if (static_cast<std::uint64_t>(in_.tellg()) > kMaxHeaderBytes)
@@ -224,23 +259,7 @@ DeclaredMeshSize Checker::ply() {
       elements.push_back({tokens[1], count(tokens[2], ("\"" + tokens[1] + "\" elements").c_str())});
     } else if (keyword == "property") {
       if (elements.empty()) fail("a property before any element");
-      Element& e = elements.back();
-      if (tokens.size() == 5 && tokens[1] == "list") {
-        if (!type_bytes.count(tokens[2]) || !type_bytes.count(tokens[3]))
-          fail("unknown PLY property type in \"" + line.substr(0, 60) + "\"");
-        // A face lists at least 3 vertices; other lists may be empty.
-        const int items = e.name == "face" ? 3 : 0;
-        e.min_bytes += type_bytes.at(tokens[2]) + items * type_bytes.at(tokens[3]);
-        ++e.lists;
-        e.is_list.push_back(true);
-      } else if (tokens.size() == 3 && tokens[1] != "list") {
-        if (!type_bytes.count(tokens[1])) fail("unknown PLY property type \"" + tokens[1] + "\"");
-        e.min_bytes += type_bytes.at(tokens[1]);
-        e.scalars.push_back(tokens[2]);
-        e.is_list.push_back(false);
-      } else {
-        malformed();
-      }
+      ply_property(tokens, line, elements.back());
     } else if (keyword == "end_header") {
       if (tokens.size() != 1) malformed();
       ended = true;
@@ -251,31 +270,11 @@ DeclaredMeshSize Checker::ply() {
   if (!ended) fail("no end_header: the PLY header is incomplete");
   if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
     fail("unknown PLY format \"" + format + "\"");
-  auto has = [](const std::vector<std::string>& names, const char* name) {
-    return std::find(names.begin(), names.end(), name) != names.end();
-  };
-  if (elements.empty() || elements[0].name != "vertex" || !has(elements[0].scalars, "x") ||
-      !has(elements[0].scalars, "y") || !has(elements[0].scalars, "z") || elements[0].lists)
-    fail("the first PLY element must be \"vertex\" with scalar properties x, y and z");
-  for (const auto& e : elements)
-    if (e.name == "face" && (e.lists != 1 || e.min_bytes == 0))
-      fail("the PLY element \"face\" must have one list property of vertex indices");
-  DeclaredMeshSize size{true, 0, 0};
-  long double needed = 0;
-  std::uint64_t lines = 0;
-  for (const auto& e : elements) {
-    if (e.name == "vertex") size.vertices = e.count;
-    if (e.name == "face") size.faces = e.count;
-    needed += format == "ascii" ? 2.0L * e.count : e.min_bytes * e.count;
-    lines += e.count;
-  }
-  const std::string what =
-      std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) + " faces";
-  require_room(needed, what);
-  if (format != "ascii") return size;
-  // ASCII: one line per element, every token a number, and each list's count
-  // within the line (OpenMesh reserves what a count says).
-  require_plain_text();
+  return format;
+}
+
+void Checker::ply_ascii_body(const std::vector<PlyElement>& elements, const std::string& what) {
+  std::string line;
   for (const auto& e : elements)
     for (std::uint64_t k = 0; k < e.count; ++k) {
       if (!next_data_line(line, false))
@@ -303,6 +302,34 @@ DeclaredMeshSize Checker::ply() {
         at += 1 + items;
       }
     }
+}
+
+DeclaredMeshSize Checker::ply() {
+  std::vector<PlyElement> elements;
+  const std::string format = ply_header(elements);
+  auto has = [](const std::vector<std::string>& names, const char* name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
+  if (elements.empty() || elements[0].name != "vertex" || !has(elements[0].scalars, "x") ||
+      !has(elements[0].scalars, "y") || !has(elements[0].scalars, "z") || elements[0].lists)
+    fail("the first PLY element must be \"vertex\" with scalar properties x, y and z");
+  for (const auto& e : elements)
+    if (e.name == "face" && (e.lists != 1 || e.min_bytes == 0))
+      fail("the PLY element \"face\" must have one list property of vertex indices");
+  DeclaredMeshSize size{true, 0, 0};
+  long double needed = 0;
+  for (const auto& e : elements) {
+    if (e.name == "vertex") size.vertices = e.count;
+    if (e.name == "face") size.faces = e.count;
+    needed += format == "ascii" ? 2.0L * e.count : e.min_bytes * e.count;
+  }
+  const std::string what =
+      std::to_string(size.vertices) + " vertices and " + std::to_string(size.faces) + " faces";
+  require_room(needed, what);
+  if (format != "ascii") return size;
+  // OpenMesh reserves what a list's count says.
+  require_plain_text();
+  ply_ascii_body(elements, what);
   return size;
 }
 

@@ -3,7 +3,7 @@
 // vertices lie in c distinct clusters is drawn c times; superclusters draw
 // a group of clusters as one, so a triangle is drawn once per distinct
 // supercluster. Reclassification and superclustering, which reduce it, are
-// in plugins/compressor/clustering/coherence.cpp.
+// in plugins/compressor/clustering/reclassification.cpp and superclusters.cpp.
 #include "prt/compressor.hpp"
 
 namespace prt {

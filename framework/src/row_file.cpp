@@ -110,10 +110,4 @@ void RowFile::release(Eigen::Index first, Eigen::Index last) const {
   if (end > begin) ::madvise(static_cast<char*>(mapping_) + begin, end - begin, MADV_DONTNEED);
 }
 
-double peak_resident_bytes() {
-  rusage usage{};
-  ::getrusage(RUSAGE_SELF, &usage);
-  return double(usage.ru_maxrss) * 1024.0;  // kilobytes on Linux
-}
-
 }  // namespace prt

@@ -268,6 +268,36 @@ TransferSignal stack_channels(const std::vector<TransferSignal>& parts,
   return out;
 }
 
+// A channel transfer kept by an earlier run (its direct part and metrics too;
+// the fitted basis when this channel fitted it).
+TransferSignal kept_channel(const BakePlan& channel, const CheckpointStore& store,
+                            const std::string& prefix, TransferSignal* direct,
+                            std::map<std::string, double>& metrics) {
+  TransferSignal part;
+  part.kind = channel.glossy ? "glossy" : "diffuse";
+  part.exit_rows = channel.glossy ? channel.glossy_operator.rows() : 1;
+  part.coefficients = store.load_floats(prefix + "transfer");
+  if (direct) {
+    *direct = part;
+    direct->coefficients = store.load_floats(prefix + "direct");
+  }
+  read_metrics(store.load_text(prefix + "metrics"), metrics);
+  if (channel.fit) load_kept_basis_state(store, *channel.basis);
+  return part;
+}
+
+// Keeps a finished channel transfer; its stages' own parts are done with.
+void keep_channel(const CheckpointStore& store, const std::string& prefix,
+                  const TransferSignal& part, const TransferSignal* direct,
+                  const std::map<std::string, double>& metrics) {
+  if (direct) store.save(prefix + "direct", direct->coefficients);
+  store.save_text(prefix + "metrics", metrics_text(metrics));
+  store.save(prefix + "transfer", part.coefficients);  // last: marks it kept
+  for (const std::string& name : store.parts())
+    for (const char* stage : {"bounce-", "glossy.", "subsurface"})
+      if (name.rfind(prefix + stage, 0) == 0) store.remove_part(name);
+}
+
 }  // namespace
 
 TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh,
@@ -305,30 +335,15 @@ TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh,
       options.message("resuming: channel transfer " + std::to_string(g + 1) + " of " +
                       std::to_string(channels.groups.size()) + " kept in " +
                       store->folder().string());
-      TransferSignal part;
-      part.kind = channel.glossy ? "glossy" : "diffuse";
-      part.exit_rows = channel.glossy ? channel.glossy_operator.rows() : 1;
-      part.coefficients = store->load_floats(prefix + "transfer");
-      if (direct) {
-        channel_direct = part;
-        channel_direct.coefficients = store->load_floats(prefix + "direct");
-      }
-      read_metrics(store->load_text(prefix + "metrics"), metrics);
-      if (channel.fit) load_kept_basis_state(*store, *plan.basis);
-      parts.push_back(std::move(part));
+      parts.push_back(kept_channel(channel, *store, prefix, direct ? &channel_direct : nullptr,
+                                   metrics));
     } else {
       // The rays are traced once; every channel but the last works on a copy.
       TransportResult rays = g + 1 < channels.groups.size() ? traced : std::move(traced);
       parts.push_back(transfer_stage(channel, mesh, set, std::move(rays), channel_options,
                                      times, metrics, direct ? &channel_direct : nullptr));
-      if (store) {
-        if (direct) store->save(prefix + "direct", channel_direct.coefficients);
-        store->save_text(prefix + "metrics", metrics_text(metrics));
-        store->save(prefix + "transfer", parts.back().coefficients);  // last: marks it kept
-        for (const std::string& part : store->parts())  // its stages' parts: done with
-          for (const char* stage : {"bounce-", "glossy.", "subsurface"})
-            if (part.rfind(prefix + stage, 0) == 0) store->remove_part(part);
-      }
+      if (store)
+        keep_channel(*store, prefix, parts.back(), direct ? &channel_direct : nullptr, metrics);
     }
     if (direct) directs.push_back(std::move(channel_direct));
   }

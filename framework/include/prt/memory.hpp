@@ -19,6 +19,9 @@ constexpr double kDefaultMemoryFraction = 0.75;
 // (the mesh, its adjacency and Embree's BVH; measured: docs/scale.md).
 constexpr double kMeshBytesPerVertex = 400;
 
+// Peak resident memory of this process so far (VmHWM), in bytes.
+double peak_resident_bytes();
+
 // "640 MB", "3.2 GB".
 std::string gigabytes(double bytes);
 

@@ -11,6 +11,8 @@
 #include <cstddef>
 #include <cstring>
 #include <exception>
+#include <string>
+#include <vector>
 
 #include "prt/params.hpp"
 #include "prt/plugin_record.hpp"
@@ -107,6 +109,82 @@ constexpr ParamSpecRecord reals(const char* name, const char* default_value, std
 }
 
 }  // namespace schema
+
+// A parameter declared once: its schema record (what parameters() lists and
+// the registry reads from the ELF file) and its typed reader, so a plug-in
+// names each key in one place:
+//   static constexpr auto kOrder = param::integer("order", "6", 1, 200, "bands");
+//   static constexpr auto parameters() { return param::records(kOrder); }
+//   explicit MyBasis(const Params& params) : order_(int(kOrder(params))) {}
+// The schema:: records above remain for plug-ins written before (their
+// readers name the key again: params.get_int("order")).
+template <class T>
+struct Param {
+  ParamSpecRecord record;
+  constexpr operator ParamSpecRecord() const { return record; }
+  const char* name() const { return record.name; }
+  // The validated value: given in the scene, or the schema's default.
+  T operator()(const Params& params) const;
+  // Whether the scene gave it (not the default).
+  bool given(const Params& params) const { return params.has(record.name); }
+};
+template <>
+inline bool Param<bool>::operator()(const Params& params) const {
+  return params.get_bool(record.name);
+}
+template <>
+inline std::int64_t Param<std::int64_t>::operator()(const Params& params) const {
+  return params.get_int(record.name);
+}
+template <>
+inline double Param<double>::operator()(const Params& params) const {
+  return params.get_real(record.name);
+}
+template <>
+inline std::string Param<std::string>::operator()(const Params& params) const {
+  return params.get_string(record.name);
+}
+template <>
+inline std::vector<double> Param<std::vector<double>>::operator()(const Params& params) const {
+  return params.get_reals(record.name);
+}
+
+namespace param {
+
+constexpr Param<std::int64_t> integer(const char* name, const char* default_value, double min,
+                                      double max, const char* help) {
+  return {schema::integer(name, default_value, min, max, help)};
+}
+constexpr Param<double> real(const char* name, const char* default_value, double min, double max,
+                             const char* help) {
+  return {schema::real(name, default_value, min, max, help)};
+}
+constexpr Param<bool> boolean(const char* name, const char* default_value, const char* help) {
+  return {schema::boolean(name, default_value, help)};
+}
+constexpr Param<std::string> choice(const char* name, const char* default_value,
+                                    const char* choices, const char* help) {
+  return {schema::choice(name, default_value, choices, help)};
+}
+constexpr Param<std::string> text(const char* name, const char* default_value, const char* help) {
+  return {schema::text(name, default_value, help)};
+}
+constexpr Param<std::string> path(const char* name, bool required, const char* help) {
+  return {schema::path(name, required, help)};
+}
+constexpr Param<std::vector<double>> reals(const char* name, const char* default_value,
+                                           std::uint32_t length, double min, double max,
+                                           const char* help) {
+  return {schema::reals(name, default_value, length, min, max, help)};
+}
+
+// The schema of a plug-in's parameters, in order (what parameters() returns).
+template <class... Keys>
+constexpr std::array<ParamSpecRecord, sizeof...(Keys)> records(const Keys&... keys) {
+  return {ParamSpecRecord(keys)...};
+}
+
+}  // namespace param
 
 template <class Plugin>
 constexpr PluginInfoRecord make_plugin_info(const char* name, const char* build_key) {

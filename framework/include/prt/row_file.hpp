@@ -48,7 +48,5 @@ class RowFile {
   std::size_t bytes_ = 0;
 };
 
-// Peak resident memory of this process so far (VmHWM), in bytes.
-double peak_resident_bytes();
 
 }  // namespace prt

@@ -191,25 +191,28 @@ class Eigentransport final : public Basis {
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
       "eigentransport: PCA basis of the sampled transport (fit to the scene's rays)";
+  static constexpr auto kD =
+      param::integer("d", "48", 1, 4096,
+                     "basis functions: the mean direction and d - 1 eigentransports (the most, "
+                     "when variance is set)");
+  static constexpr auto kVariance = param::real(
+      "variance", "0", 0, 1,
+      "if > 0: the fewest eigentransports capturing this fraction of the variance");
+  static constexpr auto kOversampling =
+      param::integer("oversampling", "10", 0, 1000, "randomized SVD: extra columns");
+  static constexpr auto kPowerIterations =
+      param::integer("power_iterations", "2", 0, 20, "randomized SVD: power iterations");
+  static constexpr auto kSeed = param::integer("seed", "1", 0, 9.2e18, "randomized SVD: seed");
   static constexpr auto parameters() {
-    using namespace schema;
-    return std::array{
-        integer("d", "48", 1, 4096,
-                "basis functions: the mean direction and d - 1 eigentransports (the most, when "
-                "variance is set)"),
-        real("variance", "0", 0, 1,
-             "if > 0: the fewest eigentransports capturing this fraction of the variance"),
-        integer("oversampling", "10", 0, 1000, "randomized SVD: extra columns"),
-        integer("power_iterations", "2", 0, 20, "randomized SVD: power iterations"),
-        integer("seed", "1", 0, 9.2e18, "randomized SVD: seed")};
+    return param::records(kD, kVariance, kOversampling, kPowerIterations, kSeed);
   }
 
   explicit Eigentransport(const Params& params)
-      : max_d_(static_cast<int>(params.get_int("d"))),
-        variance_(params.get_real("variance")),
-        oversampling_(static_cast<int>(params.get_int("oversampling"))),
-        power_iterations_(static_cast<int>(params.get_int("power_iterations"))),
-        seed_(static_cast<std::uint64_t>(params.get_int("seed"))) {}
+      : max_d_(static_cast<int>(kD(params))),
+        variance_(kVariance(params)),
+        oversampling_(static_cast<int>(kOversampling(params))),
+        power_iterations_(static_cast<int>(kPowerIterations(params))),
+        seed_(static_cast<std::uint64_t>(kSeed(params))) {}
 
   int size() const override { return fitted() ? static_cast<int>(eigen_.rows()) : max_d_; }
   bool orthonormal() const override { return true; }

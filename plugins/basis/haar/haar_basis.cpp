@@ -23,20 +23,18 @@ class HaarCubeMap final : public Basis {
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
       "orthonormal 2-D Haar wavelets on each cube-map face (6 R^2 coefficients)";
-  static constexpr auto parameters() {
-    using namespace schema;
-    return std::array{integer("resolution", "16", 1, 256, "texels per face edge R (a power of 2)"),
-                      integer("k", "0", 0, 1 << 30,
-                              "non-linear approximation: largest coefficients kept per vertex "
-                              "(0 = all)")};
-  }
+  static constexpr auto kResolution =
+      param::integer("resolution", "16", 1, 256, "texels per face edge R (a power of 2)");
+  static constexpr auto kKept = param::integer(
+      "k", "0", 0, 1 << 30, "non-linear approximation: largest coefficients kept per vertex (0 = all)");
+  static constexpr auto parameters() { return param::records(kResolution, kKept); }
 
   explicit HaarCubeMap(const Params& params)
-      : resolution_(static_cast<int>(params.get_int("resolution"))),
-        k_(static_cast<int>(params.get_int("k"))),
+      : resolution_(static_cast<int>(kResolution(params))),
+        k_(static_cast<int>(kKept(params))),
         lattice_(DirectionSet::cubemap(resolution_)) {
     if (resolution_ & (resolution_ - 1))
-      params.fail("resolution", "must be a power of 2, got " + std::to_string(resolution_));
+      params.fail(kResolution.name(), "must be a power of 2, got " + std::to_string(resolution_));
     root_weights_ = lattice_.weights.cwiseSqrt();
     if (k_ > size()) {  // keeping more than there is keeps all: say so
       log_warning_once(params.location("k").str() + ": basis \"haar\": k = " + std::to_string(k_) +

@@ -17,26 +17,27 @@ class HemisphericalHarmonics final : public Basis {
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
       "SH over the upper hemisphere with least-squares (or zero/odd/even) projection";
+  static constexpr auto kOrder =
+      param::integer("order", "5", 1, 30, "SH order N (N^2 functions, N^2 - 1 when reduced)");
+  static constexpr auto kProjection =
+      param::choice("projection", "least-squares", "least-squares|zero|odd|even",
+                    "how functions known on the hemisphere are projected");
+  static constexpr auto kCutoff = param::real(
+      "cutoff", "1e-10", 0, 1,
+      "least squares: singular values of A below this x the largest are discarded");
+  static constexpr auto kReduced = param::boolean(
+      "reduced", "false", "drop the nearly redundant l=1, m=0 function (N_i = 24 at order 5)");
   static constexpr auto parameters() {
-    using namespace schema;
-    return std::array{
-        integer("order", "5", 1, 30, "SH order N (N^2 functions, N^2 - 1 when reduced)"),
-        choice("projection", "least-squares", "least-squares|zero|odd|even",
-               "how functions known on the hemisphere are projected"),
-        real("cutoff", "1e-10", 0, 1,
-             "least squares: singular values of A below this x the largest are discarded"),
-        boolean("reduced", "false",
-                "drop the nearly redundant l=1, m=0 function (N_i = 24 at order 5)")};
+    return param::records(kOrder, kProjection, kCutoff, kReduced);
   }
 
   explicit HemisphericalHarmonics(const Params& params)
-      : order_(static_cast<int>(params.get_int("order"))), projection_(projection_of(params)) {
-    const bool reduced = params.get_bool("reduced");
+      : order_(static_cast<int>(kOrder(params))), projection_(projection_of(params)) {
+    const bool reduced = kReduced(params);
     if (reduced && projection_ != Projection::least_squares)
-      params.fail("reduced", "the reduced basis needs projection = \"least-squares\"");
-    if (reduced && order_ < 2) params.fail("reduced", "the reduced basis needs order >= 2");
-    ls_ = hemisphere::least_squares(order_, params.get_real("cutoff"),
-                                    reduced ? sh::index(1, 0) : -1);
+      params.fail(kReduced.name(), "the reduced basis needs projection = \"least-squares\"");
+    if (reduced && order_ < 2) params.fail(kReduced.name(), "the reduced basis needs order >= 2");
+    ls_ = hemisphere::least_squares(order_, kCutoff(params), reduced ? sh::index(1, 0) : -1);
   }
 
   int size() const override { return static_cast<int>(ls_.kept.size()); }
@@ -79,12 +80,12 @@ class HemisphericalHarmonics final : public Basis {
  private:
   enum class Projection { least_squares, zero, odd, even };
   static Projection projection_of(const Params& params) {
-    const std::string name = params.get_string("projection");
+    const std::string name = kProjection(params);
     if (name == "least-squares") return Projection::least_squares;
     if (name == "zero") return Projection::zero;
     if (name == "odd") return Projection::odd;
     if (name == "even") return Projection::even;
-    params.fail("projection", "unknown value \"" + name + "\"");
+    params.fail(kProjection.name(), "unknown value \"" + name + "\"");
   }
 
   int order_;

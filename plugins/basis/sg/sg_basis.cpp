@@ -22,17 +22,17 @@ class SphericalGaussians final : public Basis {
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
       "spherical Gaussians exp(lambda (mu_i.d - 1)) on a Fibonacci set (not orthonormal)";
-  static constexpr auto parameters() {
-    using namespace schema;
-    return std::array{integer("lobes", "25", 1, 100, "number of Gaussians (Fibonacci centres)"),
-                      real("sharpness", "0.2", 0.1, 8,
-                           "lambda / lobes: the lobes' width relative to their spacing "
-                           "(0.2: width about 0.63 x the spacing; 1: 0.28)")};
-  }
+  static constexpr auto kLobes =
+      param::integer("lobes", "25", 1, 100, "number of Gaussians (Fibonacci centres)");
+  static constexpr auto kSharpness =
+      param::real("sharpness", "0.2", 0.1, 8,
+                  "lambda / lobes: the lobes' width relative to their spacing (0.2: width about "
+                  "0.63 x the spacing; 1: 0.28)");
+  static constexpr auto parameters() { return param::records(kLobes, kSharpness); }
 
   explicit SphericalGaussians(const Params& params)
-      : centres_(DirectionSet::fibonacci(static_cast<int>(params.get_int("lobes"))).directions),
-        lambda_(params.get_real("sharpness") * double(params.get_int("lobes"))) {}
+      : centres_(DirectionSet::fibonacci(static_cast<int>(kLobes(params))).directions),
+        lambda_(kSharpness(params) * double(kLobes(params))) {}
 
   int size() const override { return static_cast<int>(centres_.rows()); }
   bool orthonormal() const override { return false; }

@@ -12,13 +12,12 @@ class SphericalHarmonics final : public Basis {
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
       "real orthonormal spherical harmonics, order^2 coefficients, with rotation";
-  static constexpr auto parameters() {
-    return std::array{
-        schema::integer("order", "6", 1, 200, "number of bands l = 0..order-1 (order^2 terms)")};
-  }
+  static constexpr auto kOrder =
+      param::integer("order", "6", 1, 200, "number of bands l = 0..order-1 (order^2 terms)");
+  static constexpr auto parameters() { return param::records(kOrder); }
 
   explicit SphericalHarmonics(const Params& params)
-      : order_(static_cast<int>(params.get_int("order"))) {}
+      : order_(static_cast<int>(kOrder(params))) {}
 
   int size() const override { return sh::coefficient_count(order_); }
   bool orthonormal() const override { return true; }

@@ -11,46 +11,56 @@
 
 namespace prt::compressor_params {
 
+// Each key once: its schema record and its reader.
+inline constexpr auto kClusters = param::integer("clusters", "256", 1, 1 << 24, "number of clusters");
+inline constexpr auto kInit =
+    param::choice("init", "kmeans++", "kmeans++|hyperbox",
+                  "LBG start: k-means++ or the thesis's random points in the data's hyper-box");
+inline constexpr auto kIterations =
+    param::integer("iterations", "30", 1, 10000, "LBG iterations at most");
+inline constexpr auto kTolerance =
+    param::real("tolerance", "1e-4", 0, 1, "LBG stops when the energy falls by less than this");
+inline constexpr auto kSeed = param::integer("seed", "1", 0, 9.2e18, "random seed");
+inline constexpr auto kAlpha =
+    param::real("alpha", "0", 0, 1e6,
+                "geometry coherence (Chen): weight of the distance to the cluster, per "
+                "bounding-box diagonal");
+inline constexpr auto kReclassify =
+    param::boolean("reclassify", "false", "move boundary vertices to lower overdraw");
+inline constexpr auto kErrorBudget =
+    param::real("error_budget", "0.05", 0, 10, "reclassification: allowed relative SE increase");
+inline constexpr auto kSupercluster = param::choice("supercluster", "none", "none|greedy|chen",
+                                                    "group clusters into superclusters");
+inline constexpr auto kRegisters = param::integer(
+    "registers", "256", 1, 65536, "superclusters: constant registers; (n'+1) per cluster");
+
 constexpr std::array<ParamSpecRecord, 10> clustering() {
-  using namespace schema;
-  return {integer("clusters", "256", 1, 1 << 24, "number of clusters"),
-          choice("init", "kmeans++", "kmeans++|hyperbox",
-                 "LBG start: k-means++ or the thesis's random points in the data's hyper-box"),
-          integer("iterations", "30", 1, 10000, "LBG iterations at most"),
-          real("tolerance", "1e-4", 0, 1, "LBG stops when the energy falls by less than this"),
-          integer("seed", "1", 0, 9.2e18, "random seed"),
-          real("alpha", "0", 0, 1e6,
-               "geometry coherence (Chen): weight of the distance to the cluster, per "
-               "bounding-box diagonal"),
-          boolean("reclassify", "false", "move boundary vertices to lower overdraw"),
-          real("error_budget", "0.05", 0, 10, "reclassification: allowed relative SE increase"),
-          choice("supercluster", "none", "none|greedy|chen", "group clusters into superclusters"),
-          integer("registers", "256", 1, 65536,
-                  "superclusters: constant registers; (n'+1) per cluster")};
+  return param::records(kClusters, kInit, kIterations, kTolerance, kSeed, kAlpha, kReclassify,
+                        kErrorBudget, kSupercluster, kRegisters);
 }
 
 // A choice parameter as an enum: every value the schema lists maps to one
 // enumerator; anything else is refused naming the key (no silent default).
 template <class Enum>
-Enum choose(const Params& p, const std::string& key,
+Enum choose(const Params& p, const Param<std::string>& key,
             std::initializer_list<std::pair<const char*, Enum>> values) {
-  const std::string value = p.get_string(key);
+  const std::string value = key(p);
   for (const auto& [name, e] : values)
     if (value == name) return e;
-  p.fail(key, "unknown value \"" + value + "\"");
+  p.fail(key.name(), "unknown value \"" + value + "\"");
 }
 
 // Read once, in the constructor, so a bad value is found before any ray.
 inline clustering::LbgOptions lbg_options(const Params& p) {
   clustering::LbgOptions o;
-  o.clusters = static_cast<int>(p.get_int("clusters"));
+  o.clusters = static_cast<int>(kClusters(p));
   o.init = choose<clustering::Init>(
-      p, "init",
+      p, kInit,
       {{"kmeans++", clustering::Init::kmeans_plus_plus}, {"hyperbox", clustering::Init::hyperbox}});
-  o.max_iterations = static_cast<int>(p.get_int("iterations"));
-  o.tolerance = p.get_real("tolerance");
-  o.seed = static_cast<std::uint64_t>(p.get_int("seed"));
-  o.alpha = p.get_real("alpha");
+  o.max_iterations = static_cast<int>(kIterations(p));
+  o.tolerance = kTolerance(p);
+  o.seed = static_cast<std::uint64_t>(kSeed(p));
+  o.alpha = kAlpha(p);
   return o;
 }
 
@@ -58,7 +68,7 @@ inline clustering::LbgOptions lbg_options(const Params& p) {
 inline clustering::LbgOptions with_mesh(clustering::LbgOptions o, const Params& p,
                                         const Mesh* mesh) {
   o.mesh = mesh;
-  if (o.alpha > 0 && !mesh) p.fail("alpha", "geometry-coherent clustering needs a mesh");
+  if (o.alpha > 0 && !mesh) p.fail(kAlpha.name(), "geometry-coherent clustering needs a mesh");
   return o;
 }
 
@@ -82,16 +92,16 @@ struct CoherenceOptions {
 
 inline CoherenceOptions coherence_options(const Params& p) {
   CoherenceOptions o;
-  o.reclassify = p.get_bool("reclassify");
-  o.error_budget = p.get_real("error_budget");
+  o.reclassify = kReclassify(p);
+  o.error_budget = kErrorBudget(p);
   enum class Grouping { none, greedy, chen };
   const Grouping grouping = choose<Grouping>(
-      p, "supercluster",
+      p, kSupercluster,
       {{"none", Grouping::none}, {"greedy", Grouping::greedy}, {"chen", Grouping::chen}});
   o.supercluster = grouping != Grouping::none;
   o.method = grouping == Grouping::chen ? clustering::SuperclusterMethod::chen_selection
                                         : clustering::SuperclusterMethod::greedy_merge;
-  o.registers = static_cast<int>(p.get_int("registers"));
+  o.registers = static_cast<int>(kRegisters(p));
   return o;
 }
 
@@ -101,7 +111,8 @@ inline void improve_coherence(const CoherenceOptions& o, const Params& p,
                               CompressedTransfer& compressed) {
   if (!mesh) {
     if (o.reclassify || o.supercluster)
-      p.fail(o.reclassify ? "reclassify" : "supercluster", "cluster coherence needs the mesh");
+      p.fail(o.reclassify ? kReclassify.name() : kSupercluster.name(),
+             "cluster coherence needs the mesh");
     return;
   }
   if (o.reclassify || o.supercluster)
@@ -133,8 +144,8 @@ inline void report_budget_used(const std::string& name, const Params& p,
                 std::to_string(asked) + " is more than " + why + "; " + std::to_string(used) +
                 " used");
   };
-  if (p.has("clusters") && c.clusters() < p.get_int("clusters"))
-    warn("clusters", p.get_int("clusters"), c.clusters(),
+  if (kClusters.given(p) && c.clusters() < kClusters(p))
+    warn(kClusters.name(), kClusters(p), c.clusters(),
          "this transfer supports (vertices, or clusters LBG left empty)");
   if (p.has("components") && c.components < p.get_int("components"))
     warn("components", p.get_int("components"), c.components,

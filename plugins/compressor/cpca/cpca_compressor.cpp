@@ -9,16 +9,19 @@ class ClusteredPca final : public Compressor {
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
       "clustered PCA: static, iterative or adaptive (Sloan 2003 §4), overdraw reduction (§5)";
+  static constexpr auto kMethod =
+      param::choice("method", "static", "static|iterative|adaptive", "CPCA variant");
+  static constexpr auto kComponents =
+      param::integer("components", "8", 0, 1 << 20, "n' per cluster (adaptive: on average)");
+  static constexpr auto kIterationsPerComponent =
+      param::integer("iterations_per_component", "10", 1, 1000,
+                     "iterative/adaptive: classification passes per added component");
+  static constexpr auto kAdaptiveIterations =
+      param::integer("adaptive_iterations", "5", 1, 1000, "adaptive: redistribution passes");
   static constexpr auto parameters() {
-    using namespace schema;
     return compressor_params::join(
         compressor_params::clustering(),
-        std::array{
-            choice("method", "static", "static|iterative|adaptive", "CPCA variant"),
-            integer("components", "8", 0, 1 << 20, "n' per cluster (adaptive: on average)"),
-            integer("iterations_per_component", "10", 1, 1000,
-                    "iterative/adaptive: classification passes per added component"),
-            integer("adaptive_iterations", "5", 1, 1000, "adaptive: redistribution passes")});
+        param::records(kMethod, kComponents, kIterationsPerComponent, kAdaptiveIterations));
   }
 
   // Every parameter is read here, so a bad one is refused before any ray.
@@ -26,14 +29,13 @@ class ClusteredPca final : public Compressor {
       : params_(params), coherence_(compressor_params::coherence_options(params)) {
     options_.lbg = compressor_params::lbg_options(params);
     options_.method =
-        compressor_params::choose<clustering::Method>(params, "method",
+        compressor_params::choose<clustering::Method>(params, kMethod,
                                                       {{"static", clustering::Method::static_pca},
                                                        {"iterative", clustering::Method::iterative},
                                                        {"adaptive", clustering::Method::adaptive}});
-    options_.components = static_cast<int>(params.get_int("components"));
-    options_.iterations_per_component =
-        static_cast<int>(params.get_int("iterations_per_component"));
-    options_.adaptive_iterations = static_cast<int>(params.get_int("adaptive_iterations"));
+    options_.components = static_cast<int>(kComponents(params));
+    options_.iterations_per_component = static_cast<int>(kIterationsPerComponent(params));
+    options_.adaptive_iterations = static_cast<int>(kAdaptiveIterations(params));
   }
 
   CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {

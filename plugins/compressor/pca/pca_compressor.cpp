@@ -10,12 +10,12 @@ class PrincipalComponents final : public Compressor {
  public:
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description = "PCA: one cluster, n' principal components";
-  static constexpr auto parameters() {
-    return std::array{schema::integer("components", "8", 0, 1 << 20, "n', components kept")};
-  }
+  static constexpr auto kComponents =
+      param::integer("components", "8", 0, 1 << 20, "n', components kept");
+  static constexpr auto parameters() { return param::records(kComponents); }
 
   explicit PrincipalComponents(const Params& params)
-      : params_(params), components_(static_cast<int>(params.get_int("components"))) {}
+      : params_(params), components_(static_cast<int>(kComponents(params))) {}
 
   CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const override {
     return encode_shard(signal, mesh, Distribution::whole_signal(signal.vertices()));

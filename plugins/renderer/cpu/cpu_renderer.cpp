@@ -15,12 +15,11 @@ class CpuRenderer final : public Renderer {
   static constexpr const char* plugin_version = "1.0.0";
   static constexpr const char* plugin_description =
       "software rasteriser with z-buffer and Gouraud shading; the reference for tests";
-  static constexpr auto parameters() {
-    return std::array{
-        schema::boolean("background", "true", "draw the environment behind the mesh")};
-  }
+  static constexpr auto kBackground =
+      param::boolean("background", "true", "draw the environment behind the mesh");
+  static constexpr auto parameters() { return param::records(kBackground); }
 
-  explicit CpuRenderer(const Params& params) : background_(params.get_bool("background")) {}
+  explicit CpuRenderer(const Params& params) : background_(kBackground(params)) {}
 
   Image render(const RenderInput& in) override {
     if (!in.mesh) throw Error("cpu renderer: no mesh");

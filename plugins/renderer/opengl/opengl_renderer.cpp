@@ -55,16 +55,15 @@ class OpenGLRenderer final : public Renderer {
   static constexpr const char* plugin_description =
       "OpenGL 3.3: per-cluster constants on the CPU, weighted sums and glossy evaluation on the "
       "GPU";
-  static constexpr auto parameters() {
-    return std::array{
-        schema::choice("method", "single-pass", "single-pass|per-cluster",
-                       "one indexed draw, or the paper's per-cluster draws with blending"),
-        schema::boolean("background", "true", "draw the environment behind the mesh")};
-  }
+  static constexpr auto kMethod =
+      param::choice("method", "single-pass", "single-pass|per-cluster",
+                    "one indexed draw, or the paper's per-cluster draws with blending");
+  static constexpr auto kBackground =
+      param::boolean("background", "true", "draw the environment behind the mesh");
+  static constexpr auto parameters() { return param::records(kMethod, kBackground); }
 
   explicit OpenGLRenderer(const Params& params)
-      : per_cluster_(params.get_string("method") == "per-cluster"),
-        background_(params.get_bool("background")) {}
+      : per_cluster_(kMethod(params) == "per-cluster"), background_(kBackground(params)) {}
 
   ~OpenGLRenderer() override {
     if (!context_) return;

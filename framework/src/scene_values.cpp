@@ -1,0 +1,223 @@
+// What a scene makes once read: its files resolved, its mesh, directions,
+// environment and camera, and its material as the stages need it (BRDF,
+// channels, subsurface, albedo).
+#include "prt/scene.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "prt/environment.hpp"
+#include "prt/glossy.hpp"
+#include "prt/lattice_lighting.hpp"
+#include "prt/mesh.hpp"
+#include "prt/plugin.hpp"
+#include "prt/registry.hpp"
+#include "prt/sh.hpp"
+
+namespace prt {
+namespace fs = std::filesystem;
+
+fs::path SceneSpec::resolve(const std::string& relative) const {
+  const fs::path p(relative);
+  return p.is_absolute() ? p : (file.parent_path() / p).lexically_normal();
+}
+
+fs::path SceneSpec::bake_path() const {
+  const std::string name = output.get_string("bake");
+  return name.empty() ? fs::path(file.stem().string() + ".h5") : resolve(name);
+}
+
+fs::path SceneSpec::image_path() const {
+  const std::string name = output.get_string("image");
+  return name.empty() ? fs::path(file.stem().string() + ".png") : resolve(name);
+}
+
+std::vector<fs::path> SceneSpec::input_files() const {
+  std::vector<fs::path> files{file};
+  for (const std::string& name : {mesh.get_string("file"), lighting.get_string("environment")})
+    if (!name.empty()) files.emplace_back(name);
+  return files;
+}
+
+Mesh SceneSpec::load_mesh() const {
+  const std::string file_name = mesh.get_string("file");
+  if (!file_name.empty()) return prt::load_mesh(file_name);
+  return make_generated(mesh.get_string("generate"), static_cast<int>(mesh.get_int("detail")));
+}
+
+DirectionSet SceneSpec::directions() const {
+  return DirectionSet::make(transport.get_string("directions"),
+                            static_cast<int>(transport.get_int("rays")),
+                            static_cast<std::uint64_t>(transport.get_int("seed")));
+}
+
+Environment SceneSpec::load_environment() const {
+  const std::string map = lighting.get_string("environment");
+  // Point lights alone: a black environment.
+  const Eigen::Vector3f constant =
+      lighting.has("constant")
+          ? Eigen::Vector3f(Eigen::Vector3d(lighting.get_reals("constant").data()).cast<float>())
+          : Eigen::Vector3f::Zero();
+  Environment environment = map.empty() ? Environment::constant(constant) : Environment::load(map);
+  environment.set_intensity(static_cast<float>(lighting.get_real("intensity")));
+  environment.set_rotation(rotation_about_up(lighting.get_real("rotation")));
+  return environment;
+}
+
+Eigen::MatrixX3d SceneSpec::project_light(const Environment& environment,
+                                          const Basis& basis) const {
+  // A basis on a lattice rotates the light by rotating the lattice (as the
+  // viewer does, frame after frame); any other projects the map.
+  const std::optional<LatticeRotation> lattice = LatticeRotation::of(basis, environment);
+  Eigen::MatrixX3d light =
+      lattice ? lattice->light(environment.rotation()) : environment.project(basis);
+  const std::string kind = lighting.get_string("window");
+  if (kind == "none") return light;
+  check_window(basis);
+  const std::vector<int> bands = basis.coefficient_bands();
+  const int order = *std::max_element(bands.begin(), bands.end()) + 1;
+  const Eigen::VectorXd per_band = sh::window(order, kind);  // indexed l^2 + l + m: take m = -l
+  for (std::size_t i = 0; i < bands.size(); ++i)
+    light.row(Eigen::Index(i)) *= per_band[bands[i] * bands[i]];
+  return light;
+}
+
+Camera SceneSpec::make_camera(const Mesh& m) const {
+  Camera c = Camera::framing(m, static_cast<int>(camera.get_int("width")),
+                             static_cast<int>(camera.get_int("height")),
+                             static_cast<float>(camera.get_real("fov")));
+  auto vec = [&](const char* key) {
+    const auto v = camera.get_reals(key);
+    return Eigen::Vector3f(float(v[0]), float(v[1]), float(v[2]));
+  };
+  if (camera.has("target")) c.target = vec("target");
+  if (camera.has("position")) c.position = vec("position");
+  c.up = vec("up");
+  // A camera at its target, or looking along its up vector, sees nothing.
+  const Eigen::Vector3f forward = c.target - c.position;
+  const float scale = std::max({c.target.norm(), c.position.norm(), 1e-20f});
+  if (!forward.allFinite() || forward.norm() <= 1e-6f * scale)
+    throw Error(camera.has("position") ? camera.location("position") : camera.location(),
+                "section [camera]: position and target coincide; the camera has no direction");
+  if (c.up.norm() == 0 || forward.normalized().cross(c.up.normalized()).norm() < 1e-6f)
+    throw Error(camera.has("up") ? camera.location("up") : camera.location(),
+                "section [camera]: up is parallel to the viewing direction (or zero)");
+  return c;
+}
+
+Brdf SceneSpec::brdf(int channel) const {
+  return Brdf::from_material(material, channel);
+}
+
+bool SceneSpec::glossy() const {
+  return brdf().glossy();
+}
+
+void SceneSpec::check_window(const Basis& light_basis) const {
+  // The window damps each frequency band; a basis without bands cannot be windowed.
+  if (lighting.get_string("window") == "none") return;
+  const std::vector<int> bands = light_basis.coefficient_bands();
+  if (bands.size() != static_cast<std::size_t>(light_basis.size()) || bands.empty())
+    throw Error(lighting.location("window"),
+                "section [lighting]: window damps frequency bands, and basis \"" + basis.name +
+                    "\" has none (it declares no coefficient_bands()); use window = \"none\"");
+}
+
+int SceneSpec::incident_order(const Basis& light_basis) const {
+  if (const auto order = material.get_int("incident_order"); order > 0) return int(order);
+  const std::vector<int> bands = light_basis.coefficient_bands();
+  if (bands.empty()) return 8;
+  return std::clamp(*std::max_element(bands.begin(), bands.end()) + 1, 1, kMaxIncidentOrder);
+}
+
+double SceneSpec::bounce_albedo(int channel) const {
+  const double kd = glossy() ? 1.0 : material.get_reals("diffuse")[std::size_t(channel)];
+  const auto a = material.get_reals("albedo");
+  return kd * (a[0] + a[1] + a[2]) / 3.0;
+}
+
+std::string SceneSpec::material_description() const {
+  std::string text = brdf().describe();
+  if (glossy())
+    text += " projection=" + material.get_string("projection") +
+            " cutoff=" + std::to_string(material.get_real("cutoff")) +
+            " incident_order=" + std::to_string(material.get_int("incident_order"));
+  if (material.get_bool("subsurface")) {
+    const SubsurfaceMaterial m = subsurface();
+    char more[200];
+    std::snprintf(more, sizeof more,
+                  " subsurface sigma_a=%g sigma_s=%g eta=%g mm_per_unit=%g error=%g", m.sigma_a,
+                  m.sigma_s, m.eta, m.mm_per_unit, m.error);
+    text += more;
+  }
+  const MaterialChannels c = channels();
+  if (c.groups.size() > 1) {  // the other channels' materials
+    for (int channel = 1; channel < 3; ++channel) {
+      const ChannelMaterial& g = c.groups[std::size_t(c.group_of_channel[channel])];
+      char more[200];
+      std::snprintf(more, sizeof more, " | %c: kd=%g ks=%g sigma_a=%g sigma_s=%g", "rgb"[channel],
+                    g.brdf.kd, g.brdf.ks, g.subsurface.sigma_a, g.subsurface.sigma_s);
+      text += more;
+    }
+  }
+  return text;
+}
+
+MaterialChannels SceneSpec::channels() const {
+  MaterialChannels out;
+  const bool subsurface_on = material.get_bool("subsurface");
+  const bool bounces = transport.get_int("bounces") > 0;
+  // What a channel's transfer depends on; equal keys share a transfer.
+  auto key = [&](int c) {
+    const Brdf b = brdf(c);
+    const SubsurfaceMaterial m = subsurface(c);
+    const bool brdf_in_transfer = b.glossy() || bounces;
+    return std::array<double, 4>{brdf_in_transfer ? b.kd : 0, brdf_in_transfer ? b.ks : 0,
+                                 subsurface_on ? m.sigma_a : 0, subsurface_on ? m.sigma_s : 0};
+  };
+  std::vector<std::array<double, 4>> keys;
+  for (int c = 0; c < 3; ++c) {
+    const auto k = key(c);
+    const auto found = std::find(keys.begin(), keys.end(), k);
+    if (found != keys.end()) {
+      out.group_of_channel[std::size_t(c)] = static_cast<int>(found - keys.begin());
+      continue;
+    }
+    out.group_of_channel[std::size_t(c)] = static_cast<int>(keys.size());
+    keys.push_back(k);
+    out.groups.push_back({brdf(c), subsurface(c), bounce_albedo(c)});
+  }
+  return out;
+}
+
+SubsurfaceMaterial SceneSpec::subsurface(int channel) const {
+  SubsurfaceMaterial m;
+  const auto c = std::size_t(channel);
+  if (const SubsurfacePreset* preset = subsurface_preset(material.get_string("preset"))) {
+    m.sigma_a = preset->sigma_a[c];
+    m.sigma_s = preset->sigma_s[c];
+  } else {
+    m.sigma_a = material.get_reals("sigma_a")[c];
+    m.sigma_s = material.get_reals("sigma_s")[c];
+  }
+  m.eta = material.get_real("eta");
+  m.mm_per_unit = material.get_real("mm_per_unit");
+  m.error = material.get_real("subsurface_error");
+  return m;
+}
+
+Eigen::Vector3f SceneSpec::albedo() const {
+  const auto a = material.get_reals("albedo");
+  // A Lambertian transfer vector carries no reflectance: kd scales the tint.
+  // A glossy matrix carries the whole BRDF, kd included.
+  const Eigen::Vector3f tint = Eigen::Vector3d(a[0], a[1], a[2]).cast<float>();
+  if (glossy()) return tint;
+  const auto kd = material.get_reals("diffuse");
+  return tint.cwiseProduct(Eigen::Vector3f(float(kd[0]), float(kd[1]), float(kd[2])));
+}
+
+}  // namespace prt
