@@ -30,6 +30,7 @@
 #include "prt/progress.hpp"
 #include "prt/scene.hpp"
 #include "prt/transport.hpp"
+#include "prt/turning_light.hpp"
 
 namespace prt::cli {
 
@@ -211,8 +212,7 @@ struct Baked {
 };
 
 Baked bake_configuration(const SceneSpec& scene, const BakePlan& plan,
-                         const std::vector<Override>& config, Reused& reused,
-                         const fs::path& out) {
+                         const std::vector<Override>& config, Reused& reused, const fs::path& out) {
   static const std::set<std::string> trace_sections{"mesh", "transport"};
   static const std::set<std::string> shading_sections{"compressor", "camera",   "renderer",
                                                       "output",     "lighting", "ground_truth"};
@@ -268,7 +268,7 @@ struct Measured {
 // The images of light 0: the configuration's, the truth's, their difference.
 void write_images(const Image& image, const Image& truth_image, const SceneSpec& scene,
                   const fs::path& out, const std::string& label) {
-  const float exposure = static_cast<float>(scene.camera.get_real("exposure"));
+  const float exposure = static_cast<float>(keys::camera::exposure(scene.camera));
   write_png(image, out / "images" / (stem_of(label) + ".png"), exposure);
   write_png(truth_image, out / "images" / "ground_truth.png", exposure);
   Image difference = image;
@@ -299,34 +299,33 @@ Image render_radiance(Renderer& renderer, const Mesh& mesh, const Eigen::MatrixX
 
 // 4. Lights: the scene's and rotated copies; relight time, errors, images.
 Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec& scene,
-                        const BakeData& data, const std::vector<Override>& config,
-                        Reused& reused, const fs::path& out, const std::string& label) {
+                        const BakeData& data, const std::vector<Override>& config, Reused& reused,
+                        const fs::path& out, const std::string& label) {
   const Relighting relighting(scene, data, context.registry);
-  Environment environment = scene.load_environment();
-  const Eigen::Matrix3d scene_rotation = environment.rotation();
+  // The lights turn by the viewer's rule (prt/turning_light.hpp).
+  TurningLight turning(relighting, scene.load_environment());
   const Camera camera = scene.make_camera(data.mesh);
   const std::string truth_key =
       key_of(config, {"mesh", "material", "lighting", "camera", "ground_truth", "transport"});
   const std::string limited_key =
       truth_key + " " + key_of(config, {"basis", "exit", "transport", "material"});
   Params renderer_params = scene.renderer.params;
-  auto cpu = context.registry.create<Renderer>(scene.renderer.name, renderer_params,
-                                               scene.renderer.where);
+  auto cpu =
+      context.registry.create<Renderer>(scene.renderer.name, renderer_params, scene.renderer.where);
   const CompressedTransfer exact_transfer = exact_form(data.transfer);  // for the budget
   const RelightKernel kernel = relighting.prepare(data.compressed);     // laid out once
   const RelightKernel exact_kernel = relighting.prepare(exact_transfer);
   const RunOptions quiet{true};
   Measured m;
   for (int light = 0; light < args.lights; ++light) {
-    environment.set_rotation(rotation_about_up(360.0 * light / args.lights) * scene_rotation);
-    const Eigen::MatrixX3d l = relighting.light(environment);
+    const Eigen::MatrixX3d l = turning.at(360.0 * light / args.lights);
     Relit relit;
     m.relight_seconds += median_seconds(3, [&] { relit = relighting.relight(kernel, l, camera); });
     auto& truth_list = reused.truths[truth_key];
     if (static_cast<int>(truth_list.size()) <= light) {
       SceneSpec rotated = scene;
-      rotated.lighting.set("rotation",
-                           scene.lighting.get_real("rotation") + 360.0 * light / args.lights);
+      rotated.lighting.set(keys::lighting::rotation.name(),
+                           keys::lighting::rotation(scene.lighting) + 360.0 * light / args.lights);
       StageTimes times;
       truth_list.push_back(render_ground_truth(rotated, data.mesh, context.registry, quiet, times));
     }
@@ -336,12 +335,14 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
     // Error budget: light truncation, transfer projection, compression.
     auto& limited_list = reused.limited_truths[limited_key];
     if (static_cast<int>(limited_list.size()) <= light)
-      limited_list.push_back(ground_truth_vertices(
-          scene, data.mesh, environment.band_limited(relighting.basis(), l), camera, quiet));
+      limited_list.push_back(band_limited_truth(scene, data.mesh, relighting, turning.environment(),
+                                                l, camera, quiet));
     const Eigen::MatrixX3f exact = relighting.relight(exact_kernel, l, camera).vertex_radiance;
-    m.truncation_rms += vertex_error(limited_list[light], truth.vertex_radiance).rms / args.lights;
-    m.projection_rms += vertex_error(exact, limited_list[light]).rms / args.lights;
-    m.compression_rms += vertex_error(relit.vertex_radiance, exact).rms / args.lights;
+    const ErrorBudget budget =
+        error_budget(truth.vertex_radiance, limited_list[light], exact, relit.vertex_radiance);
+    m.truncation_rms += budget.truncation / args.lights;
+    m.projection_rms += budget.projection / args.lights;
+    m.compression_rms += budget.compression / args.lights;
     m.max_error = std::max(m.max_error, e.max);
     RenderInput input = relighting.input(data.compressed, relit, l, camera);
     input.background = nullptr;
@@ -397,9 +398,9 @@ void write_summaries(const fs::path& out, const fs::path& results, const SceneSp
   std::cout << "results: " << (out / "results.json").string() << " (" << records.size()
             << " configurations)\n";
   if (!report) return;
-  const std::string command =
-      "/usr/bin/python3 " + (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
-      " " + out.string() + " \"" + base.file.filename().string() + "\"";
+  const std::string command = "/usr/bin/python3 " +
+                              (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
+                              " " + out.string() + " \"" + base.file.filename().string() + "\"";
   if (std::system(command.c_str()) != 0) throw Error("the report script failed: " + command);
   std::cout << "report: " << (out / "report.md").string() << "\n";
 }

@@ -93,10 +93,10 @@ void compare_with_truth(Context& context, const SceneSpec& scene, const BakeData
   std::printf(
       "error against ground truth (%lld samples/vertex): RMS per vertex %.6g (relative %.4f),"
       " 99th percentile %.6g, max %.6g\n",
-      static_cast<long long>(scene.ground_truth.get_int("samples")), e.rms, e.relative_rms, e.p99,
-      e.max);
+      static_cast<long long>(keys::ground_truth::samples(scene.ground_truth)), e.rms,
+      e.relative_rms, e.p99, e.max);
   const DarkPixels dark = count_dark_pixels(
-      result.image, truth.image, static_cast<float>(scene.camera.get_real("exposure")));
+      result.image, truth.image, static_cast<float>(keys::camera::exposure(scene.camera)));
   std::printf(
       "pixels darker than half the ground truth (of %lld with ground-truth luminance > 40 of "
       "255 at the scene's exposure): %lld\n",
@@ -124,8 +124,8 @@ void compare_with_truth(Context& context, const SceneSpec& scene, const BakeData
         "the same ground truth: RMS per vertex %.6g (relative %.4f)\n",
         data.bounces, d.rms, d.relative_rms);
   }
-  print_error_budget({scene, data, relighting, environment, light, camera},
-                     truth.vertex_radiance, result.vertex_radiance, context, times);
+  print_error_budget({scene, data, relighting, environment, light, camera}, truth.vertex_radiance,
+                     result.vertex_radiance, context, times);
 }
 
 int render(Context& context, const RenderArgs& args) {
@@ -153,7 +153,7 @@ int render(Context& context, const RenderArgs& args) {
   }
   clock = Stopwatch();
   const float exposure =
-      args.exposure > 0 ? args.exposure : static_cast<float>(scene.camera.get_real("exposure"));
+      args.exposure > 0 ? args.exposure : static_cast<float>(keys::camera::exposure(scene.camera));
   write_png(result.image, output, exposure);
   times.add("write PNG", clock.seconds());
   std::cout << "rendered " << result.image.width << " x " << result.image.height << " -> "
@@ -171,22 +171,19 @@ int render(Context& context, const RenderArgs& args) {
 void print_error_budget(const Comparison& with, const Eigen::MatrixX3f& truth,
                         const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times) {
   const auto& [scene, data, relighting, environment, light, camera] = with;
-  const Environment band_limited = environment.band_limited(relighting.basis(), light);
   Stopwatch clock;
   const Eigen::MatrixX3f limited_truth =
-      ground_truth_vertices(scene, data.mesh, band_limited, camera, {context.quiet});
+      band_limited_truth(scene, data.mesh, relighting, environment, light, camera, {context.quiet});
   times.add("ground truth under the band-limited light", clock.seconds());
   const Eigen::MatrixX3f exact =
       relighting.relight(exact_form(data.transfer), light, camera).vertex_radiance;
-  const double full = vertex_error(compressed, truth).rms;
+  const ErrorBudget budget = error_budget(truth, limited_truth, exact, compressed);
   std::printf("error budget (per-vertex RMS):\n");
   for (const auto& [what, error] :
-       {std::pair{"light truncation (band-limited vs full ground truth)",
-                  vertex_error(limited_truth, truth).rms},
-        {"transfer projection (exact PRT vs band-limited ground truth)",
-         vertex_error(exact, limited_truth).rms},
-        {"compression (compressed vs exact PRT)", vertex_error(compressed, exact).rms},
-        {"total (compressed PRT vs full ground truth)", full}})
+       {std::pair{"light truncation (band-limited vs full ground truth)", budget.truncation},
+        {"transfer projection (exact PRT vs band-limited ground truth)", budget.projection},
+        {"compression (compressed vs exact PRT)", budget.compression},
+        {"total (compressed PRT vs full ground truth)", budget.total}})
     std::printf("  %-62s %.6g\n", what, error);
 }
 

@@ -29,7 +29,7 @@ int render(Context& context, const RenderArgs& args);
 
 struct CompressArgs {
   std::string bake, output, compressor;  // no default: the one default is the scene's ("none")
-  std::vector<std::string> parameters;  // key=value
+  std::vector<std::string> parameters;   // key=value
   bool json = false, force = false;
   std::uint64_t memory = 0;  // memory budget in bytes (0: the default share of RAM)
 };

@@ -157,7 +157,7 @@ Row measure(Context& context, const Entry& entry, const Shared& shared) {
   row.seconds = clock.seconds();
   // The entry's own size: the exit basis's rows, or the light basis's
   // coefficients (kept terms of a sparse approximation).
-  row.coefficients = entry.exit_role             ? data.transfer.exit_rows
+  row.coefficients = entry.exit_role            ? data.transfer.exit_rows
                      : data.compressed.sparse() ? data.compressed.components
                                                 : relighting.basis().size();
   row.bytes = 4 * data.compressed.stored_floats();
@@ -174,8 +174,7 @@ Row measure(Context& context, const Entry& entry, const Shared& shared) {
   row.shading_relative = shading.relative_rms;
   std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g\n", row.spec.c_str(),
                row.coefficients, entry.exit_role ? "exit functions" : "coefficients",
-               transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(),
-               row.shading_rms);
+               transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(), row.shading_rms);
   return row;
 }
 

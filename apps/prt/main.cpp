@@ -21,7 +21,6 @@ struct Command {
   std::function<int(prt::cli::Context&)> run;
 };
 
-
 // prt bake
 Command bake_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::BakeArgs>();
@@ -42,16 +41,15 @@ Command render_command(CLI::App& app) {
   command->add_option("-o,--output", args->output, "PNG image (default: from the scene)");
   command->add_flag("--force", args->force, kForceHelp);
   command->add_flag("--ground-truth", args->ground_truth,
-                       "render the Monte Carlo ground truth instead of the bake");
+                    "render the Monte Carlo ground truth instead of the bake");
   command->add_option("-r,--renderer", args->renderer,
-                         "renderer plug-in instead of the scene's (e.g. opengl)");
+                      "renderer plug-in instead of the scene's (e.g. opengl)");
   command->add_option("--renderer-param", args->renderer_parameters,
-                         "key=value parameter of that renderer (repeatable)");
+                      "key=value parameter of that renderer (repeatable)");
   command->add_flag("--compare", args->compare,
-                       "also compute the ground truth and print per-vertex RMS error");
+                    "also compute the ground truth and print per-vertex RMS error");
   command
-      ->add_option("--exposure", args->exposure,
-                   "exposure scale of the PNG (default: the scene's)")
+      ->add_option("--exposure", args->exposure, "exposure scale of the PNG (default: the scene's)")
       ->check(CLI::Validator(
           [](const std::string& text) -> std::string {
             // CLI11's PositiveNumber lets NaN through (every comparison with it is false).
@@ -71,10 +69,9 @@ Command compress_command(CLI::App& app) {
   auto* command =
       app.add_subcommand("compress", "re-compress the transfer of a bake file with a compressor");
   command->add_option("bake", args->bake, "bake file (.h5)")->required();
-  command->add_option("-c,--compressor", args->compressor, "compressor plug-in")
-      ->required();
+  command->add_option("-c,--compressor", args->compressor, "compressor plug-in")->required();
   command->add_option("-p,--param", args->parameters,
-                           "compressor parameter key=value (repeatable)");
+                      "compressor parameter key=value (repeatable)");
   command->add_option("-o,--output", args->output, "output bake file (default: in place)");
   command->add_flag("--json", args->json, "print the metrics as JSON");
   command->add_flag("--force", args->force, kForceHelp);
@@ -84,7 +81,8 @@ Command compress_command(CLI::App& app) {
                    "into a file beside the output and compressed in passes")
       ->transform(CLI::AsSizeValue(false))
       ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
-  return {command, [args](prt::cli::Context& context) { return prt::cli::compress(context, *args); }};
+  return {command,
+          [args](prt::cli::Context& context) { return prt::cli::compress(context, *args); }};
 }
 
 // prt bench
@@ -108,21 +106,21 @@ Command stability_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::StabilityArgs>();
   auto* command =
       app.add_subcommand("stability", "report where the numerics break (SH, rotation, ...)");
-  command->add_option("--orders", args->orders, "SH orders (bands) to measure")
-      ->delimiter(',');
+  command->add_option("--orders", args->orders, "SH orders (bands) to measure")->delimiter(',');
   command->add_option("--max-rotation-order", args->max_rotation_order,
-                            "largest order whose rotation is measured");
+                      "largest order whose rotation is measured");
   command
       ->add_option("--bands", args->bands,
                    "single bands l measured alone to high degree (rotation, evaluation)")
       ->delimiter(',');
   command->add_option("--hemisphere-order", args->hemisphere_order,
-                            "largest order of the hemispherical Gram matrix");
+                      "largest order of the hemispherical Gram matrix");
   command->add_option("--json", args->json, "write the figures as JSON");
   command->add_option("--figure-data", args->figure_data,
-                            "write the sun-ringing curves as CSV (for scripts/stability_plot.py)");
+                      "write the sun-ringing curves as CSV (for scripts/stability_plot.py)");
   command->add_flag("--force", args->force, kForceHelp);
-  return {command, [args](prt::cli::Context& context) { return prt::cli::stability(context, *args); }};
+  return {command,
+          [args](prt::cli::Context& context) { return prt::cli::stability(context, *args); }};
 }
 
 // prt compare-bases
@@ -138,7 +136,8 @@ Command compare_command(CLI::App& app) {
   command->add_option("--csv", args->csv, "write the table as CSV");
   command->add_option("--json", args->json, "write the table as JSON");
   command->add_flag("--force", args->force, kForceHelp);
-  return {command, [args](prt::cli::Context& context) { return prt::cli::compare_bases(context, *args); }};
+  return {command,
+          [args](prt::cli::Context& context) { return prt::cli::compare_bases(context, *args); }};
 }
 
 // prt subdivide
@@ -146,17 +145,16 @@ Command subdivide_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::SubdivideArgs>();
   auto* command = app.add_subcommand(
       "subdivide", "make a large test mesh: Loop or midpoint subdivision to a vertex count");
-  command->add_option("mesh", args->input, "input mesh (.off, .ply, .obj, .stl)")
+  command->add_option("mesh", args->input, "input mesh (.off, .ply, .obj, .stl)")->required();
+  command->add_option("-o,--output", args->output, "output mesh (.ply binary, .off, .obj)")
       ->required();
-  command
-      ->add_option("-o,--output", args->output, "output mesh (.ply binary, .off, .obj)")
-      ->required();
-  command->add_option("-n,--vertices", args->vertices, "vertex count of the result")
-      ->required();
+  command->add_option("-n,--vertices", args->vertices, "vertex count of the result")->required();
   command->add_option("--scheme", args->scheme, "loop (smooth) or midpoint (flat)")
       ->capture_default_str();
   command->add_flag("--force", args->force, kForceHelp);
-  return {command, [args](prt::cli::Context& context) { return ((void)context, prt::cli::subdivide(*args)); }};
+  return {command, [args](prt::cli::Context& context) {
+            return ((void)context, prt::cli::subdivide(*args));
+          }};
 }
 
 // prt demo
@@ -222,10 +220,9 @@ int main(int argc, char** argv) {
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "no progress bars");
   const std::vector<Command> commands{
-      bake_command(app),      render_command(app),     compress_command(app),
-      analyze_command(app),   bench_command(app),      stability_command(app),
-      image_diff_command(app), compare_command(app),   info_command(app),
-      plugins_command(app),   subdivide_command(app),  demo_command(app)};
+      bake_command(app),  render_command(app),    compress_command(app),   analyze_command(app),
+      bench_command(app), stability_command(app), image_diff_command(app), compare_command(app),
+      info_command(app),  plugins_command(app),   subdivide_command(app),  demo_command(app)};
   CLI11_PARSE(app, argc, argv);
   prt::Progress::set_enabled(!quiet);
   try {

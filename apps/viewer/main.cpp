@@ -112,8 +112,7 @@ void add_options(CLI::App& app, prt::view::Options& options, Script& script) {
   app.add_flag("--heatmap", options.heatmap, "start in the error heat-map view");
   app.add_flag("--exact", options.exact, "start with the uncompressed transfer");
   app.add_flag("-q,--quiet", options.quiet, "no progress bars");
-  app.add_flag("--no-background", script.no_background,
-               "black behind the mesh instead of the map");
+  app.add_flag("--no-background", script.no_background, "black behind the mesh instead of the map");
 }
 
 // Frame after frame until the window closes, Q, or the script's last frame.
@@ -166,8 +165,8 @@ int main(int argc, char** argv) {
     inputs.push_back(scene.bake_path());
     prt::check_output({script.screenshot_file, prt::FileKind::png, "screenshot"}, inputs);
     const auto& camera = scene.camera;
-    prt::view::Window window(static_cast<int>(camera.get_int("width")),
-                             static_cast<int>(camera.get_int("height")),
+    prt::view::Window window(static_cast<int>(keys::camera::width(camera)),
+                             static_cast<int>(keys::camera::height(camera)),
                              "prt-view  " + scene.file.filename().string());
     if (!options.quiet) std::cout << "OpenGL: " << window.renderer() << "\n";
     prt::view::Viewer viewer(registry, options);

@@ -39,10 +39,7 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
     write_bake(bake_file, data_);
   }
   relighting_ = std::make_unique<Relighting>(scene_, data_, registry_);
-  environment_ = scene_.load_environment();
-  scene_rotation_ = environment_.rotation();
-  base_light_ = relighting_->light(environment_);
-  lattice_ = LatticeRotation::of(relighting_->basis(), environment_);
+  light_source_ = std::make_unique<TurningLight>(*relighting_, scene_.load_environment());
   lights_ = scene_.point_lights;
   Eigen::Vector3f low = data_.mesh.positions.front(), high = low;
   for (const auto& p : data_.mesh.positions) low = low.cwiseMin(p), high = high.cwiseMax(p);
@@ -53,7 +50,7 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
     encoding.kernel = std::make_unique<RelightKernel>(relighting_->prepare(encoding.transfer));
   current_ = options.exact ? 1 : 0;
   home_ = scene_.make_camera(data_.mesh);
-  exposure_ = static_cast<float>(scene_.camera.get_real("exposure"));
+  exposure_ = static_cast<float>(keys::camera::exposure(scene_.camera));
   std::string method = options.method;
   // The viewer always draws with OpenGL; a scene's renderer that has a
   // drawing method (the OpenGL renderer's) chooses the starting one.
@@ -111,11 +108,7 @@ std::vector<std::string> Viewer::encoding_names() const {
 }
 
 std::string Viewer::light_rotation_rule() const {
-  if (relighting_->basis().can_rotate()) return "rotation of the basis's coefficients";
-  if (lattice_)
-    return "rotation of the " + std::to_string(lattice_->resolution()) +
-           "^2 x 6 lattice samples (Nowrouzezahrai et al. 5)";
-  return "re-projection of the rotated map";
+  return light_source_->rule();
 }
 
 void Viewer::orbit(double yaw, double pitch) {
@@ -143,18 +136,11 @@ Camera Viewer::camera() const {
   return c;
 }
 
-// Light rotation through the basis's rotation capability when it has one,
-// by rotating the lattice for a lattice basis, otherwise by projecting the
-// rotated map again.
+// The light turned by the library's rule (prt/turning_light.hpp).
 void Viewer::update_light() {
   if (!light_dirty_) return;
   Stopwatch clock;
-  const Eigen::Matrix3d turn = rotation_about_up(light_degrees_);
-  environment_.set_rotation(turn * scene_rotation_);
-  const Basis& basis = relighting_->basis();
-  light_ = basis.can_rotate() ? Eigen::MatrixX3d(basis.rotation_matrix(turn) * base_light_)
-           : lattice_         ? lattice_->light(environment_.rotation())
-                              : relighting_->light(environment_);
+  light_ = light_source_->at(light_degrees_);
   light_ms_ = 1000 * clock.seconds();
   light_dirty_ = false;
 }
@@ -179,7 +165,7 @@ Image Viewer::render() {
   const Camera cam = camera();
   // The exit basis toward this camera (glossy); the sums themselves run on the GPU.
   Relit relit;
-  if (lights_.empty() && data_.transfer.channel_groups == 1) {
+  if (!relighting_->sums_here()) {
     relit.exit_values = relighting_->exit_values_toward(cam);
   } else {  // point lights or channel transfers: summed here, drawn by the GPU
     Stopwatch relight_clock;
@@ -187,7 +173,7 @@ Image Viewer::render() {
     point_ms_ = 1000 * relight_clock.seconds();
   }
   RenderInput input = relighting_->input(encodings_[current_].transfer, relit, light_, cam);
-  input.background = background_ ? &environment_ : nullptr;
+  input.background = background_ ? &light_source_->environment() : nullptr;
   Eigen::MatrixX3f colours;
   if (heatmap_) {
     colours = heat_colours(light_, cam);

@@ -8,10 +8,10 @@
 
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
-#include "prt/lattice_lighting.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/renderer.hpp"
 #include "prt/scene.hpp"
+#include "prt/turning_light.hpp"
 
 namespace prt::view {
 
@@ -84,10 +84,8 @@ class Viewer {
   std::unique_ptr<Relighting> relighting_;  // refers to scene_ and data_
   std::shared_ptr<Renderer> renderer_;
   std::string method_;
-  Environment environment_;
-  Eigen::Matrix3d scene_rotation_;
-  Eigen::MatrixX3d base_light_, light_;
-  std::optional<LatticeRotation> lattice_;  // lattice bases: rotation by the lattice
+  std::unique_ptr<TurningLight> light_source_;  // after relighting_, which it refers to
+  Eigen::MatrixX3d light_;
   std::vector<PointLight> lights_;
   std::size_t selected_ = 0;
   double light_step_ = 0.05;  // of the mesh's bounding-box diagonal, per key press

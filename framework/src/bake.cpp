@@ -2,36 +2,15 @@
 // sharded), refusing what cannot fit before any ray, into BakeData.
 #include "prt/bake.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <optional>
 
-#include <tbb/parallel_for.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <cmath>
-#include <cstdio>
-#include <fstream>
-#include <sstream>
-
-#include "coupled_slabs.hpp"
-#include "kept_state.hpp"
-#include "prt/basis.hpp"
-#include "prt/basis_metric.hpp"
-#include "prt/bounce_passes.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
-#include "prt/environment.hpp"
-#include "prt/glossy.hpp"
-#include "prt/glossy_interreflection.hpp"
-#include "prt/ground_truth.hpp"
-#include "prt/interreflection.hpp"
-#include "prt/log.hpp"
 #include "prt/memory.hpp"
 #include "prt/progress.hpp"
 #include "prt/rendered_metric.hpp"
-#include "prt/renderer.hpp"
-#include "prt/row_file.hpp"
-#include "prt/subsurface.hpp"
 #include "prt/transport.hpp"
 
 namespace prt {
@@ -40,8 +19,8 @@ namespace {
 
 std::string transport_description(const SceneSpec& scene, const DirectionSet& set) {
   return set.kind + " " + std::to_string(set.size()) + " directions, " +
-         (scene.transport.get_bool("shadowed") ? "shadowed" : "unshadowed") +
-         ", seed=" + std::to_string(scene.transport.get_int("seed"));
+         (keys::transport::shadowed(scene.transport) ? "shadowed" : "unshadowed") +
+         ", seed=" + std::to_string(keys::transport::seed(scene.transport));
 }
 
 // Refuses, before any ray, a bake whose largest arrays cannot fit: the
@@ -237,8 +216,8 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
   std::uint64_t rays_cast = 0;
-  TransferSignal transfer = transfer_of(scene, plan, set, options, shard.shard, on_disk, times,
-                                        rays_cast, data);
+  TransferSignal transfer =
+      transfer_of(scene, plan, set, options, shard.shard, on_disk, times, rays_cast, data);
   clock = Stopwatch();
   // Compression minimises the error of what is rendered (after a fit: the
   // fitted basis's metric).
@@ -271,9 +250,9 @@ TransportResult trace_scene(const SceneSpec& scene, const RunOptions& options) {
   const Mesh mesh = scene.load_mesh();
   const DirectionSet set = scene.directions();
   TransportOptions transport;
-  transport.shadowed = scene.transport.get_bool("shadowed");
+  transport.shadowed = keys::transport::shadowed(scene.transport);
   transport.keep_visibility = true;
-  transport.keep_hits = scene.transport.get_int("bounces") > 0;
+  transport.keep_hits = keys::transport::bounces(scene.transport) > 0;
   Progress progress("trace", double(mesh.vertex_count()), transport.shadowed ? "rays" : "",
                     options.quiet);
   return diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress);

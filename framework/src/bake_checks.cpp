@@ -2,35 +2,12 @@
 // bases a bake makes from its own plug-in records.
 #include "prt/bake_checks.hpp"
 
-#include <tbb/parallel_for.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cmath>
-#include <cstdio>
-#include <fstream>
 #include <sstream>
 
-#include "coupled_slabs.hpp"
-#include "kept_state.hpp"
 #include "prt/basis.hpp"
-#include "prt/basis_metric.hpp"
-#include "prt/bounce_passes.hpp"
-#include "prt/checkpoint.hpp"
-#include "prt/compressor.hpp"
-#include "prt/environment.hpp"
-#include "prt/glossy.hpp"
-#include "prt/glossy_interreflection.hpp"
-#include "prt/ground_truth.hpp"
-#include "prt/interreflection.hpp"
 #include "prt/log.hpp"
-#include "prt/memory.hpp"
-#include "prt/progress.hpp"
 #include "prt/rendered_metric.hpp"
-#include "prt/renderer.hpp"
-#include "prt/row_file.hpp"
-#include "prt/subsurface.hpp"
-#include "prt/transport.hpp"
 
 namespace prt {
 
@@ -50,9 +27,9 @@ void check_plugin_matches(const PluginRecord& baked, const PluginChoice& wanted,
 
 void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
   const std::string material = scene.material_description();
-  const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  const int bounces = static_cast<int>(keys::transport::bounces(scene.transport));
   if (data.material != material || data.bounces != bounces ||
-      data.subsurface != scene.material.get_bool("subsurface") ||
+      data.subsurface != keys::material::subsurface(scene.material) ||
       data.transfer.glossy() != scene.glossy())
     throw Error(scene.material.location(),
                 "the bake file was made for material \"" + data.material + "\" with " +

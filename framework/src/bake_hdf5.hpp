@@ -120,7 +120,7 @@ inline const H5::PredType& h5_type() {
 // Writes rows x cols values (row-major) as a 2-D dataset, compressed.
 template <class T>
 inline void write_array(H5::Group& group, const std::string& name, const T* data, hsize_t rows,
-                 hsize_t cols) {
+                        hsize_t cols) {
   const hsize_t dims[2] = {rows, cols};
   H5::DSetCreatPropList properties;
   H5Pset_obj_track_times(properties.getId(), false);  // no timestamps: reproducible files
@@ -148,8 +148,8 @@ inline void require_contiguous_in_file(const H5::DataSet& set, const std::string
 // Opens the 2-D dataset `name` of element class `expected`, refusing one
 // stored outside the file or declaring more values than it stores (checked
 // before anything is allocated for it); rows x cols is its shape.
-inline H5::DataSet checked_dataset(const H5::Group& group, const std::string& name, H5T_class_t expected,
-                            hsize_t& rows, hsize_t& cols) {
+inline H5::DataSet checked_dataset(const H5::Group& group, const std::string& name,
+                                   H5T_class_t expected, hsize_t& rows, hsize_t& cols) {
   reading_now = "dataset \"" + name + "\" of " + object_name(group);
   if (!group.nameExists(name)) throw Error("dataset \"" + name + "\" is missing");
   H5::DataSet set = group.openDataSet(name);
@@ -173,7 +173,7 @@ inline H5::DataSet checked_dataset(const H5::Group& group, const std::string& na
 
 template <class T>
 inline std::vector<T> read_array(const H5::Group& group, const std::string& name, hsize_t& rows,
-                          hsize_t& cols) {
+                                 hsize_t& cols) {
   H5::DataSet set = checked_dataset(
       group, name, std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER, rows, cols);
   std::vector<T> values(rows * cols);
@@ -236,7 +236,8 @@ inline void write_matrix(H5::Group& group, const std::string& name, const Matrix
 }
 
 // The same dataset as write_matrix, filled chunk by chunk from `rows`.
-inline void write_streamed(H5::Group& group, const std::string& name, const BakeData::StreamedRows& rows) {
+inline void write_streamed(H5::Group& group, const std::string& name,
+                           const BakeData::StreamedRows& rows) {
   const hsize_t dims[2] = {hsize_t(rows.rows), hsize_t(rows.cols)};
   const hsize_t chunk_rows = std::min<hsize_t>(dims[0], 4096);
   H5::DSetCreatPropList properties;
@@ -273,7 +274,8 @@ inline BakeData::StreamedRows rows_of_file(const TransferSignal& signal) {
 // into a RowFile in `folder`: never whole in memory. Values are checked as
 // read_array checks them.
 inline std::shared_ptr<RowFile> read_rows_to_file(const H5::DataSet& set, const std::string& name,
-                                           hsize_t rows, hsize_t cols, const fs::path& folder) {
+                                                  hsize_t rows, hsize_t cols,
+                                                  const fs::path& folder) {
   auto file = RowFile::create(folder, Eigen::Index(rows), Eigen::Index(cols));
   MatrixXfRow block;
   const hsize_t step = 4096;

@@ -2,35 +2,16 @@
 // before any ray (plug-ins created, domains checked against their roles).
 #include "prt/bake_plan.hpp"
 
-#include <tbb/parallel_for.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
-#include "coupled_slabs.hpp"
-#include "kept_state.hpp"
 #include "prt/basis.hpp"
 #include "prt/basis_metric.hpp"
-#include "prt/bounce_passes.hpp"
-#include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
-#include "prt/environment.hpp"
 #include "prt/glossy.hpp"
-#include "prt/glossy_interreflection.hpp"
-#include "prt/ground_truth.hpp"
-#include "prt/interreflection.hpp"
 #include "prt/log.hpp"
-#include "prt/memory.hpp"
-#include "prt/progress.hpp"
 #include "prt/rendered_metric.hpp"
-#include "prt/renderer.hpp"
-#include "prt/row_file.hpp"
-#include "prt/subsurface.hpp"
-#include "prt/transport.hpp"
 
 namespace prt {
 
@@ -61,8 +42,8 @@ namespace {
 // which its projection is exact).
 void warn_if_under_sampled(const SceneSpec& scene, const DirectionSet& set, const Basis& basis,
                            const std::string& name) {
-  const std::string where = scene.transport.location("rays").str() + ": ";
-  const auto rays = scene.transport.get_int("rays");
+  const std::string where = scene.transport.location(keys::transport::rays.name()).str() + ": ";
+  const auto rays = keys::transport::rays(scene.transport);
   if (set.kind == "cubemap" && set.size() != rays) {
     const int r = static_cast<int>(std::lround(std::sqrt(set.size() / 6.0)));
     log_warning_once(where + "rays = " + std::to_string(rays) + " makes a 6 x " +
@@ -114,8 +95,8 @@ void plan_glossy(const SceneSpec& scene, PluginRegistry& registry, BakePlan& pla
                                 "must be fixed before the bake");
   plan.brdf = scene.brdf();
   plan.incident_order = scene.incident_order(*plan.basis);
-  plan.least_squares = scene.material.get_string("projection") == "least-squares";
-  plan.cutoff = scene.material.get_real("cutoff");
+  plan.least_squares = keys::material::projection(scene.material) == "least-squares";
+  plan.cutoff = keys::material::cutoff(scene.material);
   try {
     plan.glossy_operator = GlossyOperator::make(plan.brdf, *plan.exit, plan.incident_order,
                                                 plan.least_squares, plan.cutoff);
@@ -125,7 +106,6 @@ void plan_glossy(const SceneSpec& scene, PluginRegistry& registry, BakePlan& pla
 }
 
 }  // namespace
-
 
 void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
                                  const std::string& compressor) {
@@ -163,7 +143,7 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
     plan.basis->check_directions(set);
     warn_if_under_sampled(scene, set, *plan.basis, basis.name);
   } catch (const Error& e) {
-    throw Error(scene.transport.location("directions"), e.what());
+    throw Error(scene.transport.location(keys::transport::directions.name()), e.what());
   }
   plan.sparse_terms = plan.basis->approximation_terms();
   if (plan.sparse_terms > 0 && !plan.compressor->exact())
@@ -174,10 +154,10 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
                     "(not \"" +
                     compressor.name + "\")");
   plan.glossy = scene.glossy();
-  plan.subsurface = scene.material.get_bool("subsurface");
-  plan.bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  plan.subsurface = keys::material::subsurface(scene.material);
+  plan.bounces = static_cast<int>(keys::transport::bounces(scene.transport));
   plan.bounce_albedo = scene.bounce_albedo();
-  plan.shadowed = scene.transport.get_bool("shadowed");
+  plan.shadowed = keys::transport::shadowed(scene.transport);
   plan.fit = plan.basis->can_fit();
   if (plan.glossy) plan_glossy(scene, registry, plan);
   plan.subsurface_material = scene.subsurface();

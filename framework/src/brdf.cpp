@@ -7,7 +7,6 @@
 
 #include "prt/error.hpp"
 #include "prt/hemisphere.hpp"
-#include "prt/params.hpp"
 #include "prt/sh.hpp"
 
 namespace prt {
@@ -18,20 +17,6 @@ BrdfModel brdf_model(const std::string& name) {
   if (name == "ward") return BrdfModel::ward;
   if (name == "cook-torrance") return BrdfModel::cook_torrance;
   throw Error("unknown BRDF \"" + name + "\"; valid: lambert, phong, ward, cook-torrance");
-}
-
-Brdf Brdf::from_material(const Params& material, int channel) {
-  Brdf b;
-  b.model = brdf_model(material.get_string("brdf"));
-  b.kd = material.get_reals("diffuse")[std::size_t(channel)];
-  b.ks = b.glossy() ? material.get_reals("specular")[std::size_t(channel)] : 0.0;
-  b.exponent = material.get_real("exponent");
-  const auto ward = material.get_reals("anisotropic_roughness");
-  b.alpha_x = ward[0];
-  b.alpha_y = ward[1];
-  b.roughness = material.get_real("roughness");
-  b.f0 = material.get_real("fresnel");
-  return b;
 }
 
 double Brdf::evaluate(const Eigen::Vector3d& in, const Eigen::Vector3d& out) const {

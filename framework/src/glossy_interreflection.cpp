@@ -94,8 +94,8 @@ BounceFunction glossy_bounce_function(const Mesh& mesh, const DirectionSet& set,
     throw Error("inter-reflection needs an albedo in [0, 1]; got " + std::to_string(albedo));
   return [&mesh, &set, &hits, &exit_basis, &glossy, light_size, &frames, albedo](
              const MatrixXfRow& previous, std::size_t first, std::size_t last) {
-    return glossy_bounce(mesh, set, hits, previous, exit_basis, glossy, light_size, frames,
-                         albedo, first, last);
+    return glossy_bounce(mesh, set, hits, previous, exit_basis, glossy, light_size, frames, albedo,
+                         first, last);
   };
 }
 

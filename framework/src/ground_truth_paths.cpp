@@ -66,9 +66,20 @@ struct PathScene {
 class GlossyPaths {
  public:
   GlossyPaths(const PathScene& scene)
-      : s_(scene), n_(scene.side * scene.side), paths_(n_), origins_(3 * n_), directions_(3 * n_),
-        u_(n_), v_(n_), env_origins_(3 * n_), env_directions_(3 * n_), triangle_(n_),
-        escaped_(n_), env_escaped_(n_), env_weight_(n_), env_light_(n_) {}
+      : s_(scene),
+        n_(scene.side * scene.side),
+        paths_(n_),
+        origins_(3 * n_),
+        directions_(3 * n_),
+        u_(n_),
+        v_(n_),
+        env_origins_(3 * n_),
+        env_directions_(3 * n_),
+        triangle_(n_),
+        escaped_(n_),
+        env_escaped_(n_),
+        env_weight_(n_),
+        env_light_(n_) {}
 
   // Vertex p's radiance toward its view: the light of n paths after their
   // first bounce (the direct light is the direct transfer's), averaged.
@@ -188,9 +199,16 @@ Eigen::MatrixX3f ground_truth_glossy_bounces(const Mesh& mesh, const Environment
   const std::vector<Frame> frames = tangent_frames(mesh);
   std::optional<EnvironmentSampler> sampler;
   if (environment.width() * environment.height() > 1) sampler.emplace(environment);
-  const PathScene scene{mesh,   caster, environment, sampler ? &*sampler : nullptr,
-                        brdf,   frames, local_views, albedo,
-                        caster.offset(), bounces,
+  const PathScene scene{mesh,
+                        caster,
+                        environment,
+                        sampler ? &*sampler : nullptr,
+                        brdf,
+                        frames,
+                        local_views,
+                        albedo,
+                        caster.offset(),
+                        bounces,
                         std::max(1, static_cast<int>(std::lround(std::sqrt(samples))))};
   Eigen::MatrixX3f out = Eigen::MatrixX3f::Zero(v_count, 3);
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, v_count, 8), [&](const auto& range) {

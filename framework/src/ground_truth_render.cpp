@@ -2,35 +2,17 @@
 // per-vertex error statistics against it.
 #include "prt/ground_truth_render.hpp"
 
-#include <tbb/parallel_for.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
-#include "coupled_slabs.hpp"
-#include "kept_state.hpp"
-#include "prt/basis.hpp"
-#include "prt/basis_metric.hpp"
-#include "prt/bounce_passes.hpp"
-#include "prt/checkpoint.hpp"
-#include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
 #include "prt/glossy_interreflection.hpp"
 #include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
-#include "prt/log.hpp"
-#include "prt/memory.hpp"
 #include "prt/progress.hpp"
-#include "prt/rendered_metric.hpp"
 #include "prt/renderer.hpp"
-#include "prt/row_file.hpp"
-#include "prt/subsurface.hpp"
-#include "prt/transport.hpp"
 
 namespace prt {
 
@@ -40,8 +22,8 @@ namespace {
 Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
                                       const Environment& lighting, const Camera& camera,
                                       const RunOptions& options, const ChannelMaterial& material) {
-  const int samples = static_cast<int>(scene.ground_truth.get_int("samples"));
-  const auto seed = static_cast<std::uint64_t>(scene.ground_truth.get_int("seed"));
+  const int samples = static_cast<int>(keys::ground_truth::samples(scene.ground_truth));
+  const auto seed = static_cast<std::uint64_t>(keys::ground_truth::seed(scene.ground_truth));
   // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
   Reflectance reflectance;
   std::vector<Frame> frames;
@@ -59,7 +41,8 @@ Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
     Progress progress("ground truth", double(mesh.vertex_count()), "rays", options.quiet);
     radiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress, reflectance);
   }
-  if (const int bounces = static_cast<int>(scene.transport.get_int("bounces")); bounces > 0) {
+  if (const int bounces = static_cast<int>(keys::transport::bounces(scene.transport));
+      bounces > 0) {
     if (brdf.glossy()) {  // view-dependent: paths from each vertex
       Progress progress("ground truth glossy bounces", double(mesh.vertex_count()), "rays",
                         options.quiet);
@@ -77,7 +60,7 @@ Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
     radiance +=
         ground_truth_point_lights(mesh, scene.point_lights, samples, seed, reflectance, &progress);
   }
-  if (scene.material.get_bool("subsurface")) {
+  if (keys::material::subsurface(scene.material)) {
     // The dipole over every pair of vertices, from Monte Carlo irradiance
     // (a glossy material's own radiance is not irradiance: trace it apart).
     Eigen::MatrixX3f irradiance = radiance;
@@ -163,6 +146,20 @@ ErrorStats vertex_error(const Eigen::MatrixX3f& approximation, const Eigen::Matr
   stats.p99 = errors[std::min<Eigen::Index>(n - 1, static_cast<Eigen::Index>(0.99 * n))];
   stats.max = errors.back();
   return stats;
+}
+
+Eigen::MatrixX3f band_limited_truth(const SceneSpec& scene, const Mesh& mesh,
+                                    const Relighting& relighting, const Environment& environment,
+                                    const Eigen::MatrixX3d& light, const Camera& camera,
+                                    const RunOptions& options) {
+  return ground_truth_vertices(scene, mesh, environment.band_limited(relighting.basis(), light),
+                               camera, options);
+}
+
+ErrorBudget error_budget(const Eigen::MatrixX3f& truth, const Eigen::MatrixX3f& band_limited,
+                         const Eigen::MatrixX3f& exact, const Eigen::MatrixX3f& compressed) {
+  return {vertex_error(band_limited, truth).rms, vertex_error(exact, band_limited).rms,
+          vertex_error(compressed, exact).rms, vertex_error(compressed, truth).rms};
 }
 
 }  // namespace prt

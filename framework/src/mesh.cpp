@@ -182,8 +182,7 @@ std::string read_with_openmesh(const std::filesystem::path& file, OMesh& om,
   const std::string log = capture.text();
   if (!ok) {
     const std::string detail = log.substr(0, log.find('\n'));
-    throw Error(file.string() + ": cannot read mesh" +
-                (detail.empty() ? "" : " (" + detail + ")"));
+    throw Error(file.string() + ": cannot read mesh" + (detail.empty() ? "" : " (" + detail + ")"));
   }
   return log;
 }

@@ -471,7 +471,8 @@ void glossy_cluster(const ClusterInput& in, int rows, const MatrixXfRow& y, floa
     // requested now, they arrive while this packet's dots run.
     for (std::int64_t j = j0 + kLanes; j < std::min<std::int64_t>(in.size, j0 + 2 * kLanes); ++j) {
       const char* next = reinterpret_cast<const char*>(y.row(in.vertices[j]).data());
-      for (int line = 0; line < rows * int(sizeof(float)); line += 64) __builtin_prefetch(next + line);
+      for (int line = 0; line < rows * int(sizeof(float)); line += 64)
+        __builtin_prefetch(next + line);
     }
     for (int j = 0; j < kLanes; ++j) {
       const float* values = y.row(in.vertices[j0 + std::min(j, count - 1)]).data();
@@ -541,13 +542,12 @@ void RelightKernel::radiance(const Eigen::MatrixX3d& light, const MatrixXfRow* e
   const Eigen::Index most = t.components + 1;  // stored vectors of the largest cluster
   const Eigen::Index widest = (3 * most + kDotGroup - 1) / kDotGroup * kDotGroup;
   const std::size_t scratch = std::size_t(rows_ * widest + (rows_ + widest) * kLanes);
-  for_each_cluster(
-      l, scratch,
-      [&](Eigen::Index k, const float* constants, const std::int32_t* vertices, std::int64_t size,
-          const float* weights, float* buffer) {
-        glossy_cluster({constants, vertices, size, weights, t.components_of(k)}, rows_,
-                       *exit_values, buffer, red, green, blue);
-      });
+  for_each_cluster(l, scratch,
+                   [&](Eigen::Index k, const float* constants, const std::int32_t* vertices,
+                       std::int64_t size, const float* weights, float* buffer) {
+                     glossy_cluster({constants, vertices, size, weights, t.components_of(k)}, rows_,
+                                    *exit_values, buffer, red, green, blue);
+                   });
 }
 
 MatrixXfRow RelightKernel::exit_coefficients(const Eigen::MatrixX3d& light) const {

@@ -3,34 +3,14 @@
 #include "prt/relighting.hpp"
 
 #include <tbb/parallel_for.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
-#include <cstdio>
-#include <fstream>
-#include <sstream>
 
-#include "coupled_slabs.hpp"
-#include "kept_state.hpp"
 #include "prt/basis.hpp"
 #include "prt/basis_metric.hpp"
-#include "prt/bounce_passes.hpp"
-#include "prt/checkpoint.hpp"
-#include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
-#include "prt/glossy_interreflection.hpp"
-#include "prt/ground_truth.hpp"
-#include "prt/interreflection.hpp"
-#include "prt/log.hpp"
-#include "prt/memory.hpp"
-#include "prt/progress.hpp"
-#include "prt/rendered_metric.hpp"
 #include "prt/renderer.hpp"
-#include "prt/row_file.hpp"
-#include "prt/subsurface.hpp"
-#include "prt/transport.hpp"
 
 namespace prt {
 
@@ -66,7 +46,7 @@ void Relighting::set_point_lights(std::vector<PointLight> lights) {
   point_lights_ = std::move(lights);
   if (!point_lights_.empty() && !projector_)
     projector_ = std::make_unique<PointLightProjector>(
-        *basis_, static_cast<int>(scene_.lighting.get_int("nearest")));
+        *basis_, static_cast<int>(keys::lighting::nearest(scene_.lighting)));
 }
 
 void Relighting::use_brute_force(int cap_samples) {
@@ -132,7 +112,7 @@ Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& l
   out.exit_values = exit_values_toward(camera);  // empty for diffuse transfer
   // The renderers' own relight path (RelightKernel), so CPU results are theirs.
   const MatrixXfRow* exit_values = exit_ ? &out.exit_values : nullptr;
-  if (data_.transfer.channel_groups > 1) {  // per-channel transfers: summed here
+  if (data_.transfer.channel_groups > 1) {  // per-channel transfers: summed here (sums_here)
     out.vertex_radiance = channel_radiance(kernel, light, data_.transfer, exit_values);
     out.summed = true;
   } else {

@@ -1,35 +1,10 @@
 // The render path: a bake relit under the scene's light and drawn by its renderer.
-#include "prt/relighting.hpp"
-
-#include <tbb/parallel_for.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
-#include "coupled_slabs.hpp"
-#include "kept_state.hpp"
-#include "prt/basis.hpp"
-#include "prt/basis_metric.hpp"
-#include "prt/bounce_passes.hpp"
-#include "prt/checkpoint.hpp"
-#include "prt/compressor.hpp"
 #include "prt/environment.hpp"
-#include "prt/glossy.hpp"
-#include "prt/glossy_interreflection.hpp"
-#include "prt/ground_truth.hpp"
-#include "prt/interreflection.hpp"
-#include "prt/log.hpp"
-#include "prt/memory.hpp"
-#include "prt/progress.hpp"
-#include "prt/rendered_metric.hpp"
+#include "prt/relighting.hpp"
 #include "prt/renderer.hpp"
-#include "prt/row_file.hpp"
-#include "prt/subsurface.hpp"
-#include "prt/transport.hpp"
 
 namespace prt {
 

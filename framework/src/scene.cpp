@@ -13,6 +13,7 @@
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
+#include "prt/scene_keys.hpp"
 #include "prt/sh.hpp"
 #include "scene_ascii.hpp"
 #include "toml_checked.hpp"
@@ -23,111 +24,56 @@ using namespace prt::schema;
 
 namespace {
 
-constexpr double kBig = kHuge;
-
 const ParamSchema& mesh_schema() {
-  static const ParamSchema s{
-      "section [mesh]",
-      {path("file", false, "mesh file (OFF, OBJ, PLY, STL), relative to the scene"),
-       choice("generate", "", "sphere|plane|box|open-box", "a generated mesh instead of a file"),
-       integer("detail", "3", 0, 8, "subdivision level of a generated mesh")}};
+  static const ParamSchema s{"section [mesh]",
+                             {keys::mesh::file, keys::mesh::generate, keys::mesh::detail}};
   return s;
 }
 const ParamSchema& material_schema() {
   static const ParamSchema s{
       "section [material]",
-      {reals("albedo", "0.8", 3, 0, 1, "RGB tint of the whole reflectance (RGB or grey)"),
-       choice("brdf", "lambert", "lambert|phong|ward|cook-torrance",
-              "reflectance model: lambert bakes vectors, the others glossy matrices"),
-       reals("diffuse", "1", 3, 0, 1, "kd: weight of the Lambertian part (RGB or grey)"),
-       reals("specular", "0.5", 3, 0, 1, "ks: weight of the glossy lobe (RGB or grey)"),
-       // Lobe limits: the BRDF matrix's 48 x 98 quadrature resolves them (and
-       // order-5..12 SH cannot hold sharper lobes anyway).
-       real("exponent", "32", 0, 1000, "phong: lobe exponent"),
-       reals("anisotropic_roughness", "0.1,0.3", 2, 0.03, 10,
-             "ward: roughness along the tangent and the bitangent"),
-       real("roughness", "0.3", 0.03, 10, "cook-torrance: Beckmann slope m"),
-       real("fresnel", "0.04", 0, 1, "cook-torrance: Schlick reflectance at normal incidence"),
-       integer("incident_order", "0", 0, kMaxIncidentOrder,
-               "glossy: SH order M the BRDF is band-limited to in its incident direction (0: "
-               "the light basis's band count when it has bands, else 8)"),
-       choice("projection", "least-squares", "least-squares|zero",
-              "glossy: hemispherical projection of the BRDF's incident side ([exit] has its own)"),
-       real("cutoff", "1e-10", 0, 1,
-            "glossy least squares: singular values of A below this x the largest are dropped"),
-       boolean("subsurface", "false", "add Jensen-Buhler multiple scattering"),
-       reals("sigma_a", "0.0041", 3, 1e-9, 1e6,
-             "subsurface: absorption coefficient, 1/mm (RGB or grey)"),
-       reals("sigma_s", "2.62", 3, 1e-9, 1e6,
-             "subsurface: reduced scattering coefficient, 1/mm (RGB or grey)"),
-       choice("preset", "",
-              "apple|chicken1|chicken2|cream|ketchup|marble|potato|skimmilk|skin1|skin2|wholemilk",
-              "subsurface: Jensen et al. 2001's measured sigma_a and sigma_s (RGB) and eta 1.3, "
-              "instead of those keys"),
-       real("eta", "1.5", 1.0, 4.0, "subsurface: relative index of refraction"),
-       real("mm_per_unit", "100", 1e-9, 1e9, "subsurface: millimetres per mesh unit"),
-       real("subsurface_error", "0.3", 0, 10,
-            "subsurface hierarchy: group radius / distance below which a group is one point")}};
+      {keys::material::albedo, keys::material::brdf, keys::material::diffuse,
+       keys::material::specular, keys::material::exponent, keys::material::anisotropic_roughness,
+       keys::material::roughness, keys::material::fresnel, keys::material::incident_order,
+       keys::material::projection, keys::material::cutoff, keys::material::subsurface,
+       keys::material::sigma_a, keys::material::sigma_s, keys::material::preset,
+       keys::material::eta, keys::material::mm_per_unit, keys::material::subsurface_error}};
   return s;
 }
 const ParamSchema& transport_schema() {
   static const ParamSchema s{
       "section [transport]",
-      {choice("directions", "fibonacci", "fibonacci|stratified|cubemap", "direction set"),
-       integer("rays", "1024", 1, 4194304, "directions per vertex over the sphere"),
-       boolean("shadowed", "true", "trace visibility (false: unshadowed transfer)"),
-       integer("bounces", "0", 0, 64,
-               "inter-reflection bounces (diffuse or glossy) gathered from the shadow rays' hits"),
-       integer("seed", "1", 0, 9.2e18, "seed of stratified directions")}};
+      {keys::transport::directions, keys::transport::rays, keys::transport::shadowed,
+       keys::transport::bounces, keys::transport::seed}};
   return s;
 }
 const ParamSchema& lighting_schema() {
   static const ParamSchema s{
       "section [lighting]",
-      {path("environment", false, "equirectangular environment map (.exr or .hdr)"),
-       reals("constant", "", 3, 0, kBig, "constant radiance instead of a map"),
-       real("intensity", "1", 0, kBig, "radiance scale"),
-       real("rotation", "0", -3600, 3600, "rotation of the environment about +y, degrees"),
-       choice("window", "none", "none|hanning|lanczos",
-              "SH bases: sigma factors on the light's bands against ringing (negative light)"),
-       integer("nearest", "1", 1, 64,
-               "point lights on a lattice basis (eigen, haar): lattice directions nearest to "
-               "the light that share it (k)")}};
+      {keys::lighting::environment, keys::lighting::constant, keys::lighting::intensity,
+       keys::lighting::rotation, keys::lighting::window, keys::lighting::nearest}};
   return s;
 }
 const ParamSchema& point_light_schema() {
   static const ParamSchema s{
       "[[lighting.point]]",
-      {reals("position", "", 3, -kBig, kBig, "the light's position (mesh units)"),
-       reals("colour", "1", 3, 0, kBig, "RGB colour (RGB or grey)"),
-       real("intensity", "1", 0, kBig,
-            "exit radiance of a lit white vertex facing it is intensity / pi (no falloff)"),
-       real("radius", "0", 0, kBig, "radius of a spherical light (0: an ideal point)")}};
+      {keys::point::position, keys::point::colour, keys::point::intensity, keys::point::radius}};
   return s;
 }
 const ParamSchema& camera_schema() {
   static const ParamSchema s{
       "section [camera]",
-      {reals("position", "", 3, -kBig, kBig, "eye position (default: frames the mesh)"),
-       reals("target", "", 3, -kBig, kBig, "point looked at (default: mesh centre)"),
-       reals("up", "0,1,0", 3, -kBig, kBig, "up vector"),
-       real("fov", "40", 1, 170, "vertical field of view, degrees"),
-       integer("width", "640", 1, 16384, "image width"),
-       integer("height", "480", 1, 16384, "image height"),
-       real("exposure", "1", 1e-6, 1e6, "scale applied to radiance before sRGB encoding")}};
+      {keys::camera::position, keys::camera::target, keys::camera::up, keys::camera::fov,
+       keys::camera::width, keys::camera::height, keys::camera::exposure}};
   return s;
 }
 const ParamSchema& output_schema() {
-  static const ParamSchema s{"section [output]",
-                             {text("bake", "", "bake file (.h5), relative to the scene"),
-                              text("image", "", "rendered image (.png), relative to the scene")}};
+  static const ParamSchema s{"section [output]", {keys::output::bake, keys::output::image}};
   return s;
 }
 const ParamSchema& ground_truth_schema() {
-  static const ParamSchema s{
-      "section [ground_truth]",
-      {integer("samples", "1024", 1, 1048576, "Monte Carlo samples per vertex"),
-       integer("seed", "7", 0, 9.2e18, "sampling seed")}};
+  static const ParamSchema s{"section [ground_truth]",
+                             {keys::ground_truth::samples, keys::ground_truth::seed}};
   return s;
 }
 
@@ -291,12 +237,13 @@ std::vector<PointLight> read_point_lights(const toml::table* lighting, const fs:
     const SourceLocation where = location_of(table.source(), file);
     Params params = read_table(&table, where, file);
     params.validate(point_light_schema());
-    if (!params.has("position")) throw Error(where, "[[lighting.point]]: \"position\" is required");
+    if (!keys::point::position.given(params))
+      throw Error(where, "[[lighting.point]]: \"position\" is required");
     PointLight light;
-    light.position = Eigen::Vector3d(params.get_reals("position").data());
-    light.colour = Eigen::Vector3d(params.get_reals("colour").data());
-    light.intensity = params.get_real("intensity");
-    light.radius = params.get_real("radius");
+    light.position = Eigen::Vector3d(keys::point::position(params).data());
+    light.colour = Eigen::Vector3d(keys::point::colour(params).data());
+    light.intensity = keys::point::intensity(params);
+    light.radius = keys::point::radius(params);
     lights.push_back(light);
   }
   return lights;
@@ -346,8 +293,8 @@ Params read_section(const toml::table& root, const std::string& name, const Para
                     const SceneSpec& scene, const std::string& skip = "") {
   const toml::table* table = root[name].as_table();
   // A missing section's errors point at the file's start.
-  const SourceLocation where = table ? location_of(table->source(), scene.file)
-                                     : SourceLocation{scene.file.string(), 1, 1};
+  const SourceLocation where =
+      table ? location_of(table->source(), scene.file) : SourceLocation{scene.file.string(), 1, 1};
   Params params = read_table(table, where, scene.file, skip);
   params.validate(schema);
   resolve_paths(params, schema, scene);
@@ -357,13 +304,14 @@ Params read_section(const toml::table& root, const std::string& name, const Para
 void read_sections(const toml::table& root, SceneSpec& scene) {
   scene.mesh = read_section(root, "mesh", mesh_schema(), scene);
   scene.material = read_section(root, "material", material_schema(), scene);
-  if (!scene.material.get_string("preset").empty()) {  // measured coefficients replace the keys
+  if (!keys::material::preset(scene.material).empty()) {  // measured coefficients replace the keys
     const toml::table* table = root["material"].as_table();
-    for (const char* key : {"sigma_a", "sigma_s"})
+    for (const char* key : {keys::material::sigma_a.name(), keys::material::sigma_s.name()})
       if (table->get(key))
         throw Error(scene.material.location(key),
                     std::string("section [material]: give preset or ") + key + ", not both");
-    if (!table->get("eta")) scene.material.set("eta", 1.3);  // Jensen et al.'s measurements
+    if (!table->get(keys::material::eta.name()))  // Jensen et al.'s measurements
+      scene.material.set(keys::material::eta.name(), 1.3);
   }
   scene.transport = read_section(root, "transport", transport_schema(), scene);
   scene.lighting = read_section(root, "lighting", lighting_schema(), scene, "point");
@@ -375,22 +323,23 @@ void read_sections(const toml::table& root, SceneSpec& scene) {
 
 // Keys that are each valid but not together.
 void check_combinations(const SceneSpec& scene) {
-  const bool has_file = !scene.mesh.get_string("file").empty();
-  const bool has_generated = !scene.mesh.get_string("generate").empty();
+  const bool has_file = !keys::mesh::file(scene.mesh).empty();
+  const bool has_generated = !keys::mesh::generate(scene.mesh).empty();
   if (has_file == has_generated)
     throw Error(scene.mesh.location(),
                 "section [mesh]: give exactly one of \"file\" or \"generate\"");
-  const bool has_map = !scene.lighting.get_string("environment").empty();
-  if (has_map && scene.lighting.has("constant"))
+  const bool has_map = !keys::lighting::environment(scene.lighting).empty();
+  if (has_map && scene.lighting.has(keys::lighting::constant.name()))
     throw Error(scene.lighting.location(),
                 "section [lighting]: give one of \"environment\" or \"constant\", not both");
-  if (!has_map && !scene.lighting.has("constant") && scene.point_lights.empty())
+  if (!has_map && !scene.lighting.has(keys::lighting::constant.name()) &&
+      scene.point_lights.empty())
     throw Error(scene.lighting.location(),
                 "section [lighting]: give \"environment\", \"constant\" or [[lighting.point]] "
                 "lights");
-  const int bounces = static_cast<int>(scene.transport.get_int("bounces"));
+  const int bounces = static_cast<int>(keys::transport::bounces(scene.transport));
   if (!scene.point_lights.empty() && bounces > 0)
-    throw Error(scene.transport.location("bounces"),
+    throw Error(scene.transport.location(keys::transport::bounces.name()),
                 "section [transport]: point lights shade direct light only (the transfer's "
                 "bounces assume distant light); use bounces = 0 with [[lighting.point]]");
   if (!scene.point_lights.empty() && scene.channels().groups.size() > 1)
@@ -398,8 +347,8 @@ void check_combinations(const SceneSpec& scene) {
                 "section [material]: point lights need one transfer for all colour channels; this "
                 "material's channels differ (coloured diffuse/specular with glossy or bounces, or "
                 "coloured subsurface): use grey coefficients with [[lighting.point]]");
-  if (bounces > 0 && !scene.transport.get_bool("shadowed"))
-    throw Error(scene.transport.location("bounces"),
+  if (bounces > 0 && !keys::transport::shadowed(scene.transport))
+    throw Error(scene.transport.location(keys::transport::bounces.name()),
                 "section [transport]: bounces gather light from the shadow rays' hits; they need "
                 "shadowed = true");
 }

@@ -1,8 +1,6 @@
 // What a scene makes once read: its files resolved, its mesh, directions,
 // environment and camera, and its material as the stages need it (BRDF,
 // channels, subsurface, albedo).
-#include "prt/scene.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -16,6 +14,7 @@
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
+#include "prt/scene.hpp"
 #include "prt/sh.hpp"
 
 namespace prt {
@@ -27,44 +26,45 @@ fs::path SceneSpec::resolve(const std::string& relative) const {
 }
 
 fs::path SceneSpec::bake_path() const {
-  const std::string name = output.get_string("bake");
+  const std::string name = keys::output::bake(output);
   return name.empty() ? fs::path(file.stem().string() + ".h5") : resolve(name);
 }
 
 fs::path SceneSpec::image_path() const {
-  const std::string name = output.get_string("image");
+  const std::string name = keys::output::image(output);
   return name.empty() ? fs::path(file.stem().string() + ".png") : resolve(name);
 }
 
 std::vector<fs::path> SceneSpec::input_files() const {
   std::vector<fs::path> files{file};
-  for (const std::string& name : {mesh.get_string("file"), lighting.get_string("environment")})
+  for (const std::string& name : {keys::mesh::file(mesh), keys::lighting::environment(lighting)})
     if (!name.empty()) files.emplace_back(name);
   return files;
 }
 
 Mesh SceneSpec::load_mesh() const {
-  const std::string file_name = mesh.get_string("file");
+  const std::string file_name = keys::mesh::file(mesh);
   if (!file_name.empty()) return prt::load_mesh(file_name);
-  return make_generated(mesh.get_string("generate"), static_cast<int>(mesh.get_int("detail")));
+  return make_generated(keys::mesh::generate(mesh), static_cast<int>(keys::mesh::detail(mesh)));
 }
 
 DirectionSet SceneSpec::directions() const {
-  return DirectionSet::make(transport.get_string("directions"),
-                            static_cast<int>(transport.get_int("rays")),
-                            static_cast<std::uint64_t>(transport.get_int("seed")));
+  return DirectionSet::make(keys::transport::directions(transport),
+                            static_cast<int>(keys::transport::rays(transport)),
+                            static_cast<std::uint64_t>(keys::transport::seed(transport)));
 }
 
 Environment SceneSpec::load_environment() const {
-  const std::string map = lighting.get_string("environment");
+  const std::string map = keys::lighting::environment(lighting);
   // Point lights alone: a black environment.
   const Eigen::Vector3f constant =
-      lighting.has("constant")
-          ? Eigen::Vector3f(Eigen::Vector3d(lighting.get_reals("constant").data()).cast<float>())
+      lighting.has(keys::lighting::constant.name())
+          ? Eigen::Vector3f(
+                Eigen::Vector3d(keys::lighting::constant(lighting).data()).cast<float>())
           : Eigen::Vector3f::Zero();
   Environment environment = map.empty() ? Environment::constant(constant) : Environment::load(map);
-  environment.set_intensity(static_cast<float>(lighting.get_real("intensity")));
-  environment.set_rotation(rotation_about_up(lighting.get_real("rotation")));
+  environment.set_intensity(static_cast<float>(keys::lighting::intensity(lighting)));
+  environment.set_rotation(rotation_about_up(keys::lighting::rotation(lighting)));
   return environment;
 }
 
@@ -75,7 +75,7 @@ Eigen::MatrixX3d SceneSpec::project_light(const Environment& environment,
   const std::optional<LatticeRotation> lattice = LatticeRotation::of(basis, environment);
   Eigen::MatrixX3d light =
       lattice ? lattice->light(environment.rotation()) : environment.project(basis);
-  const std::string kind = lighting.get_string("window");
+  const std::string kind = keys::lighting::window(lighting);
   if (kind == "none") return light;
   check_window(basis);
   const std::vector<int> bands = basis.coefficient_bands();
@@ -87,30 +87,43 @@ Eigen::MatrixX3d SceneSpec::project_light(const Environment& environment,
 }
 
 Camera SceneSpec::make_camera(const Mesh& m) const {
-  Camera c = Camera::framing(m, static_cast<int>(camera.get_int("width")),
-                             static_cast<int>(camera.get_int("height")),
-                             static_cast<float>(camera.get_real("fov")));
+  Camera c = Camera::framing(m, static_cast<int>(keys::camera::width(camera)),
+                             static_cast<int>(keys::camera::height(camera)),
+                             static_cast<float>(keys::camera::fov(camera)));
   auto vec = [&](const char* key) {
     const auto v = camera.get_reals(key);
     return Eigen::Vector3f(float(v[0]), float(v[1]), float(v[2]));
   };
-  if (camera.has("target")) c.target = vec("target");
-  if (camera.has("position")) c.position = vec("position");
+  if (camera.has(keys::camera::target.name())) c.target = vec("target");
+  if (camera.has(keys::camera::position.name())) c.position = vec("position");
   c.up = vec("up");
   // A camera at its target, or looking along its up vector, sees nothing.
   const Eigen::Vector3f forward = c.target - c.position;
   const float scale = std::max({c.target.norm(), c.position.norm(), 1e-20f});
   if (!forward.allFinite() || forward.norm() <= 1e-6f * scale)
-    throw Error(camera.has("position") ? camera.location("position") : camera.location(),
+    throw Error(camera.has(keys::camera::position.name())
+                    ? camera.location(keys::camera::position.name())
+                    : camera.location(),
                 "section [camera]: position and target coincide; the camera has no direction");
   if (c.up.norm() == 0 || forward.normalized().cross(c.up.normalized()).norm() < 1e-6f)
-    throw Error(camera.has("up") ? camera.location("up") : camera.location(),
+    throw Error(camera.has(keys::camera::up.name()) ? camera.location(keys::camera::up.name())
+                                                    : camera.location(),
                 "section [camera]: up is parallel to the viewing direction (or zero)");
   return c;
 }
 
 Brdf SceneSpec::brdf(int channel) const {
-  return Brdf::from_material(material, channel);
+  Brdf b;
+  b.model = brdf_model(keys::material::brdf(material));
+  b.kd = keys::material::diffuse(material)[std::size_t(channel)];
+  b.ks = b.glossy() ? keys::material::specular(material)[std::size_t(channel)] : 0.0;
+  b.exponent = keys::material::exponent(material);
+  const auto ward = keys::material::anisotropic_roughness(material);
+  b.alpha_x = ward[0];
+  b.alpha_y = ward[1];
+  b.roughness = keys::material::roughness(material);
+  b.f0 = keys::material::fresnel(material);
+  return b;
 }
 
 bool SceneSpec::glossy() const {
@@ -119,34 +132,34 @@ bool SceneSpec::glossy() const {
 
 void SceneSpec::check_window(const Basis& light_basis) const {
   // The window damps each frequency band; a basis without bands cannot be windowed.
-  if (lighting.get_string("window") == "none") return;
+  if (keys::lighting::window(lighting) == "none") return;
   const std::vector<int> bands = light_basis.coefficient_bands();
   if (bands.size() != static_cast<std::size_t>(light_basis.size()) || bands.empty())
-    throw Error(lighting.location("window"),
+    throw Error(lighting.location(keys::lighting::window.name()),
                 "section [lighting]: window damps frequency bands, and basis \"" + basis.name +
                     "\" has none (it declares no coefficient_bands()); use window = \"none\"");
 }
 
 int SceneSpec::incident_order(const Basis& light_basis) const {
-  if (const auto order = material.get_int("incident_order"); order > 0) return int(order);
+  if (const auto order = keys::material::incident_order(material); order > 0) return int(order);
   const std::vector<int> bands = light_basis.coefficient_bands();
   if (bands.empty()) return 8;
   return std::clamp(*std::max_element(bands.begin(), bands.end()) + 1, 1, kMaxIncidentOrder);
 }
 
 double SceneSpec::bounce_albedo(int channel) const {
-  const double kd = glossy() ? 1.0 : material.get_reals("diffuse")[std::size_t(channel)];
-  const auto a = material.get_reals("albedo");
+  const double kd = glossy() ? 1.0 : keys::material::diffuse(material)[std::size_t(channel)];
+  const auto a = keys::material::albedo(material);
   return kd * (a[0] + a[1] + a[2]) / 3.0;
 }
 
 std::string SceneSpec::material_description() const {
   std::string text = brdf().describe();
   if (glossy())
-    text += " projection=" + material.get_string("projection") +
-            " cutoff=" + std::to_string(material.get_real("cutoff")) +
-            " incident_order=" + std::to_string(material.get_int("incident_order"));
-  if (material.get_bool("subsurface")) {
+    text += " projection=" + keys::material::projection(material) +
+            " cutoff=" + std::to_string(keys::material::cutoff(material)) +
+            " incident_order=" + std::to_string(keys::material::incident_order(material));
+  if (keys::material::subsurface(material)) {
     const SubsurfaceMaterial m = subsurface();
     char more[200];
     std::snprintf(more, sizeof more,
@@ -169,8 +182,8 @@ std::string SceneSpec::material_description() const {
 
 MaterialChannels SceneSpec::channels() const {
   MaterialChannels out;
-  const bool subsurface_on = material.get_bool("subsurface");
-  const bool bounces = transport.get_int("bounces") > 0;
+  const bool subsurface_on = keys::material::subsurface(material);
+  const bool bounces = keys::transport::bounces(transport) > 0;
   // What a channel's transfer depends on; equal keys share a transfer.
   auto key = [&](int c) {
     const Brdf b = brdf(c);
@@ -197,26 +210,26 @@ MaterialChannels SceneSpec::channels() const {
 SubsurfaceMaterial SceneSpec::subsurface(int channel) const {
   SubsurfaceMaterial m;
   const auto c = std::size_t(channel);
-  if (const SubsurfacePreset* preset = subsurface_preset(material.get_string("preset"))) {
+  if (const SubsurfacePreset* preset = subsurface_preset(keys::material::preset(material))) {
     m.sigma_a = preset->sigma_a[c];
     m.sigma_s = preset->sigma_s[c];
   } else {
-    m.sigma_a = material.get_reals("sigma_a")[c];
-    m.sigma_s = material.get_reals("sigma_s")[c];
+    m.sigma_a = keys::material::sigma_a(material)[c];
+    m.sigma_s = keys::material::sigma_s(material)[c];
   }
-  m.eta = material.get_real("eta");
-  m.mm_per_unit = material.get_real("mm_per_unit");
-  m.error = material.get_real("subsurface_error");
+  m.eta = keys::material::eta(material);
+  m.mm_per_unit = keys::material::mm_per_unit(material);
+  m.error = keys::material::subsurface_error(material);
   return m;
 }
 
 Eigen::Vector3f SceneSpec::albedo() const {
-  const auto a = material.get_reals("albedo");
+  const auto a = keys::material::albedo(material);
   // A Lambertian transfer vector carries no reflectance: kd scales the tint.
   // A glossy matrix carries the whole BRDF, kd included.
   const Eigen::Vector3f tint = Eigen::Vector3d(a[0], a[1], a[2]).cast<float>();
   if (glossy()) return tint;
-  const auto kd = material.get_reals("diffuse");
+  const auto kd = keys::material::diffuse(material);
   return tint.cwiseProduct(Eigen::Vector3f(float(kd[0]), float(kd[1]), float(kd[2])));
 }
 

@@ -103,7 +103,6 @@ CompressedTransfer exact_form(const TransferSignal& t) {
   return c;
 }
 
-
 double CompressedTransfer::stored_floats() const {
   // Sparse: a value and a 32-bit index per kept term, plus the mean.
   if (sparse()) return 2.0 * vertices() * components + double(dimension);

@@ -1,36 +1,22 @@
 // Stages 1-3 of a bake on plain values: rays, transfer (fit, project,
 // bounces, subsurface, glossy matrices, colour channels) and compression.
-#include "prt/bake_stages.hpp"
-
-#include <tbb/parallel_for.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
-#include "coupled_slabs.hpp"
-#include "kept_state.hpp"
+#include "prt/bake_stages.hpp"
 #include "prt/basis.hpp"
-#include "prt/basis_metric.hpp"
 #include "prt/bounce_passes.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
-#include "prt/environment.hpp"
 #include "prt/glossy.hpp"
 #include "prt/glossy_interreflection.hpp"
-#include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
-#include "prt/log.hpp"
-#include "prt/memory.hpp"
 #include "prt/progress.hpp"
 #include "prt/rendered_metric.hpp"
-#include "prt/renderer.hpp"
-#include "prt/row_file.hpp"
 #include "prt/subsurface.hpp"
 #include "prt/transport.hpp"
+#include "run/coupled_slabs.hpp"
+#include "run/kept_state.hpp"
 
 namespace prt {
 
@@ -103,10 +89,9 @@ void add_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set
                  TransportResult& result, const RunOptions& options,
                  std::map<std::string, double>& metrics) {
   Progress progress("inter-reflection", plan.bounces, "", options.quiet);
-  BouncedTransfer light = bounce_passes(
-      result.transfer.coefficients, plan.bounces,
-      diffuse_bounce(mesh, set, result.hits, plan.bounce_albedo), &progress,
-      bounce_checkpoint(options));
+  BouncedTransfer light = bounce_passes(result.transfer.coefficients, plan.bounces,
+                                        diffuse_bounce(mesh, set, result.hits, plan.bounce_albedo),
+                                        &progress, bounce_checkpoint(options));
   // How much the bounces add per vertex (transfer norm with / without - 1):
   // near zero on convex parts, large in concave ones.
   std::vector<double> gain(static_cast<std::size_t>(light.total.rows()));
@@ -158,11 +143,11 @@ void add_glossy_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionS
                         std::map<std::string, double>& metrics) {
   Stopwatch clock;
   Progress bounce_progress("glossy inter-reflection", plan.bounces, "", options.quiet);
-  BouncedTransfer light = bounce_passes(
-      transfer.coefficients, plan.bounces,
-      glossy_bounce_function(mesh, set, result.hits, *plan.exit, plan.glossy_operator,
-                             plan.basis->size(), frames, plan.bounce_albedo),
-      &bounce_progress, bounce_checkpoint(options));
+  BouncedTransfer light =
+      bounce_passes(transfer.coefficients, plan.bounces,
+                    glossy_bounce_function(mesh, set, result.hits, *plan.exit, plan.glossy_operator,
+                                           plan.basis->size(), frames, plan.bounce_albedo),
+                    &bounce_progress, bounce_checkpoint(options));
   const double direct_norm = transfer.coefficients.cast<double>().norm();
   transfer.coefficients = std::move(light.total);
   char line[200];
@@ -212,9 +197,8 @@ TransferSignal glossy_stage(const BakePlan& plan, const Mesh& mesh, const Direct
 }  // namespace
 
 TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                              TransportResult result, const RunOptions& options,
-                              StageTimes& times, std::map<std::string, double>& metrics,
-                              TransferSignal* direct) {
+                              TransportResult result, const RunOptions& options, StageTimes& times,
+                              std::map<std::string, double>& metrics, TransferSignal* direct) {
   Stopwatch clock;
   if (plan.fit) fit_basis(plan, mesh, set, result.visibility, options, times);
   // Projected from the bits when they were kept (or traced before by a sweep).
@@ -300,10 +284,10 @@ void keep_channel(const CheckpointStore& store, const std::string& prefix,
 
 }  // namespace
 
-TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh,
-                                 const DirectionSet& set, TransportResult traced,
-                                 const RunOptions& options, StageTimes& times,
-                                 std::map<std::string, double>& metrics, TransferSignal* direct) {
+TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                                 TransportResult traced, const RunOptions& options,
+                                 StageTimes& times, std::map<std::string, double>& metrics,
+                                 TransferSignal* direct) {
   const MaterialChannels& channels = plan.channels;
   std::string which;
   for (int c = 0; c < 3; ++c)
@@ -335,13 +319,13 @@ TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh,
       options.message("resuming: channel transfer " + std::to_string(g + 1) + " of " +
                       std::to_string(channels.groups.size()) + " kept in " +
                       store->folder().string());
-      parts.push_back(kept_channel(channel, *store, prefix, direct ? &channel_direct : nullptr,
-                                   metrics));
+      parts.push_back(
+          kept_channel(channel, *store, prefix, direct ? &channel_direct : nullptr, metrics));
     } else {
       // The rays are traced once; every channel but the last works on a copy.
       TransportResult rays = g + 1 < channels.groups.size() ? traced : std::move(traced);
-      parts.push_back(transfer_stage(channel, mesh, set, std::move(rays), channel_options,
-                                     times, metrics, direct ? &channel_direct : nullptr));
+      parts.push_back(transfer_stage(channel, mesh, set, std::move(rays), channel_options, times,
+                                     metrics, direct ? &channel_direct : nullptr));
       if (store)
         keep_channel(*store, prefix, parts.back(), direct ? &channel_direct : nullptr, metrics);
     }

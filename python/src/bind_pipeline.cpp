@@ -164,9 +164,8 @@ void bind_pipeline(py::module_& m) {
         return py::make_tuple(std::move(data), times_dict(times));
       },
       py::arg("scene"), py::kw_only(), py::arg("output") = py::none(), py::arg("force") = false,
-      py::arg("restart") = false,
-      py::arg("compress") = true, py::arg("traced") = nullptr, py::arg("quiet") = false,
-      py::arg("log") = py::none());
+      py::arg("restart") = false, py::arg("compress") = true, py::arg("traced") = nullptr,
+      py::arg("quiet") = false, py::arg("log") = py::none());
 
   m.def(
       "compress",

@@ -48,8 +48,8 @@ TEST_CASE("white furnace: a convex sphere returns the light, with or without bou
   const DirectionSet set = DirectionSet::make("fibonacci", 2048, 1);
   for (const auto& hits : t.hits) CHECK(hits.empty());  // nothing to hit on a convex object
   for (int bounces : {0, 3}) {
-    const BouncedTransfer r = bounce_passes(
-        t.transfer.coefficients, bounces, diffuse_bounce(sphere, set, t.hits, 1.0), nullptr);
+    const BouncedTransfer r = bounce_passes(t.transfer.coefficients, bounces,
+                                            diffuse_bounce(sphere, set, t.hits, 1.0), nullptr);
     const Eigen::VectorXd radiance = under_constant_light(r.total);
     CHECK((radiance.array() - 1.0).abs().maxCoeff() < 0.01);
   }
@@ -62,8 +62,8 @@ TEST_CASE("inter-reflection brightens an open box's corners, converges and adds 
   const TransportResult t = traced(box, rays);
   const DirectionSet set = DirectionSet::make("fibonacci", rays, 1);
   const double albedo = 0.8;
-  const BouncedTransfer r = bounce_passes(
-        t.transfer.coefficients, 4, diffuse_bounce(box, set, t.hits, albedo), nullptr);
+  const BouncedTransfer r =
+      bounce_passes(t.transfer.coefficients, 4, diffuse_bounce(box, set, t.hits, albedo), nullptr);
   REQUIRE(r.bounce_norms.size() == 4);
   for (std::size_t b = 1; b < r.bounce_norms.size(); ++b) {
     CHECK(r.bounce_norms[b] < r.bounce_norms[b - 1]);  // converges
@@ -89,8 +89,8 @@ TEST_CASE("two bounces match the ground truth's independent bounces", "[interref
   const int rays = 4096;
   const TransportResult t = traced(box, rays);
   const DirectionSet set = DirectionSet::make("fibonacci", rays, 1);
-  const BouncedTransfer r = bounce_passes(
-        t.transfer.coefficients, 2, diffuse_bounce(box, set, t.hits, 0.7), nullptr);
+  const BouncedTransfer r =
+      bounce_passes(t.transfer.coefficients, 2, diffuse_bounce(box, set, t.hits, 0.7), nullptr);
   const Eigen::VectorXd prt_radiance = under_constant_light(r.total);
   const Environment light = Environment::constant(Eigen::Vector3f::Ones());
   const Eigen::MatrixX3f direct = ground_truth_radiance(box, light, 1024, 3, nullptr);

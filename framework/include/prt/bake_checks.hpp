@@ -2,6 +2,7 @@
 // that use it.
 #pragma once
 #include <string>
+
 #include "prt/bake_file.hpp"
 #include "prt/registry.hpp"
 #include "prt/rendered_metric.hpp"

@@ -3,6 +3,7 @@
 #pragma once
 #include <memory>
 #include <string>
+
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/brdf.hpp"

@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <string>
+
 #include "prt/bake_file.hpp"
 #include "prt/bake_plan.hpp"
 #include "prt/frame.hpp"
@@ -24,17 +25,15 @@ TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const Direct
 // 2. Transfer: fit (data-driven bases), project, bounces, subsurface, glossy
 //    matrices, glossy bounces. Consumes the visibility and hits; metrics
 //    gets its figures; `direct` (optional) the transfer before any bounce.
-TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh,
-                              const DirectionSet& set, TransportResult traced,
-                              const RunOptions& options, StageTimes& times,
+TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                              TransportResult traced, const RunOptions& options, StageTimes& times,
                               std::map<std::string, double>& metrics,
                               TransferSignal* direct = nullptr);
 // 2'. The same per distinct colour-channel material (plan.channels), the
 //    rays traced once; the transfers stacked in each row.
-TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh,
-                                 const DirectionSet& set, TransportResult traced,
-                                 const RunOptions& options, StageTimes& times,
-                                 std::map<std::string, double>& metrics,
+TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                                 TransportResult traced, const RunOptions& options,
+                                 StageTimes& times, std::map<std::string, double>& metrics,
                                  TransferSignal* direct = nullptr);
 // 2''. A transfer that each vertex gets alone (no fitted basis, bounces,
 //    subsurface light or per-channel transfers) in slabs of vertices:

@@ -28,9 +28,6 @@ struct Brdf {
   double roughness = 0.3;               // Cook-Torrance Beckmann slope
   double f0 = 0.04;                     // Cook-Torrance Schlick reflectance at normal incidence
 
-  // The material section's BRDF (kd = diffuse, ks = specular, ...) in one
-  // colour channel (0 red, 1 green, 2 blue).
-  static Brdf from_material(const Params& material, int channel = 0);
   bool glossy() const { return model != BrdfModel::lambert; }
 
   // rho(in, out); zero when either direction is below the horizon.

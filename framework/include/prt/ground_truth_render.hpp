@@ -24,4 +24,22 @@ struct ErrorStats {
 };
 ErrorStats vertex_error(const Eigen::MatrixX3f& approximation, const Eigen::MatrixX3f& reference);
 
+// The ground truth under the light basis's reconstruction of `light` (the
+// environment band-limited by the basis): what the basis can carry at all.
+Eigen::MatrixX3f band_limited_truth(const SceneSpec& scene, const Mesh& mesh,
+                                    const Relighting& relighting, const Environment& environment,
+                                    const Eigen::MatrixX3d& light, const Camera& camera,
+                                    const RunOptions& options);
+
+// A relit bake's error against the ground truth in three parts (per-vertex
+// RMS): light truncation (band-limited truth against the full truth),
+// transfer projection (the exact transfer relit against the band-limited
+// truth) and compression (the compressed transfer against the exact one);
+// total is the compressed transfer against the full truth.
+struct ErrorBudget {
+  double truncation = 0, projection = 0, compression = 0, total = 0;
+};
+ErrorBudget error_budget(const Eigen::MatrixX3f& truth, const Eigen::MatrixX3f& band_limited,
+                         const Eigen::MatrixX3f& exact, const Eigen::MatrixX3f& compressed);
+
 }  // namespace prt

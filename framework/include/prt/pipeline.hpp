@@ -9,3 +9,4 @@
 #include "prt/ground_truth_render.hpp"
 #include "prt/relighting.hpp"
 #include "prt/run_options.hpp"
+#include "prt/turning_light.hpp"

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 #include <vector>
+
 #include "prt/bake_file.hpp"
 #include "prt/environment.hpp"
 #include "prt/frame.hpp"
@@ -59,6 +60,10 @@ class Relighting {
   RelightKernel prepare(const CompressedTransfer& transfer) const;
   Relit relight(const RelightKernel& kernel, const Eigen::MatrixX3d& light,
                 const Camera& camera) const;
+  // Whether relight() makes the per-vertex sums itself (point lights or
+  // per-channel transfers: Relit::summed) rather than leaving them to the
+  // renderer's constants-and-weights path.
+  bool sums_here() const { return data_.transfer.channel_groups > 1 || !point_lights_.empty(); }
   Relit relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
                 const Camera& camera) const {
     return relight(prepare(transfer), light, camera);

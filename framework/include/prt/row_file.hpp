@@ -48,5 +48,4 @@ class RowFile {
   std::size_t bytes_ = 0;
 };
 
-
 }  // namespace prt

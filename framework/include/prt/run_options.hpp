@@ -5,6 +5,7 @@
 #include <string>
 #include <utility>
 #include <vector>
+
 #include "prt/checkpoint.hpp"
 #include "prt/communicator.hpp"
 

@@ -11,6 +11,7 @@
 #include "prt/direction_set.hpp"
 #include "prt/params.hpp"
 #include "prt/point_lights.hpp"
+#include "prt/scene_keys.hpp"
 #include "prt/subsurface.hpp"
 #include "prt/transfer.hpp"
 

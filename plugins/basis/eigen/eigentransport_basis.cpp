@@ -17,9 +17,9 @@
 #include <random>
 
 #include "prt/basis.hpp"
-#include "prt/part_keeper.hpp"
 #include "prt/log.hpp"
 #include "prt/mesh.hpp"
+#include "prt/part_keeper.hpp"
 #include "prt/plugin.hpp"
 #include "prt/row_blocks.hpp"
 #include "prt/segment_sum.hpp"
@@ -151,8 +151,14 @@ class CentredTransport {
   CentredTransport(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
                    const TransposedVisibility& transposed, const Eigen::VectorXd& root_weights,
                    const Eigen::RowVectorXd& mean, const Shard& shard, const Communicator& comm)
-      : mesh_(mesh), set_(set), visibility_(visibility), transposed_(transposed),
-        root_weights_(root_weights), mean_(mean), shard_(shard), comm_(comm) {}
+      : mesh_(mesh),
+        set_(set),
+        visibility_(visibility),
+        transposed_(transposed),
+        root_weights_(root_weights),
+        mean_(mean),
+        shard_(shard),
+        comm_(comm) {}
 
   // q = C right: this shard's rows.
   void times(const Eigen::MatrixXd& right, Eigen::MatrixXd& q) {
@@ -195,9 +201,9 @@ class Eigentransport final : public Basis {
       param::integer("d", "48", 1, 4096,
                      "basis functions: the mean direction and d - 1 eigentransports (the most, "
                      "when variance is set)");
-  static constexpr auto kVariance = param::real(
-      "variance", "0", 0, 1,
-      "if > 0: the fewest eigentransports capturing this fraction of the variance");
+  static constexpr auto kVariance =
+      param::real("variance", "0", 0, 1,
+                  "if > 0: the fewest eigentransports capturing this fraction of the variance");
   static constexpr auto kOversampling =
       param::integer("oversampling", "10", 0, 1000, "randomized SVD: extra columns");
   static constexpr auto kPowerIterations =
@@ -270,7 +276,8 @@ class Eigentransport final : public Basis {
     double transport_energy = 0;  // ||T W||_F^2
     mean_ = column_sums(mesh, set, transposed, shard, comm, transport_energy) / double(v);
     CentredTransport c(mesh, set, visibility, transposed, root_weights_, mean_, shard, comm);
-    const Eigen::MatrixXd q = range_of(c, data, std::min<Eigen::Index>({max_d_ + oversampling_, s, v}));
+    const Eigen::MatrixXd q =
+        range_of(c, data, std::min<Eigen::Index>({max_d_ + oversampling_, s, v}));
     // ||C||_F^2 = ||T W||_F^2 - v ||mean||^2 (C's rows are centred). It loses
     // digits when the mean holds nearly all the energy (the error is ~eps
     // ||T W||^2); below 1e-12 ||T W||^2 the rows are the same up to rounding,

@@ -25,8 +25,9 @@ class HaarCubeMap final : public Basis {
       "orthonormal 2-D Haar wavelets on each cube-map face (6 R^2 coefficients)";
   static constexpr auto kResolution =
       param::integer("resolution", "16", 1, 256, "texels per face edge R (a power of 2)");
-  static constexpr auto kKept = param::integer(
-      "k", "0", 0, 1 << 30, "non-linear approximation: largest coefficients kept per vertex (0 = all)");
+  static constexpr auto kKept =
+      param::integer("k", "0", 0, 1 << 30,
+                     "non-linear approximation: largest coefficients kept per vertex (0 = all)");
   static constexpr auto parameters() { return param::records(kResolution, kKept); }
 
   explicit HaarCubeMap(const Params& params)

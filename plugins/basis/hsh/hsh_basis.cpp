@@ -22,9 +22,9 @@ class HemisphericalHarmonics final : public Basis {
   static constexpr auto kProjection =
       param::choice("projection", "least-squares", "least-squares|zero|odd|even",
                     "how functions known on the hemisphere are projected");
-  static constexpr auto kCutoff = param::real(
-      "cutoff", "1e-10", 0, 1,
-      "least squares: singular values of A below this x the largest are discarded");
+  static constexpr auto kCutoff =
+      param::real("cutoff", "1e-10", 0, 1,
+                  "least squares: singular values of A below this x the largest are discarded");
   static constexpr auto kReduced = param::boolean(
       "reduced", "false", "drop the nearly redundant l=1, m=0 function (N_i = 24 at order 5)");
   static constexpr auto parameters() {

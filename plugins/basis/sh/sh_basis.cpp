@@ -16,8 +16,7 @@ class SphericalHarmonics final : public Basis {
       param::integer("order", "6", 1, 200, "number of bands l = 0..order-1 (order^2 terms)");
   static constexpr auto parameters() { return param::records(kOrder); }
 
-  explicit SphericalHarmonics(const Params& params)
-      : order_(static_cast<int>(kOrder(params))) {}
+  explicit SphericalHarmonics(const Params& params) : order_(static_cast<int>(kOrder(params))) {}
 
   int size() const override { return sh::coefficient_count(order_); }
   bool orthonormal() const override { return true; }

@@ -314,14 +314,13 @@ class CpcaRun {
     progress_.emplace(options_.method == Method::adaptive ? "adaptive CPCA" : "iterative CPCA",
                       passes, "passes");
     if (resumed_)
-      progress_->add(adaptive_kept_
-                         ? n_prime_ * per_component + first_iteration_
-                         : (first_component_ - 1) * per_component + first_iteration_,
+      progress_->add(adaptive_kept_ ? n_prime_ * per_component + first_iteration_
+                                    : (first_component_ - 1) * per_component + first_iteration_,
                      0);
     KeptErrors kept_errors;
     for (int c = adaptive_kept_ ? n_prime_ + 1 : first_component_; c <= n_prime_; ++c) {
-      for (int iteration = c == first_component_ ? first_iteration_ : 0;
-           iteration < per_component; ++iteration) {
+      for (int iteration = c == first_component_ ? first_iteration_ : 0; iteration < per_component;
+           ++iteration) {
         Progress::check_interrupt();
         keep_before_pass(0, c, iteration);
         Stopwatch clock;
@@ -343,8 +342,7 @@ class CpcaRun {
   // representatives beyond the means), refit and reclassified each pass.
   CpcaResult adaptive_passes() {
     const int widest = static_cast<int>(std::min<Eigen::Index>(rows_.cols(), 2 * n_prime_ + 8));
-    const double budget =
-        double(rows_.total()) * n_prime_ + double(k_) * n_prime_ * rows_.cols();
+    const double budget = double(rows_.total()) * n_prime_ + double(k_) * n_prime_ * rows_.cols();
     std::vector<double> sizes;
     for (int iteration = adaptive_kept_ ? first_iteration_ : 0;
          iteration < options_.adaptive_iterations; ++iteration) {

@@ -356,12 +356,12 @@ struct BatchScratch {
 // What solving the clusters' models needs, made once per refit.
 struct ClusterSolve {
   const Rows& rows;
-  const std::vector<int>& which;  // the clusters to solve
-  const std::vector<bool>& gram;  // from the Gram matrix (else the scatter)
+  const std::vector<int>& which;      // the clusters to solve
+  const std::vector<bool>& gram;      // from the Gram matrix (else the scatter)
   const std::vector<bool>& gathered;  // members gathered (else the scatter summed over segments)
   const std::vector<std::vector<std::uint32_t>>& members;
   const std::map<int, MatrixXfRow>& gathered_members;  // ranks: the members gathered here
-  const std::map<int, Eigen::MatrixXd>& summed;         // scatters summed over segments
+  const std::map<int, Eigen::MatrixXd>& summed;        // scatters summed over segments
   std::vector<ClusterModel>& models;
 
   // One batch of clusters: their matrices, one batched eigen-solve, their models.
@@ -402,9 +402,8 @@ struct ClusterSolve {
     }
     const std::vector<std::uint32_t>& list = members[std::size_t(which[i])];
     CentredMembers out = centre_members(
-        Eigen::Index(list.size()),
-        [&](Eigen::Index p) { return rows.x.row(list[std::size_t(p)]); }, model.mean, gram[i],
-        storage);
+        Eigen::Index(list.size()), [&](Eigen::Index p) { return rows.x.row(list[std::size_t(p)]); },
+        model.mean, gram[i], storage);
     // Its members' pages go at once (most clusters are small for wide rows).
     for (std::uint32_t p : list) rows.release(p, p + 1);
     return out;
@@ -476,8 +475,7 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
     mine.push_back(i);
   const std::vector<std::vector<std::size_t>> batches =
       solve_batches(std::move(mine), which, gram, sums.counts, models, n);
-  const ClusterSolve solve{rows,   which,           gram,   gathered, members,
-                           gathered_members, summed, models};
+  const ClusterSolve solve{rows, which, gram, gathered, members, gathered_members, summed, models};
   tbb::enumerable_thread_specific<BatchScratch> batch_scratch;
   tbb::parallel_for(std::size_t(0), batches.size(), [&](std::size_t b) {
     Progress::check_interrupt();  // eight eigen-solves may take a while (glossy rows)

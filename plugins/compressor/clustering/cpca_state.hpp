@@ -7,8 +7,8 @@
 #pragma once
 #include <optional>
 
-#include "prt/part_keeper.hpp"
 #include "prt/clustering.hpp"
+#include "prt/part_keeper.hpp"
 
 namespace prt::clustering {
 

@@ -12,10 +12,10 @@
 #include <random>
 
 #include "kept_on_ranks.hpp"
-#include "prt/part_keeper.hpp"
 #include "prt/clustering.hpp"
 #include "prt/error.hpp"
 #include "prt/log.hpp"
+#include "prt/part_keeper.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_blocks.hpp"
 #include "prt/segment_sum.hpp"

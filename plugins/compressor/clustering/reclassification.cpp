@@ -68,8 +68,12 @@ struct Move {
 class Reclassifier {
  public:
   Reclassifier(RowsRef x, const Mesh& mesh, CompressedTransfer& compressed)
-      : x_(x), mesh_(mesh), compressed_(compressed), label_(compressed.cluster_of_vertex),
-        adjacency_(adjacency(mesh)), version_(mesh.vertex_count(), 0),
+      : x_(x),
+        mesh_(mesh),
+        compressed_(compressed),
+        label_(compressed.cluster_of_vertex),
+        adjacency_(adjacency(mesh)),
+        version_(mesh.vertex_count(), 0),
         moved_(mesh.vertex_count(), 0) {}
 
   // The move of vertex p to a neighbour's cluster with the most overdraw

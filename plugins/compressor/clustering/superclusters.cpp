@@ -46,7 +46,8 @@ void greedy_merge(const Mesh& mesh, const std::vector<std::int32_t>& label, int 
 // The unselected cluster sharing the most triangles with the group; -1 when
 // none is adjacent.
 int most_shared(const Mesh& mesh, const std::vector<std::int32_t>& label,
-                const std::vector<std::uint8_t>& in_group, const std::vector<std::uint8_t>& selected) {
+                const std::vector<std::uint8_t>& in_group,
+                const std::vector<std::uint8_t>& selected) {
   const int k = int(selected.size());
   std::vector<int> shared(k, 0);
   for (const auto& t : mesh.triangles) {

@@ -12,7 +12,8 @@
 namespace prt::compressor_params {
 
 // Each key once: its schema record and its reader.
-inline constexpr auto kClusters = param::integer("clusters", "256", 1, 1 << 24, "number of clusters");
+inline constexpr auto kClusters =
+    param::integer("clusters", "256", 1, 1 << 24, "number of clusters");
 inline constexpr auto kInit =
     param::choice("init", "kmeans++", "kmeans++|hyperbox",
                   "LBG start: k-means++ or the thesis's random points in the data's hyper-box");
@@ -29,8 +30,8 @@ inline constexpr auto kReclassify =
     param::boolean("reclassify", "false", "move boundary vertices to lower overdraw");
 inline constexpr auto kErrorBudget =
     param::real("error_budget", "0.05", 0, 10, "reclassification: allowed relative SE increase");
-inline constexpr auto kSupercluster = param::choice("supercluster", "none", "none|greedy|chen",
-                                                    "group clusters into superclusters");
+inline constexpr auto kSupercluster =
+    param::choice("supercluster", "none", "none|greedy|chen", "group clusters into superclusters");
 inline constexpr auto kRegisters = param::integer(
     "registers", "256", 1, 65536, "superclusters: constant registers; (n'+1) per cluster");
 

@@ -517,7 +517,7 @@ std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {
   for (const PluginRecord* record :
        {&plan.basis_record, &plan.exit_record, &plan.compressor_record})
     digest.add(one_line(*record));
-  const std::string mesh_file = scene.mesh.get_string("file");
+  const std::string mesh_file = keys::mesh::file(scene.mesh);
   if (!mesh_file.empty()) digest.add_file(mesh_file);  // else generated: the text says all
   return digest.hex();
 }
