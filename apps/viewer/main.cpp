@@ -165,8 +165,8 @@ int main(int argc, char** argv) {
     inputs.push_back(scene.bake_path());
     prt::check_output({script.screenshot_file, prt::FileKind::png, "screenshot"}, inputs);
     const auto& camera = scene.camera;
-    prt::view::Window window(static_cast<int>(keys::camera::width(camera)),
-                             static_cast<int>(keys::camera::height(camera)),
+    prt::view::Window window(static_cast<int>(prt::keys::camera::width(camera)),
+                             static_cast<int>(prt::keys::camera::height(camera)),
                              "prt-view  " + scene.file.filename().string());
     if (!options.quiet) std::cout << "OpenGL: " << window.renderer() << "\n";
     prt::view::Viewer viewer(registry, options);

@@ -1,6 +1,7 @@
 // Relighting: the one relight path (light projection, per-cluster constants,
 // per-vertex sums, exit basis toward the camera, point lights).
 #include "prt/relighting.hpp"
+#include "prt/bake_checks.hpp"
 
 #include <tbb/parallel_for.h>
 

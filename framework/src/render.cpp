@@ -4,6 +4,7 @@
 
 #include "prt/environment.hpp"
 #include "prt/relighting.hpp"
+#include "prt/progress.hpp"
 #include "prt/renderer.hpp"
 
 namespace prt {
