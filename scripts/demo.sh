@@ -13,7 +13,12 @@ bash "$root/scripts/setup.sh"
 # scene reader's default (framework/src/scene.cpp: sh, none, cpu).
 targets=(--target prt_cli)
 while read -r target; do
-  targets+=(--target "$target")
+  kind="${target#prt_}"; name="${kind#*_}"; kind="${kind%%_*}"
+  if grep -q "prt_add_plugin($name KIND $kind" "$root/plugins/CMakeLists.txt"; then
+    targets+=(--target "$target")
+  else  # an out-of-tree plug-in: built and installed by its own project
+    echo "demo: $kind plug-in \"$name\" is not in this tree; build it as docs/writing-a-plugin.md says and put it on PRT_PLUGIN_PATH"
+  fi
 done < <(awk '
   /^\[/ { section = $0; gsub(/[\[\]]/, "", section) }
   /^[[:space:]]*plugin[[:space:]]*=/ {
