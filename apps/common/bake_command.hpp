@@ -46,14 +46,11 @@ inline CLI::App* add_bake_command(CLI::App& app, BakeArgs& args, const std::stri
   return command;
 }
 
-inline std::filesystem::path bake_output(const SceneSpec& scene, const BakeArgs& args) {
-  return args.output.empty() ? scene.bake_path() : std::filesystem::path(args.output);
-}
-
 // `who` leads the description kept in the checkpoint folder ("prt bake").
 inline BakeTarget bake_target(const SceneSpec& scene, const BakeArgs& args,
                               const std::string& who) {
-  const std::filesystem::path output = bake_output(scene, args);
+  const std::filesystem::path output =
+      args.output.empty() ? scene.bake_path() : std::filesystem::path(args.output);
   return {{output, FileKind::bake, "bake file", args.output.empty()},
           args.force,
           args.restart,

@@ -37,7 +37,6 @@ int bake(Context& context, const BakeArgs& args) {
   const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
   StageTimes times;
   times.add("parse + validate scene", clock.seconds());
-  const fs::path output = bake_output(scene, args);
   clock = Stopwatch();
   const BakePlan plan = plan_bake(scene, context.registry);
   times.add("load plug-ins", clock.seconds());
@@ -49,7 +48,7 @@ int bake(Context& context, const BakeArgs& args) {
       data.streamed_transfer.rows > 0 ? data.streamed_transfer.cols : data.transfer.dimension();
   std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << columns
             << " coefficients (" << data.basis.name << ", " << data.transport << ") -> "
-            << output.string() << "\n"
+            << target.file.path.string() << "\n"
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
   std::printf("peak memory: %.3f GB (resident; budget %.3f GB)\n", peak_resident_bytes() / 1e9,
               options.budget() / 1e9);

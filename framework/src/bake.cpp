@@ -1,12 +1,12 @@
 // The bake driver: a plan run through its stages (whole, slab by slab or
 // sharded), refusing what cannot fit before any ray, into BakeData.
 #include "prt/bake.hpp"
-#include "prt/bake_stages.hpp"
 
 #include <algorithm>
 #include <cstdio>
 #include <optional>
 
+#include "prt/bake_stages.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/compressor.hpp"
 #include "prt/memory.hpp"

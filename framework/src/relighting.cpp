@@ -1,12 +1,12 @@
 // Relighting: the one relight path (light projection, per-cluster constants,
 // per-vertex sums, exit basis toward the camera, point lights).
 #include "prt/relighting.hpp"
-#include "prt/bake_checks.hpp"
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 
+#include "prt/bake_checks.hpp"
 #include "prt/basis.hpp"
 #include "prt/basis_metric.hpp"
 #include "prt/environment.hpp"

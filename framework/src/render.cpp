@@ -3,8 +3,8 @@
 #include <cstdio>
 
 #include "prt/environment.hpp"
-#include "prt/relighting.hpp"
 #include "prt/progress.hpp"
+#include "prt/relighting.hpp"
 #include "prt/renderer.hpp"
 
 namespace prt {
