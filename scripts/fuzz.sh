@@ -2,7 +2,9 @@
 # Builds the libFuzzer harnesses (tests/fuzz, clang, ASan + UBSan) into
 # build-fuzz/ against the main build's libprt.so and runs them.
 #   scripts/fuzz.sh [TARGET|all] [SECONDS] [-- extra libFuzzer flags]
-# TARGET: scene, mesh, image, bake, elf. Each run starts from the seed corpus
+# TARGET: scene, mesh, image, bake, bake_sealed, elf. bake_sealed is the bake
+# harness with PRT_FUZZ_SEAL=1: every input gets a valid checksum first, as a
+# crafted file would, so it reaches libhdf5 (in the child that parses it). Each run starts from the seed corpus
 # (tests/fuzz/corpus/TARGET plus files made from the build and data/), replays
 # every kept regression input (tests/fuzz/regressions/TARGET), and stops at
 # the first sanitizer report, which is saved under build-fuzz/artifacts/.
@@ -13,7 +15,7 @@ targets="${1:-all}"
 seconds="${2:-60}"
 shift $(($# > 2 ? 2 : $#))
 [ "${1:-}" = "--" ] && shift
-[ "$targets" = all ] && targets="scene mesh image bake elf"
+[ "$targets" = all ] && targets="scene mesh image bake bake_sealed elf"
 build="$root/build"
 out="$root/build-fuzz"
 [ -f "$build/lib/libprt.so" ] || { echo "fuzz: build the project first (scripts/build.sh)"; exit 1; }
@@ -26,6 +28,7 @@ cmake --build "$out" >/dev/null
 # Seeds made from the build: a small bake and the test plug-ins' ELF files.
 seeds="$out/seeds"
 mkdir -p "$seeds"/{scene,mesh,image,bake,elf}
+ln -sfn bake "$seeds/bake_sealed"
 if [ ! -f "$seeds/bake/sphere.h5" ]; then
   work="$(mktemp -d)"
   printf '[mesh]\ngenerate = "sphere"\ndetail = 0\n[lighting]\nconstant = [1, 1, 1]\n[basis]\nplugin = "sh"\norder = 2\n[transport]\nrays = 16\n[compressor]\nplugin = "cpca"\nclusters = 2\ncomponents = 1\n' >"$work/s.toml"
@@ -41,13 +44,15 @@ fi
 export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp:print_suppressions=0"
 status=0
 for target in $targets; do
+  harness="$out/fuzz_${target%_sealed}"
+  if [ "$target" = bake_sealed ]; then export PRT_FUZZ_SEAL=1; else unset PRT_FUZZ_SEAL; fi
   corpus="$out/corpus/$target"
   artifacts="$out/artifacts/$target/"
   mkdir -p "$corpus" "$artifacts"
   regressions="$root/tests/fuzz/regressions/$target"
   # Kept crashing inputs run once each first: a fixed bug stays fixed.
   if [ -d "$regressions" ] && [ -n "$(ls -A "$regressions")" ]; then
-    if ! "$out/fuzz_$target" -rss_limit_mb=2048 -timeout=10 "$regressions"/* >"$out/$target.replay.log" 2>&1; then
+    if ! "$harness" -rss_limit_mb=2048 -timeout=10 "$regressions"/* >"$out/$target.replay.log" 2>&1; then
       echo "fuzz $target: a regression input fails again (see $out/$target.replay.log)"
       status=1
       continue
@@ -60,7 +65,7 @@ for target in $targets; do
   for dir in "$root/tests/fuzz/corpus/$target" "$seeds/$target"; do
     [ -d "$dir" ] && dirs+=("$dir")
   done
-  "$out/fuzz_$target" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
+  "$harness" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
     -print_final_stats=1 -artifact_prefix="$artifacts" "$@" "${dirs[@]}" >"$log" 2>&1
   code=$?
   set -e

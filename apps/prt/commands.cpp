@@ -146,6 +146,7 @@ int render(Context& context, const RenderArgs& args) {
   } else {
     clock = Stopwatch();
     const BakeData data = read_bake(bake_file);
+    check_bake_records(bake_file.string(), data, context.registry);
     times.add("read bake file", clock.seconds());
     result = render(scene, data, context.registry, times, {context.quiet});
     if (args.compare) compare_with_truth(context, scene, data, result, times);
@@ -201,6 +202,7 @@ int compress(Context& context, const CompressArgs& args) {
   budget.memory_budget = double(args.memory);
   ReadOptions reading{budget.budget(), output.has_parent_path() ? output.parent_path() : "."};
   BakeData data = read_bake(args.bake, reading);
+  check_bake_records(args.bake, data, context.registry);
   StageTimes times;
   times.add("read bake file", clock.seconds());
   if (data.transfer.on_disk() && !args.json)
@@ -242,8 +244,9 @@ int compress(Context& context, const CompressArgs& args) {
   return 0;
 }
 
-int info(const std::string& file) {
+int info(Context& context, const std::string& file) {
   const BakeData data = read_bake(file);
+  const std::vector<std::string> unchecked = check_bake_records(file, data, context.registry);
   const CompressedTransfer& c = data.compressed;
   std::cout << "bake file:    " << file << " (format version " << kBakeFormatVersion << ")\n"
             << "scene:        " << data.scene_file << "\n"
@@ -266,8 +269,12 @@ int info(const std::string& file) {
             << "compressor:   " << one_line(data.compressor) << ": " << c.clusters()
             << " cluster(s), " << c.components << " component(s), " << c.stored_floats()
             << " floats stored\n"
-            << "albedo:       " << data.albedo.transpose() << "\n"
-            << "metrics:\n";
+            << "albedo:       " << data.albedo.transpose() << "\n";
+  std::cout << "records:      "
+            << (unchecked.empty() ? "checked against the installed plug-ins" : "not checked:");
+  for (std::size_t i = 0; i < unchecked.size(); ++i)
+    std::cout << (i ? ", " : " ") << unchecked[i];
+  std::cout << (unchecked.empty() ? "\n" : " (plug-in not installed)\n") << "metrics:\n";
   for (const auto& [name, value] : data.metrics)
     std::cout << "  " << name << " = " << value << "\n";
   return 0;

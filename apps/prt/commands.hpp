@@ -82,7 +82,7 @@ int image_diff(const std::string& a, const std::string& b);
 // "key=value" typed as TOML would type it, located at command-line item `index`.
 void parse_parameter(const std::string& text, std::size_t index, Params& params);
 
-int info(const std::string& bake_file);
+int info(Context& context, const std::string& bake_file);
 int plugins(Context& context);
 
 struct DemoArgs {

@@ -203,7 +203,7 @@ Command info_command(CLI::App& app) {
   auto file = std::make_shared<std::string>();
   auto* command = app.add_subcommand("info", "print a bake file's contents");
   command->add_option("bake", *file, "bake file (.h5)")->required();
-  return {command, [file](prt::cli::Context&) { return prt::cli::info(*file); }};
+  return {command, [file](prt::cli::Context& context) { return prt::cli::info(context, *file); }};
 }
 
 // prt plugins

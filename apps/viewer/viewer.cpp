@@ -31,6 +31,7 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
   const auto bake_file = scene_.bake_path();
   if (std::filesystem::exists(bake_file)) {
     data_ = read_bake(bake_file);
+    check_bake_records(bake_file.string(), data_, registry_);
   } else {
     std::cerr << "prt-view: " << bake_file.string() << " does not exist; baking it\n";
     check_output({bake_file, FileKind::bake, "bake file", true}, scene_.input_files());

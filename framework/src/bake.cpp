@@ -170,7 +170,7 @@ void describe(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& 
   data.transport = transport_description(scene, set);
   data.basis = plan.basis_record;
   data.compressor = plan.compressor_record;
-  if (!options.compress && plan.sparse_terms == 0) data.compressor = {"exact", "", ""};
+  if (!options.compress && plan.sparse_terms == 0) data.compressor = {kExactRecord, "", ""};
   data.albedo = scene.albedo();
   data.material = scene.material_description();
   data.bounces = plan.bounces;

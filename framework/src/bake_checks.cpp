@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "prt/basis.hpp"
+#include "prt/compressor.hpp"
 #include "prt/log.hpp"
 #include "prt/rendered_metric.hpp"
 
@@ -58,12 +59,9 @@ void check_bake_dimension(const BakeData& data, const Basis& basis) {
 
 namespace {
 
-// A bake's basis made again from its plug-in record ("key = value" lines, as
-// Params::describe writes them) and its saved state: what re-compressing a
-// bake file needs, without its scene's mesh or map (a bake may travel alone).
-std::shared_ptr<Basis> basis_of_record(const PluginRecord& record, const BasisState& state,
-                                       PluginRegistry& registry, const std::string& role) {
-  const SourceLocation where{"the bake's " + role + " \"" + record.name + "\""};
+// A plug-in record's parameters ("key = value" lines, as Params::describe
+// writes them), typed as the scene's would be.
+Params params_of_record(const PluginRecord& record, const SourceLocation& where) {
   Params params(where);
   const auto trim = [](std::string text) {
     const auto first = text.find_first_not_of(" \t"), last = text.find_last_not_of(" \t");
@@ -77,12 +75,83 @@ std::shared_ptr<Basis> basis_of_record(const PluginRecord& record, const BasisSt
     parse_assignment(trim(line.substr(0, equals)) + "=" + trim(line.substr(equals + 1)), where,
                      params);
   }
+  return params;
+}
+
+// A bake's basis made again from its plug-in record and its saved state:
+// what re-compressing a bake file needs, without its scene's mesh or map (a
+// bake may travel alone).
+std::shared_ptr<Basis> basis_of_record(const PluginRecord& record, const BasisState& state,
+                                       PluginRegistry& registry, const std::string& role) {
+  const SourceLocation where{"the bake's " + role + " \"" + record.name + "\""};
+  Params params = params_of_record(record, where);
   auto basis = registry.create<Basis>(record.name, params, where);
   basis->load(state);
   return basis;
 }
 
 }  // namespace
+
+namespace {
+
+bool installed(const PluginRegistry& registry, PluginKind kind, const std::string& name) {
+  const auto names = registry.names(kind);
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+void check_exit_rows(const BakeData& data, const Basis& exit) {
+  if (exit.size() != data.transfer.exit_rows)
+    throw Error("the bake's transfer has " + std::to_string(data.transfer.exit_rows) +
+                " exit rows, but its exit basis \"" + data.exit.name + "\" has " +
+                std::to_string(exit.size()) + " functions");
+}
+
+void check_compressor_record(const BakeData& data, PluginRegistry& registry,
+                             std::vector<std::string>& unchecked) {
+  const CompressedTransfer& c = data.compressed;
+  if (data.compressor.name == kExactRecord) {  // written by a bake that kept the transfer exact
+    if (c.sparse() || c.components != 0 || c.clusters() != c.vertices())
+      throw Error("the bake says its transfer is exact, but it is stored in " +
+                  std::to_string(c.clusters()) + " clusters of " + std::to_string(c.components) +
+                  " components");
+    return;
+  }
+  if (!installed(registry, PluginKind::compressor, data.compressor.name)) {
+    unchecked.push_back("compressor \"" + data.compressor.name + "\"");
+    return;
+  }
+  const SourceLocation where{"the bake's compressor \"" + data.compressor.name + "\""};
+  Params params = params_of_record(data.compressor, where);
+  const auto compressor = registry.create<Compressor>(data.compressor.name, params, where);
+  try {
+    compressor->check_encoding(c);
+  } catch (const Error& e) {
+    throw Error(where, e.what());
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> check_bake_records(const std::string& file, const BakeData& data,
+                                            PluginRegistry& registry) {
+  std::vector<std::string> unchecked;
+  try {
+    if (installed(registry, PluginKind::basis, data.basis.name))
+      check_bake_dimension(data, *basis_of_record(data.basis, data.basis_state, registry, "basis"));
+    else
+      unchecked.push_back("basis \"" + data.basis.name + "\"");
+    if (data.transfer.glossy()) {
+      if (installed(registry, PluginKind::basis, data.exit.name))
+        check_exit_rows(data, *basis_of_record(data.exit, data.exit_state, registry, "exit basis"));
+      else
+        unchecked.push_back("exit basis \"" + data.exit.name + "\"");
+    }
+    check_compressor_record(data, registry, unchecked);
+  } catch (const Error& e) {
+    throw Error(file + ": bad bake file: " + e.what());
+  }
+  return unchecked;
+}
 
 RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry) {
   std::shared_ptr<Basis> basis;
@@ -96,10 +165,7 @@ RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry) {
   check_bake_dimension(data, *basis);
   if (!data.transfer.glossy()) return RenderedMetric(*basis, nullptr);
   const auto exit = basis_of_record(data.exit, data.exit_state, registry, "exit basis");
-  if (exit->size() != data.transfer.exit_rows)
-    throw Error("the bake's transfer has " + std::to_string(data.transfer.exit_rows) +
-                " exit rows, but its exit basis \"" + data.exit.name + "\" has " +
-                std::to_string(exit->size()) + " functions");
+  check_exit_rows(data, *exit);
   return RenderedMetric(*basis, exit.get());
 }
 

@@ -11,7 +11,6 @@
 
 #include "prt/bake_file.hpp"
 #include "prt/error.hpp"
-#include "prt/row_file.hpp"
 
 namespace prt::bake_hdf5 {
 namespace fs = std::filesystem;
@@ -270,29 +269,25 @@ inline BakeData::StreamedRows rows_of_file(const TransferSignal& signal) {
   return rows;
 }
 
-// The float dataset `set` (rows x cols, from checked_dataset), read a block of rows at a time
-// into a RowFile in `folder`: never whole in memory. Values are checked as
-// read_array checks them.
-inline std::shared_ptr<RowFile> read_rows_to_file(const H5::DataSet& set, const std::string& name,
-                                                  hsize_t rows, hsize_t cols,
-                                                  const fs::path& folder) {
-  auto file = RowFile::create(folder, Eigen::Index(rows), Eigen::Index(cols));
-  MatrixXfRow block;
-  const hsize_t step = 4096;
-  for (hsize_t first = 0; first < rows; first += step) {
-    const hsize_t count[2] = {std::min(step, rows - first), cols}, offset[2] = {first, 0};
-    block.resize(Eigen::Index(count[0]), Eigen::Index(cols));
+// The float dataset `name` of `group`, checked as checked_dataset checks it,
+// as rows read a block at a time when asked (so never whole in memory).
+inline BakeData::StreamedRows dataset_rows(const H5::Group& group, const std::string& name) {
+  hsize_t rows = 0, cols = 0;
+  const H5::DataSet set = checked_dataset(group, name, H5T_FLOAT, rows, cols);
+  BakeData::StreamedRows stream;
+  stream.rows = Eigen::Index(rows), stream.cols = Eigen::Index(cols);
+  stream.read = [set, name](Eigen::Index first, Eigen::Index count, MatrixXfRow& out) {
+    reading_now = "dataset \"" + name + "\"";
+    const H5::DataSpace space = set.getSpace();
+    hsize_t dims[2];
+    space.getSimpleExtentDims(dims);
+    const hsize_t shape[2] = {hsize_t(count), dims[1]}, offset[2] = {hsize_t(first), 0};
+    out.resize(count, Eigen::Index(dims[1]));
     H5::DataSpace file_space = set.getSpace();
-    file_space.selectHyperslab(H5S_SELECT_SET, count, offset);
-    set.read(block.data(), h5_type<float>(), H5::DataSpace(2, count), file_space);
-    for (Eigen::Index r = 0; r < block.rows(); ++r)
-      if (!block.row(r).allFinite())
-        throw Error("dataset \"" + name + "\" has a NaN or infinite value at row " +
-                    std::to_string(first + hsize_t(r)));
-    file->write(Eigen::Index(first), block);
-  }
-  file->map();
-  return file;
+    file_space.selectHyperslab(H5S_SELECT_SET, shape, offset);
+    set.read(out.data(), h5_type<float>(), H5::DataSpace(2, shape), file_space);
+  };
+  return stream;
 }
 
 inline MatrixXfRow read_matrix(const H5::Group& group, const std::string& name) {

@@ -2,10 +2,13 @@
 
 #include <fcntl.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <csignal>
 #include <cstring>
 #include <exception>
@@ -83,6 +86,99 @@ void run_in_child_process(const std::string& what, const std::function<void()>& 
                 std::to_string(WTERMSIG(status)) + " (" + ::strsignal(WTERMSIG(status)) +
                 "); nothing was kept");
   throw Error(what + ": failed");
+}
+
+}  // namespace prt
+
+namespace prt {
+
+namespace {
+
+double mapped_bytes_now() {
+  std::FILE* statm = std::fopen("/proc/self/statm", "r");
+  unsigned long pages = 0;
+  if (statm) {
+    if (std::fscanf(statm, "%lu", &pages) != 1) pages = 0;
+    std::fclose(statm);
+  }
+  return double(pages) * double(::sysconf(_SC_PAGESIZE));
+}
+
+void set_limit(int resource, double value) {
+  const auto limit = static_cast<rlim_t>(value);
+  const rlimit both{limit, limit};
+  ::setrlimit(resource, &both);
+}
+
+std::string how_it_ended(const std::string& what, int status, const ChildLimits& limits) {
+  if (WIFSIGNALED(status)) {
+    const int signal = WTERMSIG(status);
+    if (signal == SIGXCPU)
+      return what + ": parsing it took more than " + std::to_string(int(limits.cpu_seconds)) +
+             " s of processor time and was stopped (a damaged or crafted file); nothing was read";
+    return what + ": the process parsing it was killed by signal " + std::to_string(signal) +
+           " (" + ::strsignal(signal) + "), a defect of the HDF5 library met by a damaged or " +
+           "crafted file; nothing was read";
+  }
+  return what + ": the process parsing it failed (exit status " +
+         std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + "); nothing was read";
+}
+
+int wait_for(pid_t child) {
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  return status;
+}
+
+}  // namespace
+
+void exchange_with_child(const std::string& what, const ChildLimits& limits,
+                         const std::function<void(int)>& produce,
+                         const std::function<void(int)>& consume) {
+  int ends[2];
+  if (::pipe2(ends, O_CLOEXEC) != 0)
+    throw Error(what + ": cannot start a process to parse it (" + std::strerror(errno) + ")");
+  std::cout.flush();
+  std::cerr.flush();
+  const double mapped = mapped_bytes_now();
+  const pid_t child = ::fork();
+  if (child < 0) {
+    const int error = errno;
+    ::close(ends[0]), ::close(ends[1]);
+    throw Error(what + ": cannot start a process to parse it (" + std::strerror(error) + ")");
+  }
+  if (child == 0) {
+    ::close(ends[0]);
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    std::cerr.setstate(std::ios::badbit);
+    set_limit(RLIMIT_CORE, 0);
+    set_limit(RLIMIT_FSIZE, 0);
+    if (limits.memory_bytes > 0) set_limit(RLIMIT_AS, mapped + limits.memory_bytes);
+    if (limits.cpu_seconds > 0) set_limit(RLIMIT_CPU, std::ceil(limits.cpu_seconds));
+    try {
+      produce(ends[1]);
+    } catch (...) {
+      ::_exit(1);
+    }
+    ::_exit(0);
+  }
+  ::close(ends[1]);
+  try {
+    consume(ends[0]);
+  } catch (const ChildStreamEnded&) {
+    ::close(ends[0]);
+    throw Error(how_it_ended(what, wait_for(child), limits));
+  } catch (...) {
+    ::kill(child, SIGKILL);
+    ::close(ends[0]);
+    wait_for(child);
+    throw;
+  }
+  ::close(ends[0]);
+  const int status = wait_for(child);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw Error(how_it_ended(what, status, limits));
 }
 
 }  // namespace prt

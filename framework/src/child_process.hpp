@@ -1,6 +1,7 @@
 // Work that a library defect must not be able to take this process down
 // with: it runs in a forked child, and only its verdict comes back.
 #pragma once
+#include <exception>
 #include <functional>
 #include <string>
 
@@ -19,5 +20,29 @@ bool in_child_process();
 // that dies by a signal is an Error that says so, naming `what`. Where no
 // child can be forked (no memory for one), `work` runs here instead.
 void run_in_child_process(const std::string& what, const std::function<void()>& work);
+
+// What a child that parses untrusted input may use: address space beyond
+// what this process maps now, processor seconds (a parser's endless loop
+// ends), and no core file and no file writes.
+struct ChildLimits {
+  double memory_bytes = 0;
+  double cpu_seconds = 0;
+};
+
+// Thrown by a `consume` that finds the child's stream ended early.
+struct ChildStreamEnded : std::exception {
+  const char* what() const noexcept override { return "the stream ended early"; }
+};
+
+// Runs `produce` in a forked child under `limits`, writing to the descriptor
+// it is given, while `consume` reads the other end here: values cross, the
+// parser's failures do not. An exception from `consume` ends the child and
+// passes on; a stream that ends early (ChildStreamEnded) becomes an Error
+// naming `what` and how the child ended (a signal, the processor-time limit).
+// Where no child can be forked this throws: parsing the input here is what
+// the child exists to avoid.
+void exchange_with_child(const std::string& what, const ChildLimits& limits,
+                         const std::function<void(int)>& produce,
+                         const std::function<void(int)>& consume);
 
 }  // namespace prt

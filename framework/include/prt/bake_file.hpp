@@ -22,6 +22,8 @@ constexpr int kBakeFormatVersion = 4;
 struct PluginRecord {
   std::string name, version, parameters;
 };
+// The compressor record of a bake that kept its transfer exact (no compressor ran).
+inline constexpr const char* kExactRecord = "exact";
 // "sh 1.0.0 (order = 6)": name, version and every parameter on one line.
 std::string one_line(const PluginRecord& plugin);
 

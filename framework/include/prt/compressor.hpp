@@ -55,6 +55,11 @@ class Compressor : public PluginObject {
   // so it may be replaced by a basis's own sparse approximation and needs no
   // comparison against the exact transfer.
   virtual bool exact() const { return false; }
+  // Checks an encoding read from a bake file against this compressor as its
+  // record configures it: throws prt::Error naming what it could not have
+  // made (more clusters or components than its budget, another form).
+  // Default: no check beyond the form's own (CompressedTransfer::validate).
+  virtual void check_encoding(const CompressedTransfer& encoding) const { (void)encoding; }
 };
 
 // What every encode reports (DESIGN §3): squared error, its per-vertex

@@ -65,6 +65,21 @@ inline clustering::LbgOptions lbg_options(const Params& p) {
   return o;
 }
 
+// Refuses an encoding (read from a bake file) beyond a compressor's budget:
+// more than `clusters` clusters or `components` components (< 0: any), or a
+// sparse form.
+inline void check_budget(const CompressedTransfer& c, const Param<std::int64_t>* clusters_key,
+                         std::int64_t clusters, const Param<std::int64_t>* components_key,
+                         std::int64_t components) {
+  if (c.sparse()) throw Error("the encoding is sparse, which this compressor does not make");
+  if (clusters_key && c.clusters() > clusters)
+    throw Error("the encoding has " + std::to_string(c.clusters()) + " clusters, more than " +
+                std::string(clusters_key->name()) + " = " + std::to_string(clusters));
+  if (components_key && c.components > components)
+    throw Error("the encoding has " + std::to_string(c.components) + " components, more than " +
+                std::string(components_key->name()) + " = " + std::to_string(components));
+}
+
 // The options with the mesh of this encode (geometry-coherent clustering needs one).
 inline clustering::LbgOptions with_mesh(clustering::LbgOptions o, const Params& p,
                                         const Mesh* mesh) {

@@ -48,6 +48,14 @@ class ClusteredPca final : public Compressor {
     return compressor_params::why_not_distributed(coherence_, options_.lbg);
   }
 
+  // Adaptive CPCA spends `components` per cluster on average, so only its
+  // clusters are bounded.
+  void check_encoding(const CompressedTransfer& c) const override {
+    const bool adaptive = options_.method == clustering::Method::adaptive;
+    compressor_params::check_budget(c, &compressor_params::kClusters, options_.lbg.clusters,
+                                    adaptive ? nullptr : &kComponents, options_.components);
+  }
+
   CompressedTransfer encode_shard(const TransferSignal& signal, const Mesh* mesh,
                                   const Distribution& where) const override {
     compressor_params::require_finite(signal);

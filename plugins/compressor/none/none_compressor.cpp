@@ -17,6 +17,14 @@ class NoCompression final : public Compressor {
 
   bool exact() const override { return true; }
 
+  // Its own exact form, or a basis's sparse approximation that replaced it.
+  void check_encoding(const CompressedTransfer& c) const override {
+    if (!c.sparse() && (c.components != 0 || c.clusters() != c.vertices()))
+      throw Error("the encoding has " + std::to_string(c.clusters()) + " clusters and " +
+                  std::to_string(c.components) +
+                  " components; an exact form has a cluster per vertex and none");
+  }
+
   CompressedTransfer encode(const TransferSignal& signal, const Mesh*) const override {
     CompressedTransfer c = exact_form(signal);
     c.compressor = "none";

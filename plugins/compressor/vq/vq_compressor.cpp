@@ -26,6 +26,12 @@ class VectorQuantizer final : public Compressor {
     return compressor_params::why_not_distributed(coherence_, lbg_);
   }
 
+  void check_encoding(const CompressedTransfer& c) const override {
+    if (c.components != 0)
+      throw Error("a VQ encoding has no components, not " + std::to_string(c.components));
+    compressor_params::check_budget(c, &compressor_params::kClusters, lbg_.clusters, nullptr, 0);
+  }
+
   CompressedTransfer encode_shard(const TransferSignal& signal, const Mesh* mesh,
                                   const Distribution& where) const override {
     compressor_params::require_finite(signal);

@@ -1,0 +1,88 @@
+#include "bake_values.hpp"
+
+#include <cmath>
+
+#include "prt/error.hpp"
+
+namespace prt {
+
+namespace {
+
+void check_mesh(const Mesh& mesh) {
+  mesh.validate("mesh");
+  for (std::size_t v = 0; v < mesh.normals.size(); ++v)
+    if (!mesh.normals[v].allFinite())
+      throw Error("mesh: normal " + std::to_string(v) + " is NaN or infinite");
+}
+
+void check_layout(const TransferSignal& transfer, int bounces) {
+  if (transfer.kind != "diffuse" && transfer.kind != "glossy")
+    throw Error("unknown transfer kind \"" + transfer.kind + "\"");
+  if (transfer.glossy() ? transfer.exit_rows < 1 : transfer.exit_rows != 1)
+    throw Error("transfer kind \"" + transfer.kind + "\" with " +
+                std::to_string(transfer.exit_rows) + " exit rows");
+  if (bounces < 0 || bounces > 1000)
+    throw Error("attribute \"bounces\" = " + std::to_string(bounces) + " is outside [0, 1000]");
+  if (transfer.channel_groups < 1 || transfer.channel_groups > 3)
+    throw Error("the transfer has " + std::to_string(transfer.channel_groups) +
+                " channel groups (1 to 3)");
+  for (int c = 0; c < 3; ++c) {
+    const int group = transfer.group_of_channel[std::size_t(c)];
+    if (group < 0 || group >= transfer.channel_groups)
+      throw Error("colour channel " + std::to_string(c) + " reads transfer " +
+                  std::to_string(group) + " of " + std::to_string(transfer.channel_groups));
+  }
+}
+
+void check_transfer(BakeData& data) {
+  const TransferSignal& transfer = data.transfer;
+  if (transfer.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
+    throw Error("the transfer has " + std::to_string(transfer.vertices()) + " rows for " +
+                std::to_string(data.mesh.vertex_count()) + " vertices");
+  const Eigen::Index columns = transfer.dimension();
+  if (columns % (Eigen::Index(transfer.exit_rows) * transfer.channel_groups) != 0)
+    throw Error("the transfer's " + std::to_string(columns) +
+                " columns are not a whole number of exit-basis rows (" +
+                std::to_string(transfer.exit_rows) + ") x channel transfers (" +
+                std::to_string(transfer.channel_groups) + ")");
+  TransferSignal& direct = data.direct;
+  if (direct.coefficients.size() == 0 && direct.coefficients.rows() == 0) return;
+  if (data.bounces == 0) throw Error("a direct transfer without bounces");
+  if (direct.coefficients.rows() != transfer.vertices() || direct.coefficients.cols() != columns)
+    throw Error("the direct transfer's shape differs from the transfer's");
+  direct.kind = transfer.kind;
+  direct.exit_rows = transfer.exit_rows;
+  direct.channel_groups = transfer.channel_groups;
+  direct.group_of_channel = transfer.group_of_channel;
+}
+
+void check_compressed(const BakeData& data) {
+  const CompressedTransfer& c = data.compressed;
+  if (c.dimension != data.transfer.dimension())
+    throw Error("the transfer has " + std::to_string(data.transfer.dimension()) +
+                " columns but the compressed dimension is " + std::to_string(c.dimension));
+  if (c.components < 0) throw Error("a negative number of components");
+  c.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
+}
+
+void check_finite(const BasisState& state, const char* group) {
+  for (const auto& [name, matrix] : state.matrices)
+    if (!matrix.allFinite())
+      throw Error("dataset \"" + name + "\" of /" + group + " has a NaN or infinite value");
+}
+
+}  // namespace
+
+void check_bake_values(BakeData& data) {
+  check_mesh(data.mesh);
+  if (!data.albedo.allFinite()) throw Error("the albedo is NaN or infinite");
+  check_layout(data.transfer, data.bounces);
+  check_transfer(data);
+  check_compressed(data);
+  check_finite(data.basis_state, "basis_state");
+  check_finite(data.exit_state, "exit_state");
+  for (const auto& [name, value] : data.metrics)
+    if (!std::isfinite(value)) throw Error("metric \"" + name + "\" is NaN or infinite");
+}
+
+}  // namespace prt
