@@ -29,7 +29,7 @@ Eigen::Index block_rows(Eigen::Index cols) {
 // ---- sender ----
 
 void Out::bytes(const void* data, std::size_t size) {
-  if (size > 0 && write_fully(fd_, data, size) != 0) ::_exit(1);  // the reader is gone
+  if (size > 0 && write_fully(fd_, data, size) != 0) throw Error("the bake's reader is gone");
 }
 
 void Out::frame(std::uint64_t rows, std::uint64_t cols, std::uint32_t element_bytes,

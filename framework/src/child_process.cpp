@@ -104,10 +104,11 @@ double mapped_bytes_now() {
   return double(pages) * double(::sysconf(_SC_PAGESIZE));
 }
 
-void set_limit(int resource, double value) {
-  const auto limit = static_cast<rlim_t>(value);
-  const rlimit both{limit, limit};
-  ::setrlimit(resource, &both);
+// `grace` past the soft limit, the hard one (processor time: SIGXCPU at the
+// soft limit, SIGKILL at the hard one).
+void set_limit(int resource, double value, double grace = 0) {
+  const rlimit limits{static_cast<rlim_t>(value), static_cast<rlim_t>(value + grace)};
+  ::setrlimit(resource, &limits);
 }
 
 std::string how_it_ended(const std::string& what, int status, const ChildLimits& limits) {
@@ -151,11 +152,15 @@ void exchange_with_child(const std::string& what, const ChildLimits& limits,
   if (child == 0) {
     ::close(ends[0]);
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    // This process's handlers (removing its temporaries, a test framework's
+    // or a sanitizer's reports) are not the child's: it just ends.
+    for (int signal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGXCPU, SIGINT, SIGTERM})
+      std::signal(signal, SIG_DFL);
     std::cerr.setstate(std::ios::badbit);
     set_limit(RLIMIT_CORE, 0);
     set_limit(RLIMIT_FSIZE, 0);
     if (limits.memory_bytes > 0) set_limit(RLIMIT_AS, mapped + limits.memory_bytes);
-    if (limits.cpu_seconds > 0) set_limit(RLIMIT_CPU, std::ceil(limits.cpu_seconds));
+    if (limits.cpu_seconds > 0) set_limit(RLIMIT_CPU, std::ceil(limits.cpu_seconds), 1);
     try {
       produce(ends[1]);
     } catch (...) {
