@@ -137,7 +137,9 @@ int render(Context& context, const RenderArgs& args) {
   const fs::path bake_file = args.bake.empty() ? scene.bake_path() : fs::path(args.bake);
   std::vector<fs::path> inputs = scene.input_files();
   inputs.push_back(bake_file);
-  check_output({output, FileKind::png, "image", args.output.empty()}, inputs, args.force);
+  const FileKind image_kind =
+      image_format(output) == ImageFormat::exr ? FileKind::exr : FileKind::png;
+  check_output({output, image_kind, "image", args.output.empty()}, inputs, args.force);
 
   Rendered result;
   if (args.ground_truth) {
@@ -154,8 +156,8 @@ int render(Context& context, const RenderArgs& args) {
   clock = Stopwatch();
   const float exposure =
       args.exposure > 0 ? args.exposure : static_cast<float>(keys::camera::exposure(scene.camera));
-  write_png(result.image, output, exposure);
-  times.add("write PNG", clock.seconds());
+  write_image(result.image, output, exposure);
+  times.add(image_kind == FileKind::exr ? "write EXR" : "write PNG", clock.seconds());
   std::cout << "rendered " << result.image.width << " x " << result.image.height << " -> "
             << output.string() << "\n";
   for (const auto& [name, value] : result.statistics)
@@ -272,8 +274,7 @@ int info(Context& context, const std::string& file) {
             << "albedo:       " << data.albedo.transpose() << "\n";
   std::cout << "records:      "
             << (unchecked.empty() ? "checked against the installed plug-ins" : "not checked:");
-  for (std::size_t i = 0; i < unchecked.size(); ++i)
-    std::cout << (i ? ", " : " ") << unchecked[i];
+  for (std::size_t i = 0; i < unchecked.size(); ++i) std::cout << (i ? ", " : " ") << unchecked[i];
   std::cout << (unchecked.empty() ? "\n" : " (plug-in not installed)\n") << "metrics:\n";
   for (const auto& [name, value] : data.metrics)
     std::cout << "  " << name << " = " << value << "\n";

@@ -168,12 +168,13 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   // trigger: the file is parsed in a child process with bounded memory
   // and processor time, and only checked values cross back.
   const double bytes = double(fs::file_size(file));
-  const ChildLimits limits{kParseMemory + 2 * bytes, kParseSeconds + bytes / kParseBytesPerSecond};
+  const double seconds = kParseSeconds + bytes / kParseBytesPerSecond;
+  const ChildLimits limits{kParseMemory + 2 * bytes, seconds, seconds + kParseSeconds};
   BakeData data;
   exchange_with_child(
       file.string(), limits, [&](int fd) { parse_and_send(file, fd); },
       [&](int fd) {
-        bake_stream::In in(fd, bytes, options, data.mesh);
+        bake_stream::In in(fd, bytes, options, data.mesh, limits.idle_seconds);
         try {
           bake_stream::bake_fields(in, data);
           check_bake_values(data);

@@ -21,7 +21,8 @@ constexpr std::size_t kBlockBytes = 8 << 20;  // rows of a transfer are sent in 
 constexpr std::size_t kMaxMessage = 1 << 16;  // an error frame's text
 
 Eigen::Index block_rows(Eigen::Index cols) {
-  return std::max<Eigen::Index>(1, Eigen::Index(kBlockBytes / (4 * std::max<Eigen::Index>(cols, 1))));
+  return std::max<Eigen::Index>(1,
+                                Eigen::Index(kBlockBytes / (4 * std::max<Eigen::Index>(cols, 1))));
 }
 
 }  // namespace
@@ -88,13 +89,7 @@ void In::refuse(const std::string& what) const {
 }
 
 void In::read_exactly(void* data, std::size_t size) {
-  auto* at = static_cast<char*>(data);
-  while (size > 0) {
-    const ssize_t n = ::read(fd_, at, size);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw ChildStreamEnded();
-    at += n, size -= std::size_t(n);
-  }
+  read_from_child(fd_, data, size, idle_seconds_);
 }
 
 In::Shape In::header(std::uint32_t element_bytes, char expected) {

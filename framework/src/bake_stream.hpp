@@ -35,13 +35,13 @@ class Out {
 
   void operator()(const std::string& text) { frame(text.size(), 1, 1, text.data()); }
   template <class T>
-    requires std::is_arithmetic_v<T>
+  requires std::is_arithmetic_v<T>
   void operator()(const T& value) {
     const double number = static_cast<double>(value);
     frame(1, 1, sizeof number, &number);
   }
   template <class T>
-    requires std::is_trivially_copyable_v<T>
+  requires std::is_trivially_copyable_v<T>
   void operator()(const std::vector<T>& values) {
     frame(values.size(), 1, sizeof(T), values.data());
   }
@@ -66,8 +66,8 @@ class Out {
   void fail(const std::string& message);
 
  private:
-  void frame(std::uint64_t rows, std::uint64_t cols, std::uint32_t element_bytes,
-             const void* data, char tag = 'f');
+  void frame(std::uint64_t rows, std::uint64_t cols, std::uint32_t element_bytes, const void* data,
+             char tag = 'f');
   void bytes(const void* data, std::size_t size);
   int fd_;
 };
@@ -78,19 +78,21 @@ class In {
   // `byte_limit`: the most bytes all frames may hold together (a parse of
   // a file yields no more values than the file stores). `reading`: where a
   // transfer too large for the memory budget goes (prt::ReadOptions).
-  In(int fd, double byte_limit, const ReadOptions& reading, const Mesh& mesh)
-      : fd_(fd), left_(byte_limit), reading_(reading), mesh_(mesh) {}
+  // `idle_seconds` (> 0): the longest wait for the sender's next bytes.
+  In(int fd, double byte_limit, const ReadOptions& reading, const Mesh& mesh,
+     double idle_seconds = 0)
+      : fd_(fd), left_(byte_limit), idle_seconds_(idle_seconds), reading_(reading), mesh_(mesh) {}
 
   void operator()(std::string& text);
   template <class T>
-    requires std::is_arithmetic_v<T>
+  requires std::is_arithmetic_v<T>
   void operator()(T& value) {
     double number = 0;
     expect(1, 1, sizeof number, &number);
     value = number_as<T>(number);
   }
   template <class T>
-    requires std::is_trivially_copyable_v<T>
+  requires std::is_trivially_copyable_v<T>
   void operator()(std::vector<T>& values) {
     const Shape shape = header(sizeof(T));
     if (shape.cols != 1) refuse("a list with " + std::to_string(shape.cols) + " columns");
@@ -136,6 +138,7 @@ class In {
 
   int fd_;
   double left_;
+  double idle_seconds_;
   const ReadOptions& reading_;
   const Mesh& mesh_;
 };

@@ -1,12 +1,56 @@
 #include "bake_values.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "prt/error.hpp"
 
 namespace prt {
 
 namespace {
+
+// The texts a bake holds end up in messages and in `prt info`: each must be
+// UTF-8 without control bytes (line breaks only where a record has lines).
+void check_text(const std::string& text, const std::string& field, bool lines = false) {
+  for (std::size_t i = 0; i < text.size();) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    const std::size_t length = byte < 0x80         ? 1
+                               : (byte >> 5) == 6  ? 2
+                               : (byte >> 4) == 14 ? 3
+                               : (byte >> 3) == 30 ? 4
+                                                   : 0;
+    bool ok = length > 0 && i + length <= text.size();
+    for (std::size_t k = 1; ok && k < length; ++k)
+      ok = (static_cast<unsigned char>(text[i + k]) >> 6) == 2;
+    if (byte < 0x80) ok = (byte >= 0x20 && byte != 0x7f) || byte == '\t' || (lines && byte == '\n');
+    if (!ok) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02x", byte);
+      throw Error(field + " holds a byte that is not text (" + hex + " at offset " +
+                  std::to_string(i) + ")");
+    }
+    i += length;
+  }
+}
+
+void check_texts(const BakeData& data) {
+  check_text(data.scene_file, "attribute \"scene_file\"");
+  check_text(data.transport, "attribute \"transport\"");
+  check_text(data.material, "attribute \"material\"");
+  check_text(data.transfer.kind, "attribute \"kind\"");
+  check_text(data.compressed.compressor, "attribute \"compressor\" of /compressed");
+  for (const auto& [prefix, record] : {std::pair{"basis", &data.basis},
+                                       {"compressor", &data.compressor},
+                                       {"exit_basis", &data.exit}}) {
+    const std::string attribute = std::string("attribute \"") + prefix;
+    check_text(record->name, attribute + "_plugin\"");
+    check_text(record->version, attribute + "_version\"");
+    check_text(record->parameters, attribute + "_parameters\"", true);
+  }
+  for (const auto& [name, value] : data.metrics) check_text(name, "a metric's name");
+  for (const auto* state : {&data.basis_state, &data.exit_state})
+    for (const auto& [name, matrix] : state->matrices) check_text(name, "a basis state's name");
+}
 
 void check_mesh(const Mesh& mesh) {
   mesh.validate("mesh");
@@ -74,6 +118,7 @@ void check_finite(const BasisState& state, const char* group) {
 }  // namespace
 
 void check_bake_values(BakeData& data) {
+  check_texts(data);
   check_mesh(data.mesh);
   if (!data.albedo.allFinite()) throw Error("the albedo is NaN or infinite");
   check_layout(data.transfer, data.bounces);

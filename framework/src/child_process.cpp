@@ -1,15 +1,18 @@
 #include "child_process.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <cstdio>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <iostream>
@@ -104,6 +107,19 @@ double mapped_bytes_now() {
   return double(pages) * double(::sysconf(_SC_PAGESIZE));
 }
 
+// The default action for `signal`, set with the system call itself: a
+// sanitizer intercepts signal() and sigaction() and keeps its own handler,
+// which in a forked child may spin instead of ending it.
+void default_action(int signal) {
+  struct {
+    void* handler = nullptr;  // SIG_DFL
+    unsigned long flags = 0;
+    void* restorer = nullptr;
+    unsigned long mask = 0;
+  } action;
+  ::syscall(SYS_rt_sigaction, signal, &action, nullptr, sizeof action.mask);
+}
+
 // `grace` past the soft limit, the hard one (processor time: SIGXCPU at the
 // soft limit, SIGKILL at the hard one).
 void set_limit(int resource, double value, double grace = 0) {
@@ -117,8 +133,8 @@ std::string how_it_ended(const std::string& what, int status, const ChildLimits&
     if (signal == SIGXCPU)
       return what + ": parsing it took more than " + std::to_string(int(limits.cpu_seconds)) +
              " s of processor time and was stopped (a damaged or crafted file); nothing was read";
-    return what + ": the process parsing it was killed by signal " + std::to_string(signal) +
-           " (" + ::strsignal(signal) + "), a defect of the HDF5 library met by a damaged or " +
+    return what + ": the process parsing it was killed by signal " + std::to_string(signal) + " (" +
+           ::strsignal(signal) + "), a defect of the HDF5 library met by a damaged or " +
            "crafted file; nothing was read";
   }
   return what + ": the process parsing it failed (exit status " +
@@ -133,6 +149,22 @@ int wait_for(pid_t child) {
 }
 
 }  // namespace
+
+void read_from_child(int fd, void* data, std::size_t size, double idle_seconds) {
+  auto* at = static_cast<char*>(data);
+  while (size > 0) {
+    if (idle_seconds > 0) {
+      pollfd ready{fd, POLLIN, 0};
+      const int n = ::poll(&ready, 1, int(std::min(idle_seconds, 1e6) * 1000));
+      if (n < 0 && errno == EINTR) continue;
+      if (n == 0) throw ChildSilent();
+    }
+    const ssize_t n = ::read(fd, at, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw ChildStreamEnded();
+    at += n, size -= std::size_t(n);
+  }
+}
 
 void exchange_with_child(const std::string& what, const ChildLimits& limits,
                          const std::function<void(int)>& produce,
@@ -155,8 +187,12 @@ void exchange_with_child(const std::string& what, const ChildLimits& limits,
     // This process's handlers (removing its temporaries, a test framework's
     // or a sanitizer's reports) are not the child's: it just ends.
     for (int signal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGXCPU, SIGINT, SIGTERM})
-      std::signal(signal, SIG_DFL);
+      default_action(signal);
     std::cerr.setstate(std::ios::badbit);
+    // A library's own prints (libhdf5's diagnostics) go nowhere: the stream
+    // carries the one message that matters, and a log file must not grow.
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (null >= 0) ::dup2(null, STDOUT_FILENO), ::dup2(null, STDERR_FILENO), ::close(null);
     set_limit(RLIMIT_CORE, 0);
     set_limit(RLIMIT_FSIZE, 0);
     if (limits.memory_bytes > 0) set_limit(RLIMIT_AS, mapped + limits.memory_bytes);
@@ -174,6 +210,13 @@ void exchange_with_child(const std::string& what, const ChildLimits& limits,
   } catch (const ChildStreamEnded&) {
     ::close(ends[0]);
     throw Error(how_it_ended(what, wait_for(child), limits));
+  } catch (const ChildSilent&) {
+    ::kill(child, SIGKILL);
+    ::close(ends[0]);
+    wait_for(child);
+    throw Error(what + ": the process parsing it sent nothing for " +
+                std::to_string(int(limits.idle_seconds)) +
+                " s and was stopped (a damaged or crafted file); nothing was read");
   } catch (...) {
     ::kill(child, SIGKILL);
     ::close(ends[0]);

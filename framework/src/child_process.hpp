@@ -1,6 +1,7 @@
 // Work that a library defect must not be able to take this process down
 // with: it runs in a forked child, and only its verdict comes back.
 #pragma once
+#include <cstddef>
 #include <exception>
 #include <functional>
 #include <string>
@@ -24,15 +25,27 @@ void run_in_child_process(const std::string& what, const std::function<void()>& 
 // What a child that parses untrusted input may use: address space beyond
 // what this process maps now, processor seconds (a parser's endless loop
 // ends), and no core file and no file writes.
+// `idle_seconds`: the longest the parent waits for the child's next bytes
+// (a child stuck without using processor time).
 struct ChildLimits {
   double memory_bytes = 0;
   double cpu_seconds = 0;
+  double idle_seconds = 0;
 };
 
 // Thrown by a `consume` that finds the child's stream ended early.
 struct ChildStreamEnded : std::exception {
   const char* what() const noexcept override { return "the stream ended early"; }
 };
+
+// Thrown by a `consume` that waited longer than its limits' idle_seconds.
+struct ChildSilent : std::exception {
+  const char* what() const noexcept override { return "the child sent nothing"; }
+};
+
+// Reads exactly `size` bytes of the child's stream: ChildStreamEnded at its
+// end, ChildSilent after `idle_seconds` (> 0) without a byte.
+void read_from_child(int fd, void* data, std::size_t size, double idle_seconds);
 
 // Runs `produce` in a forked child under `limits`, writing to the descriptor
 // it is given, while `consume` reads the other end here: values cross, the

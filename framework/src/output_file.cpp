@@ -29,6 +29,8 @@ const char* to_string(FileKind kind) {
       return "a bake file";
     case FileKind::png:
       return "a PNG image";
+    case FileKind::exr:
+      return "an OpenEXR image";
     case FileKind::scene:
       return "a scene file";
     case FileKind::text:
@@ -55,6 +57,8 @@ FileKind detect_file_kind(const fs::path& file) {
     return FileKind::bake;
   static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (n >= 8 && std::memcmp(head, png, 8) == 0) return FileKind::png;
+  static const unsigned char exr[4] = {0x76, 0x2f, 0x31, 0x01};
+  if (n >= 4 && std::memcmp(head, exr, 4) == 0) return FileKind::exr;
   for (std::size_t i = 0; i < n; ++i) {
     const auto c = static_cast<unsigned char>(head[i]);
     if (c == 0 || (c < 32 && c != '\n' && c != '\r' && c != '\t')) return FileKind::other;

@@ -83,9 +83,10 @@ TEST_CASE("a child that parses untrusted input cannot take the process down",
     }
     throw ChildStreamEnded();
   };
-  CHECK_THROWS_WITH(exchange_with_child("crash.h5", {}, [](int) { std::raise(SIGSEGV); }, nothing),
-                    Contains("crash.h5") && Contains("killed by signal 11") &&
-                        Contains("nothing was read"));
+  CHECK_THROWS_WITH(
+      exchange_with_child(
+          "crash.h5", {}, [](int) { std::raise(SIGSEGV); }, nothing),
+      Contains("crash.h5") && Contains("killed by signal 11") && Contains("nothing was read"));
   // An endless loop is stopped by the processor-time limit.
   const auto started = std::chrono::steady_clock::now();
   CHECK_THROWS_WITH(exchange_with_child(
@@ -106,6 +107,17 @@ TEST_CASE("a child that parses untrusted input cannot take the process down",
                         },
                         nothing),
                     Contains("huge.h5") && Contains("failed"));
+  // A child that waits without using processor time is stopped by the idle limit.
+  CHECK_THROWS_WITH(exchange_with_child(
+                        "stuck.h5", {0, 0, 1},
+                        [](int) {
+                          for (;;) ::pause();
+                        },
+                        [](int fd) {
+                          char byte;
+                          read_from_child(fd, &byte, 1, 1);
+                        }),
+                    Contains("stuck.h5") && Contains("sent nothing for 1 s"));
   // The consumer's refusal ends the child and passes on unchanged.
   CHECK_THROWS_WITH(exchange_with_child(
                         "slow.h5", {},
@@ -149,8 +161,7 @@ TEST_CASE("the bake stream is checked frame by frame before anything is allocate
                     Contains("a bad count of values"));
 }
 
-TEST_CASE("crafted bakes that crashed the HDF5 library are one message",
-          "[hardening][crafted]") {
+TEST_CASE("crafted bakes that crashed the HDF5 library are one message", "[hardening][crafted]") {
   // Mutations that scripts/crafted_bakes.py found ending the parsing process
   // (libhdf5 1.10: SIGSEGV), each sealed with a valid checksum: in this
   // process they would have ended the test.
@@ -161,6 +172,24 @@ TEST_CASE("crafted bakes that crashed the HDF5 library are one message",
     CHECK_THROWS_WITH(read_bake(entry.path()), Contains(entry.path().filename().string()));
   }
   CHECK(files > 0);
+}
+
+TEST_CASE("texts in a bake that are not text are refused, not printed", "[hardening][crafted]") {
+  const fs::path dir = fresh_dir("texts");
+  BakeData control = pca_bake();
+  control.compressor.parameters = "components = 1\ninit = \"kmeans+\x0b\"\n";
+  write_bake(dir / "control.h5", control);
+  CHECK_THROWS_WITH(read_bake(dir / "control.h5"),
+                    Contains("control.h5: bad bake file") &&
+                        Contains("\"compressor_parameters\" holds a byte that is not text (0x0b"));
+  BakeData utf8 = pca_bake();
+  utf8.scene_file = "sc\xe9ne.toml";  // Latin-1, not UTF-8
+  write_bake(dir / "latin1.h5", utf8);
+  CHECK_THROWS_WITH(read_bake(dir / "latin1.h5"), Contains("\"scene_file\" holds a byte"));
+  BakeData fine = pca_bake();
+  fine.scene_file = "sc\xc3\xa8ne.toml";  // UTF-8
+  write_bake(dir / "fine.h5", fine);
+  CHECK(read_bake(dir / "fine.h5").scene_file == fine.scene_file);
 }
 
 TEST_CASE("a bake's plug-in records are checked against the plug-ins' schemas",

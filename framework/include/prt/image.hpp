@@ -21,6 +21,16 @@ struct Image {
 // Writes exposure-scaled, sRGB-encoded 8-bit PNG atomically (temp + rename).
 void write_png(const Image& image, const std::filesystem::path& file, float exposure = 1.0f);
 
+// Writes the linear radiance as OpenEXR (RGB, 32-bit float, no exposure:
+// what a paper's figures and other tools compute with), atomically.
+void write_exr(const Image& image, const std::filesystem::path& file);
+
+// The image file a path names by its extension: .png (exposure-scaled,
+// sRGB) or .exr (linear float); any other is refused with both named.
+enum class ImageFormat { png, exr };
+ImageFormat image_format(const std::filesystem::path& file);
+void write_image(const Image& image, const std::filesystem::path& file, float exposure = 1.0f);
+
 // An 8-bit image file as written (RGB, 0..255, top row first), for comparing
 // renderings; throws prt::Error naming the file when it cannot be read.
 struct Image8 {

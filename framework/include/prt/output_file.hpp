@@ -13,7 +13,7 @@ namespace prt {
 // counts as a scene, which only --force may replace.
 // JSON (text starting with { or [) and CSV (a *.csv text) are kinds of their
 // own, so a report replaces an earlier report, never a note.
-enum class FileKind { missing, bake, png, scene, text, json, csv, other };
+enum class FileKind { missing, bake, png, exr, scene, text, json, csv, other };
 const char* to_string(FileKind kind);
 FileKind detect_file_kind(const std::filesystem::path& file);
 

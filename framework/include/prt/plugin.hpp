@@ -12,6 +12,7 @@
 #include <cstring>
 #include <exception>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "prt/params.hpp"
@@ -149,7 +150,42 @@ inline std::vector<double> Param<std::vector<double>>::operator()(const Params& 
   return params.get_reals(record.name);
 }
 
+// A choice read as an enumeration: each value is named once, and the same
+// names make the schema record's "a|b|c" list.
+//   static constexpr auto kMethod = param::choice<Method>(
+//       "method", "fast", {{"fast", Method::fast}, {"exact", Method::exact}}, "how");
+//   const Method method = kMethod(params);
+template <class Enum, std::size_t N>
+struct Choice {
+  ParamSpecRecord record;
+  std::array<std::pair<const char*, Enum>, N> values;
+  constexpr operator ParamSpecRecord() const { return record; }
+  const char* name() const { return record.name; }
+  Enum operator()(const Params& params) const {
+    const std::string value = params.get_string(record.name);
+    for (const auto& [text, e] : values)
+      if (value == text) return e;
+    params.fail(record.name, "unknown value \"" + value + "\"");  // the schema lets none through
+  }
+  bool given(const Params& params) const { return params.has(record.name); }
+};
+
 namespace param {
+
+template <class Enum, std::size_t N>
+constexpr Choice<Enum, N> choice(const char* name, const char* default_value,
+                                 const std::pair<const char*, Enum> (&values)[N],
+                                 const char* help) {
+  char joined[sizeof(ParamSpecRecord::choices)]{};
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (i > 0 && at + 1 < sizeof joined) joined[at++] = '|';
+    for (const char* c = values[i].first; *c && at + 1 < sizeof joined; ++c) joined[at++] = *c;
+  }
+  Choice<Enum, N> result{schema::choice(name, default_value, joined, help), {}};
+  for (std::size_t i = 0; i < N; ++i) result.values[i] = values[i];
+  return result;
+}
 
 constexpr Param<std::int64_t> integer(const char* name, const char* default_value, double min,
                                       double max, const char* help) {

@@ -14,9 +14,10 @@ namespace prt::compressor_params {
 // Each key once: its schema record and its reader.
 inline constexpr auto kClusters =
     param::integer("clusters", "256", 1, 1 << 24, "number of clusters");
-inline constexpr auto kInit =
-    param::choice("init", "kmeans++", "kmeans++|hyperbox",
-                  "LBG start: k-means++ or the thesis's random points in the data's hyper-box");
+inline constexpr auto kInit = param::choice<clustering::Init>(
+    "init", "kmeans++",
+    {{"kmeans++", clustering::Init::kmeans_plus_plus}, {"hyperbox", clustering::Init::hyperbox}},
+    "LBG start: k-means++ or the thesis's random points in the data's hyper-box");
 inline constexpr auto kIterations =
     param::integer("iterations", "30", 1, 10000, "LBG iterations at most");
 inline constexpr auto kTolerance =
@@ -30,8 +31,11 @@ inline constexpr auto kReclassify =
     param::boolean("reclassify", "false", "move boundary vertices to lower overdraw");
 inline constexpr auto kErrorBudget =
     param::real("error_budget", "0.05", 0, 10, "reclassification: allowed relative SE increase");
-inline constexpr auto kSupercluster =
-    param::choice("supercluster", "none", "none|greedy|chen", "group clusters into superclusters");
+enum class Grouping { none, greedy, chen };
+inline constexpr auto kSupercluster = param::choice<Grouping>(
+    "supercluster", "none",
+    {{"none", Grouping::none}, {"greedy", Grouping::greedy}, {"chen", Grouping::chen}},
+    "group clusters into superclusters");
 inline constexpr auto kRegisters = param::integer(
     "registers", "256", 1, 65536, "superclusters: constant registers; (n'+1) per cluster");
 
@@ -40,24 +44,11 @@ constexpr std::array<ParamSpecRecord, 10> clustering() {
                         kErrorBudget, kSupercluster, kRegisters);
 }
 
-// A choice parameter as an enum: every value the schema lists maps to one
-// enumerator; anything else is refused naming the key (no silent default).
-template <class Enum>
-Enum choose(const Params& p, const Param<std::string>& key,
-            std::initializer_list<std::pair<const char*, Enum>> values) {
-  const std::string value = key(p);
-  for (const auto& [name, e] : values)
-    if (value == name) return e;
-  p.fail(key.name(), "unknown value \"" + value + "\"");
-}
-
 // Read once, in the constructor, so a bad value is found before any ray.
 inline clustering::LbgOptions lbg_options(const Params& p) {
   clustering::LbgOptions o;
   o.clusters = static_cast<int>(kClusters(p));
-  o.init = choose<clustering::Init>(
-      p, kInit,
-      {{"kmeans++", clustering::Init::kmeans_plus_plus}, {"hyperbox", clustering::Init::hyperbox}});
+  o.init = kInit(p);
   o.max_iterations = static_cast<int>(kIterations(p));
   o.tolerance = kTolerance(p);
   o.seed = static_cast<std::uint64_t>(kSeed(p));
@@ -110,10 +101,7 @@ inline CoherenceOptions coherence_options(const Params& p) {
   CoherenceOptions o;
   o.reclassify = kReclassify(p);
   o.error_budget = kErrorBudget(p);
-  enum class Grouping { none, greedy, chen };
-  const Grouping grouping = choose<Grouping>(
-      p, kSupercluster,
-      {{"none", Grouping::none}, {"greedy", Grouping::greedy}, {"chen", Grouping::chen}});
+  const Grouping grouping = kSupercluster(p);
   o.supercluster = grouping != Grouping::none;
   o.method = grouping == Grouping::chen ? clustering::SuperclusterMethod::chen_selection
                                         : clustering::SuperclusterMethod::greedy_merge;

@@ -10,7 +10,11 @@ class ClusteredPca final : public Compressor {
   static constexpr const char* plugin_description =
       "clustered PCA: static, iterative or adaptive (Sloan 2003 §4), overdraw reduction (§5)";
   static constexpr auto kMethod =
-      param::choice("method", "static", "static|iterative|adaptive", "CPCA variant");
+      param::choice<clustering::Method>("method", "static",
+                                        {{"static", clustering::Method::static_pca},
+                                         {"iterative", clustering::Method::iterative},
+                                         {"adaptive", clustering::Method::adaptive}},
+                                        "CPCA variant");
   static constexpr auto kComponents =
       param::integer("components", "8", 0, 1 << 20, "n' per cluster (adaptive: on average)");
   static constexpr auto kIterationsPerComponent =
@@ -28,11 +32,7 @@ class ClusteredPca final : public Compressor {
   explicit ClusteredPca(const Params& params)
       : params_(params), coherence_(compressor_params::coherence_options(params)) {
     options_.lbg = compressor_params::lbg_options(params);
-    options_.method =
-        compressor_params::choose<clustering::Method>(params, kMethod,
-                                                      {{"static", clustering::Method::static_pca},
-                                                       {"iterative", clustering::Method::iterative},
-                                                       {"adaptive", clustering::Method::adaptive}});
+    options_.method = kMethod(params);
     options_.components = static_cast<int>(kComponents(params));
     options_.iterations_per_component = static_cast<int>(kIterationsPerComponent(params));
     options_.adaptive_iterations = static_cast<int>(kAdaptiveIterations(params));

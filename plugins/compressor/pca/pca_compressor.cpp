@@ -26,7 +26,8 @@ class PrincipalComponents final : public Compressor {
   std::string why_not_distributed() const override { return ""; }
 
   void check_encoding(const CompressedTransfer& c) const override {
-    if (c.clusters() != 1) throw Error("a PCA encoding has 1 cluster, not " + std::to_string(c.clusters()));
+    if (c.clusters() != 1)
+      throw Error("a PCA encoding has 1 cluster, not " + std::to_string(c.clusters()));
     compressor_params::check_budget(c, nullptr, 1, &kComponents, components_);
   }
 
