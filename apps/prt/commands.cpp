@@ -137,9 +137,9 @@ int render(Context& context, const RenderArgs& args) {
   const fs::path bake_file = args.bake.empty() ? scene.bake_path() : fs::path(args.bake);
   std::vector<fs::path> inputs = scene.input_files();
   inputs.push_back(bake_file);
-  const FileKind image_kind =
-      image_format(output) == ImageFormat::exr ? FileKind::exr : FileKind::png;
+  const FileKind image_kind = output.extension() == ".exr" ? FileKind::exr : FileKind::png;
   check_output({output, image_kind, "image", args.output.empty()}, inputs, args.force);
+  image_format(output);  // an unknown extension is refused before any work
 
   Rendered result;
   if (args.ground_truth) {

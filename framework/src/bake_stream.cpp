@@ -126,8 +126,8 @@ void In::expect(std::uint64_t rows, std::uint64_t cols, std::uint32_t element_by
 std::size_t In::count(const char* what) {
   double number = 0;
   expect(1, 1, sizeof number, &number);
-  // Each entry is at least a frame header: a count the budget cannot hold is damage.
-  if (!(number >= 0 && number <= left_ / 21)) refuse(std::string("a bad count of ") + what);
+  if (!(number >= 0 && number <= entries_left_)) refuse(std::string("a bad count of ") + what);
+  entries_left_ -= number;
   return std::size_t(number);
 }
 

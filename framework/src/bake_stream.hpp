@@ -81,7 +81,12 @@ class In {
   // `idle_seconds` (> 0): the longest wait for the sender's next bytes.
   In(int fd, double byte_limit, const ReadOptions& reading, const Mesh& mesh,
      double idle_seconds = 0)
-      : fd_(fd), left_(byte_limit), idle_seconds_(idle_seconds), reading_(reading), mesh_(mesh) {}
+      : fd_(fd),
+        left_(byte_limit),
+        entries_left_(byte_limit / 4),
+        idle_seconds_(idle_seconds),
+        reading_(reading),
+        mesh_(mesh) {}
 
   void operator()(std::string& text);
   template <class T>
@@ -138,6 +143,10 @@ class In {
 
   int fd_;
   double left_;
+  // Entries of lists (clusters' blocks, metrics, states): the file stores
+  // at least 4 bytes for each (a cluster's component count), so all lists
+  // together have at most a quarter of its bytes.
+  double entries_left_;
   double idle_seconds_;
   const ReadOptions& reading_;
   const Mesh& mesh_;

@@ -174,6 +174,25 @@ TEST_CASE("crafted bakes that crashed the HDF5 library are one message", "[harde
   CHECK(files > 0);
 }
 
+TEST_CASE("an exact bake (a cluster per vertex) crosses the stream whole", "[hardening][crafted]") {
+  // Thousands of empty representative blocks: their count is bounded by the
+  // file's size, not by the bytes left after the arrays.
+  const fs::path dir = fresh_dir("exact");
+  BakeData exact = pca_bake();
+  exact.mesh = make_sphere(4);
+  exact.transfer.coefficients =
+      MatrixXfRow::Random(Eigen::Index(exact.mesh.vertex_count()), 4);
+  exact.compressed = exact_form(exact.transfer);
+  exact.compressor = {"none", "1.0.0", ""};
+  write_bake(dir / "exact.h5", exact);
+  const BakeData back = read_bake(dir / "exact.h5");
+  CHECK(back.compressed.clusters() == 2562);
+  CHECK(back.compressed.representatives.size() == 2562);
+  CHECK(back.compressed.means == exact.compressed.means);
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  CHECK(check_bake_records("exact.h5", back, registry).empty());
+}
+
 TEST_CASE("texts in a bake that are not text are refused, not printed", "[hardening][crafted]") {
   const fs::path dir = fresh_dir("texts");
   BakeData control = pca_bake();
