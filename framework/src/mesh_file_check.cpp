@@ -194,6 +194,16 @@ void Checker::off_body(const DeclaredMeshSize& size) {
         std::stoul(k) < 3 || std::stoul(k) > tokens.size() - 1)
       fail("a face must be \"k i_1 ... i_k\" with k >= 3 vertex indices, not \"" +
            line.substr(0, 40) + "\"");
+    // Each index a vertex of the file: OpenMesh's stream fails on a number
+    // beyond an int and then reads the next counts from a failed stream
+    // (a 182-byte file grew to 8 GB).
+    for (std::size_t i = 1; i <= std::stoul(k); ++i) {
+      const std::string& index = tokens[i];
+      if (index.find_first_not_of("0123456789") != std::string::npos || index.size() > 10 ||
+          std::stoull(index) >= size.vertices)
+        fail("face " + std::to_string(faces + 1) + " uses vertex index \"" + index.substr(0, 20) +
+             "\", but the file declares " + std::to_string(size.vertices) + " vertices");
+    }
     ++faces;
   }
   if (faces < size.faces)

@@ -180,8 +180,7 @@ TEST_CASE("an exact bake (a cluster per vertex) crosses the stream whole", "[har
   const fs::path dir = fresh_dir("exact");
   BakeData exact = pca_bake();
   exact.mesh = make_sphere(4);
-  exact.transfer.coefficients =
-      MatrixXfRow::Random(Eigen::Index(exact.mesh.vertex_count()), 4);
+  exact.transfer.coefficients = MatrixXfRow::Random(Eigen::Index(exact.mesh.vertex_count()), 4);
   exact.compressed = exact_form(exact.transfer);
   exact.compressor = {"none", "1.0.0", ""};
   write_bake(dir / "exact.h5", exact);

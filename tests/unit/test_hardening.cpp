@@ -256,6 +256,10 @@ TEST_CASE("mesh headers that declare more than the file holds are refused at onc
       {"huge_vertices.off", "OFF\n1000000000000 1 0\n0 0 0\n"},
       {"huge_faces.off", "OFF\n3 1000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
       {"no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 100000000\n"},
+      // Found by fuzz.smoke: an index beyond an int put OpenMesh's OFF reader
+      // in a loop that grew to 8 GB.
+      {"index_beyond_int.off",
+       "OFF\n4 2 0\n0 0 0\n2 0 0\n0 1 0\n0 0 1\n3 1 1111111111111111111 0 1 4\n3 0 1 2\n"},
       {"binary_short.ply",
        "ply\nformat binary_little_endian 1.0\nelement vertex 90000000\nproperty float x\n"
        "property float y\nproperty float z\nend_header\n"},
@@ -269,6 +273,8 @@ TEST_CASE("mesh headers that declare more than the file holds are refused at onc
   }
   CHECK_THROWS_WITH(load_mesh(dir / "huge_vertices.off"), Contains("1000000000000"));
   CHECK_THROWS_WITH(load_mesh(dir / "no_end_header.ply"), Contains("end_header"));
+  CHECK_THROWS_WITH(load_mesh(dir / "index_beyond_int.off"),
+                    Contains("vertex index \"1111111111111111111\"") && Contains("4 vertices"));
   CHECK_THROWS_WITH(load_mesh(dir), Contains("directory"));
   CHECK_THROWS_WITH(load_mesh("/dev/zero"), Contains("not a regular file"));
 }
