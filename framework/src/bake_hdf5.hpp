@@ -163,7 +163,8 @@ inline H5::DataSet checked_dataset(const H5::Group& group, const std::string& na
   // Stored uncompressed, so its bytes must be in the file.
   const double bytes = static_cast<double>(rows) * static_cast<double>(cols) *
                        static_cast<double>(set.getDataType().getSize());
-  if (bytes > static_cast<double>(file_bytes) ||
+  // A dimension beyond the file's bytes is damage even when the other is 0.
+  if (bytes > static_cast<double>(file_bytes) || rows > file_bytes || cols > file_bytes ||
       (bytes > 0 && static_cast<double>(set.getStorageSize()) < bytes))
     throw Error("dataset \"" + name + "\" declares " + std::to_string(rows) + " x " +
                 std::to_string(cols) + " values that are not stored in the file");

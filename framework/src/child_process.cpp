@@ -166,6 +166,36 @@ void read_from_child(int fd, void* data, std::size_t size, double idle_seconds) 
   }
 }
 
+namespace {
+
+// The child's side: its own signal actions, quiet output and limits, then
+// `produce`; it ends without unwinding (a library's cleanup is the parent's).
+[[noreturn]] void run_child(int fd, const ChildLimits& limits, double mapped,
+                            const std::function<void(int)>& produce) {
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+  // This process's handlers (removing its temporaries, a test framework's
+  // or a sanitizer's reports) are not the child's: it just ends.
+  for (int signal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGXCPU, SIGINT, SIGTERM})
+    default_action(signal);
+  std::cerr.setstate(std::ios::badbit);
+  // A library's own prints (libhdf5's diagnostics) go nowhere: the stream
+  // carries the one message that matters, and a log file must not grow.
+  const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+  if (null >= 0) ::dup2(null, STDOUT_FILENO), ::dup2(null, STDERR_FILENO), ::close(null);
+  set_limit(RLIMIT_CORE, 0);
+  set_limit(RLIMIT_FSIZE, 0);
+  if (limits.memory_bytes > 0) set_limit(RLIMIT_AS, mapped + limits.memory_bytes);
+  if (limits.cpu_seconds > 0) set_limit(RLIMIT_CPU, std::ceil(limits.cpu_seconds), 1);
+  try {
+    produce(fd);
+  } catch (...) {
+    ::_exit(1);
+  }
+  ::_exit(0);
+}
+
+}  // namespace
+
 void exchange_with_child(const std::string& what, const ChildLimits& limits,
                          const std::function<void(int)>& produce,
                          const std::function<void(int)>& consume) {
@@ -183,26 +213,7 @@ void exchange_with_child(const std::string& what, const ChildLimits& limits,
   }
   if (child == 0) {
     ::close(ends[0]);
-    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-    // This process's handlers (removing its temporaries, a test framework's
-    // or a sanitizer's reports) are not the child's: it just ends.
-    for (int signal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGXCPU, SIGINT, SIGTERM})
-      default_action(signal);
-    std::cerr.setstate(std::ios::badbit);
-    // A library's own prints (libhdf5's diagnostics) go nowhere: the stream
-    // carries the one message that matters, and a log file must not grow.
-    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
-    if (null >= 0) ::dup2(null, STDOUT_FILENO), ::dup2(null, STDERR_FILENO), ::close(null);
-    set_limit(RLIMIT_CORE, 0);
-    set_limit(RLIMIT_FSIZE, 0);
-    if (limits.memory_bytes > 0) set_limit(RLIMIT_AS, mapped + limits.memory_bytes);
-    if (limits.cpu_seconds > 0) set_limit(RLIMIT_CPU, std::ceil(limits.cpu_seconds), 1);
-    try {
-      produce(ends[1]);
-    } catch (...) {
-      ::_exit(1);
-    }
-    ::_exit(0);
+    run_child(ends[1], limits, mapped, produce);
   }
   ::close(ends[1]);
   try {
