@@ -38,7 +38,8 @@ Command render_command(CLI::App& app) {
   auto* command = app.add_subcommand("render", "relight a bake and write an image");
   command->add_option("scene", args->scene, "scene description (.toml)")->required();
   command->add_option("-b,--bake", args->bake, "bake file (default: from the scene)");
-  command->add_option("-o,--output", args->output, "image: .png (8-bit sRGB) or .exr (linear float) (default: from the scene)");
+  command->add_option("-o,--output", args->output,
+                      "image: .png (8-bit sRGB) or .exr (linear float) (default: from the scene)");
   command->add_flag("--force", args->force, kForceHelp);
   command->add_flag("--ground-truth", args->ground_truth,
                     "render the Monte Carlo ground truth instead of the bake");

@@ -90,10 +90,6 @@ std::shared_ptr<Basis> basis_of_record(const PluginRecord& record, const BasisSt
   return basis;
 }
 
-}  // namespace
-
-namespace {
-
 bool installed(const PluginRegistry& registry, PluginKind kind, const std::string& name) {
   const auto names = registry.names(kind);
   return std::find(names.begin(), names.end(), name) != names.end();
