@@ -17,6 +17,7 @@
 #include "prt/hemisphere.hpp"
 #include "prt/mesh.hpp"
 #include "prt/quadrature.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/registry.hpp"
 #include "prt/transport.hpp"
 #include "scenes.hpp"
@@ -395,7 +396,7 @@ static void basis_check_11(Kit& kit) {
       const VisibilityBits bits =
           test::shard_bits(r.visibility, std::size_t(shard.first), std::size_t(shard.last));
       try {
-        bases[std::size_t(comm.rank())]->fit({&scene, &lattice, &bits, shard, &comm});
+        bases[std::size_t(comm.rank())]->fit({&scene, &lattice, &bits, prt::parts_over(comm, shard)});
       } catch (const std::exception& e) {
         errors[std::size_t(comm.rank())] = e.what();
       }

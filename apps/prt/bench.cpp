@@ -278,11 +278,13 @@ void write_images(const Image& image, const Image& truth_image, const SceneSpec&
 }
 
 // A fresh GPU renderer's draw time (each configuration uploads its own data).
-double gpu_draw_seconds(PluginRegistry& registry, const RenderInput& input) {
-  Params params;
-  params.set("background", false);
-  auto gpu = registry.create<Renderer>("opengl", params);
-  gpu->render(input);  // uploads, compiles
+// The scene's renderer when it draws on the GPU, else the first that does.
+double gpu_draw_seconds(PluginRegistry& registry, const std::string& scene_renderer,
+                        RenderInput input) {
+  Params defaults;
+  auto gpu = registry.create<Renderer>(gpu_renderer(registry, scene_renderer), defaults);
+  input.background = nullptr;  // the transfer's draw alone
+  gpu->render(input);          // uploads, compiles
   gpu->render(input);
   return gpu->statistics().at("draw_seconds");
 }
@@ -351,7 +353,7 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
     m.image_error += mean_absolute_difference(image, truth_image) / args.lights;
     if (light != 0) continue;
     write_images(image, truth_image, scene, out, label);
-    if (args.gpu) m.gpu_seconds = gpu_draw_seconds(context.registry, input);
+    if (args.gpu) m.gpu_seconds = gpu_draw_seconds(context.registry, scene.renderer.name, input);
   }
   m.relight_seconds /= args.lights;
   return m;

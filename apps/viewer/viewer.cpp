@@ -1,5 +1,6 @@
 #include "viewer.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <glm/glm.hpp>
@@ -52,24 +53,39 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
   current_ = options.exact ? 1 : 0;
   home_ = scene_.make_camera(data_.mesh);
   exposure_ = static_cast<float>(keys::camera::exposure(scene_.camera));
+  // The viewer draws with a renderer that draws on the GPU: the scene's when
+  // it does. Its drawing methods, if it has a "method" choice, are what the
+  // viewer switches between; the scene's choice (or --method) starts.
+  renderer_name_ = gpu_renderer(registry_, scene_.renderer.name);
+  for (const ParamSpecRecord& spec :
+       registry_.find(PluginKind::renderer, renderer_name_).schema().specs) {
+    if (std::string(spec.name) != "method") continue;
+    std::string choices = spec.choices;
+    for (std::size_t at = 0; at <= choices.size();) {
+      const std::size_t bar = std::min(choices.find('|', at), choices.size());
+      methods_.push_back(choices.substr(at, bar - at));
+      at = bar + 1;
+    }
+  }
   std::string method = options.method;
-  // The viewer always draws with OpenGL; a scene's renderer that has a
-  // drawing method (the OpenGL renderer's) chooses the starting one.
-  if (method.empty())
-    method = scene_.renderer.params.has("method") ? scene_.renderer.params.get_string("method")
-                                                  : "single-pass";
+  if (method.empty() && renderer_name_ == scene_.renderer.name &&
+      scene_.renderer.params.has("method"))
+    method = scene_.renderer.params.get_string("method");
+  if (method.empty() && !methods_.empty()) method = methods_.front();
   make_renderer(method);
 }
 
 void Viewer::make_renderer(const std::string& method) {
   Params params(SourceLocation{"prt-view"});
-  params.set("method", method);
-  renderer_ = registry_.create<Renderer>("opengl", params);
+  if (!methods_.empty()) params.set("method", method);
+  renderer_ = registry_.create<Renderer>(renderer_name_, params);
   method_ = method;
 }
 
 void Viewer::toggle_method() {
-  make_renderer(method_ == "single-pass" ? "per-cluster" : "single-pass");
+  if (methods_.size() < 2) return;
+  const auto at = std::find(methods_.begin(), methods_.end(), method_);
+  make_renderer(at == methods_.end() || at + 1 == methods_.end() ? methods_.front() : *(at + 1));
 }
 
 void Viewer::next_encoding() {

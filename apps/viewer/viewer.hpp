@@ -83,6 +83,8 @@ class Viewer {
   BakeData data_;
   std::unique_ptr<Relighting> relighting_;  // refers to scene_ and data_
   std::shared_ptr<Renderer> renderer_;
+  std::string renderer_name_;         // a renderer that draws on the GPU (gpu_renderer)
+  std::vector<std::string> methods_;  // its "method" choices, if it has any
   std::string method_;
   std::unique_ptr<TurningLight> light_source_;  // after relighting_, which it refers to
   Eigen::MatrixX3d light_;

@@ -8,6 +8,7 @@
 
 #include "prt/bake_stages.hpp"
 #include "prt/checkpoint.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/compressor.hpp"
 #include "prt/memory.hpp"
 #include "prt/progress.hpp"
@@ -207,18 +208,16 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const bool distributed = comm.size() > 1;
   if (distributed) require_distributable(scene, plan, options);
   const Eigen::Index vertices = static_cast<Eigen::Index>(data.mesh.vertex_count());
-  const Distribution shard = distributed
-                                 ? Distribution{&comm, shard_of(vertices, comm.rank(), comm.size())}
-                                 : Distribution::whole_signal(vertices);
-  Distribution encode_where = shard;  // the compressor keeps its state in the checkpoint
-  encode_where.checkpoint = options.checkpoint;
+  Distribution encode_where{rank_parts(comm, vertices)};
+  encode_where.checkpoint = options.checkpoint;  // the compressor keeps its state there
   encode_where.checkpoint_seconds = options.checkpoint_seconds;
-  const bool on_disk = transfer_on_disk(plan, data.mesh, shard.shard.rows(), options);
+  const Shard shard = encode_where.parts->shard();
+  const bool on_disk = transfer_on_disk(plan, data.mesh, shard.rows(), options);
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
   std::uint64_t rays_cast = 0;
   TransferSignal transfer =
-      transfer_of(scene, plan, set, options, shard.shard, on_disk, times, rays_cast, data);
+      transfer_of(scene, plan, set, options, shard, on_disk, times, rays_cast, data);
   clock = Stopwatch();
   // Compression minimises the error of what is rendered (after a fit: the
   // fitted basis's metric).
@@ -230,7 +229,7 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
   const CompressionReport report =
-      measure(transfer, data.compressed, &data.mesh, encode_seconds, shard, &metric);
+      measure(transfer, data.compressed, &data.mesh, encode_seconds, encode_where, &metric);
   if (distributed && comm.rank() != 0) return {};  // rank 0 holds the bake
   record(report, data.metrics);
   std::string text = report.text();

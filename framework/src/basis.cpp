@@ -5,9 +5,9 @@
 
 namespace prt {
 
-Shard FitData::rows() const {
-  if (shard.total != 0) return shard;
-  return whole(mesh ? static_cast<Eigen::Index>(mesh->vertex_count()) : 0);
+std::shared_ptr<const RowParts> FitData::row_parts() const {
+  if (parts) return parts;
+  return single_part(mesh ? static_cast<Eigen::Index>(mesh->vertex_count()) : 0);
 }
 
 Eigen::MatrixXd Basis::project(const Eigen::MatrixXd& samples, const DirectionSet& set) const {

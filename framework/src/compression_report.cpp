@@ -9,7 +9,6 @@
 #include "prt/compressor.hpp"
 #include "prt/rendered_metric.hpp"
 #include "prt/row_blocks.hpp"
-#include "prt/segment_sum.hpp"
 
 namespace prt {
 
@@ -45,15 +44,16 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
   if (metric && metric->identity()) metric = nullptr;
   r.rendered_metric = metric != nullptr;
   std::vector<double> errors = vertex_errors(signal, compressed, metric);
-  r.squared_error = segment_sum_rows(where.shard, errors, *where.comm);
-  if (where.comm->size() > 1) {  // every vertex's error on rank 0
-    const auto all = where.comm->gather(to_bytes(errors), 0);
+  const auto parts = where.row_parts(signal.vertices());
+  r.squared_error = parts->sum_rows(errors);
+  if (parts->distributed()) {  // every vertex's error on the first part
+    const auto all = parts->gather(to_bytes(errors), 0);
     errors.clear();
     for (const auto& part : all) {
       const auto values = to_doubles(part);
       errors.insert(errors.end(), values.begin(), values.end());
     }
-    if (where.comm->rank() != 0) return r;
+    if (!parts->first()) return r;
   }
   std::sort(errors.begin(), errors.end());
   auto percentile = [&](double q) {

@@ -7,8 +7,9 @@
 
 namespace prt {
 
-void gather_rows(const Distribution& rows, CompressedTransfer& c) {
-  if (rows.comm->size() == 1) return;
+void gather_rows(const Distribution& where, CompressedTransfer& c) {
+  if (!where.distributed()) return;
+  const RowParts& parts = *where.parts;
   // One message: ids, then weights, then sparse indices, as raw bytes.
   std::vector<char> mine;
   // Every rank says whether its rows are sparse (a rank without rows has no
@@ -22,9 +23,9 @@ void gather_rows(const Distribution& rows, CompressedTransfer& c) {
   put(c.cluster_of_vertex.data(), c.cluster_of_vertex.size() * sizeof(std::int32_t));
   put(c.weights.data(), std::size_t(c.weights.size()) * sizeof(float));
   put(c.weight_index.data(), c.weight_index.size() * sizeof(std::int32_t));
-  const auto all = rows.comm->gather(mine, 0);
-  if (rows.comm->rank() != 0) return;
-  const Eigen::Index total = rows.shard.total, width = c.weights.cols();
+  const auto all = parts.gather(mine, 0);
+  if (!parts.first()) return;
+  const Eigen::Index total = parts.shard().total, width = c.weights.cols();
   bool sparse = false;
   for (const auto& message : all) {
     std::int32_t flag = 0;
@@ -35,8 +36,8 @@ void gather_rows(const Distribution& rows, CompressedTransfer& c) {
   c.cluster_of_vertex.resize(std::size_t(total));
   c.weights.resize(total, width);
   if (sparse) c.weight_index.resize(std::size_t(total * width));
-  for (int r = 0; r < rows.comm->size(); ++r) {
-    const Shard shard = shard_of(total, r, rows.comm->size());
+  for (int r = 0; r < parts.count(); ++r) {
+    const Shard shard = parts.shard_of(r);
     const std::size_t count = std::size_t(shard.rows());
     const std::size_t expected = sizeof(std::int32_t) + count * sizeof(std::int32_t) +
                                  count * std::size_t(width) * sizeof(float) +

@@ -7,7 +7,6 @@
 
 #include "prt/error.hpp"
 #include "prt/row_blocks.hpp"
-#include "prt/row_file.hpp"
 
 namespace prt {
 

@@ -338,8 +338,8 @@ TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh, const D
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where,
                                   const RenderedMetric& metric, const Distribution& shard) {
-  const Distribution here =
-      shard.shard.total == 0 ? Distribution::whole_signal(transfer.vertices()) : shard;
+  Distribution here = shard;
+  here.parts = shard.row_parts(transfer.vertices());
   try {
     if (plan.sparse_terms > 0) {  // a sparse approximation keeps its terms per channel transfer
       CompressedTransfer sparse =

@@ -12,7 +12,6 @@
 
 #include "prt/error.hpp"
 #include "prt/row_blocks.hpp"
-#include "prt/segment_sum.hpp"
 #include "prt/transport.hpp"
 
 namespace prt {
@@ -570,8 +569,8 @@ Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& se
 
 Eigen::MatrixXd visible_transpose_sum(const Mesh& mesh, const DirectionSet& set,
                                       const TransposedVisibility& transposed,
-                                      const PaddedRows& left, const Shard& shard,
-                                      const Communicator& comm) {
+                                      const PaddedRows& left, const RowParts& parts) {
+  const Shard shard = parts.shard();
   const auto s = static_cast<std::size_t>(set.size());
   check_rows(left.rows(), transposed.vertices(), "visible_transpose_sum: the left matrix",
              "vertices");
@@ -607,7 +606,7 @@ Eigen::MatrixXd visible_transpose_sum(const Mesh& mesh, const DirectionSet& set,
         values.data(), set.size(), cols) = sums.matrix_view();
     return values;
   };
-  const std::vector<double> sum = segment_sum(shard, partial, comm);
+  const std::vector<double> sum = parts.sum(partial);
   if (sum.empty()) return Eigen::MatrixXd::Zero(set.size(), cols);
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       sum.data(), set.size(), cols);

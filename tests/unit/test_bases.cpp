@@ -8,6 +8,7 @@
 
 #include "../common/scenes.hpp"
 #include "../common/thread_communicator.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/hemisphere.hpp"
@@ -183,7 +184,7 @@ TEST_CASE("eigentransport: ranks fitting from shards of the bits get the one-pro
       const VisibilityBits bits =
           test::shard_bits(r.visibility, std::size_t(shard.first), std::size_t(shard.last));
       auto mine = make("eigen", {{"d", std::int64_t(6)}});
-      mine->fit({&scene, &lattice, &bits, shard, &comm});
+      mine->fit({&scene, &lattice, &bits, parts_over(comm, shard)});
       bases[std::size_t(comm.rank())] = fitted(*mine);
     });
     for (const auto& basis : bases) CHECK(basis == fitted(*one));  // bit for bit
@@ -191,7 +192,7 @@ TEST_CASE("eigentransport: ranks fitting from shards of the bits get the one-pro
   // Bits that are not the shard's are refused.
   CHECK_THROWS_WITH(make("eigen", {})
                         ->fit({&scene, &lattice, &r.visibility,
-                               shard_of(Eigen::Index(scene.vertex_count()), 0, 2), &solo()}),
+                               parts_over(solo(), shard_of(Eigen::Index(scene.vertex_count()), 0, 2))}),
                     Catch::Contains("visibility of"));
 }
 

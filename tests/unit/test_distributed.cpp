@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "../common/thread_communicator.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/clustering.hpp"
 #include "prt/segment_sum.hpp"
@@ -46,7 +47,7 @@ void on_ranks(const MatrixXfRow& x, int ranks, const Work& work) {
       ThreadCommunicator comm(group, r);
       const Shard shard = shard_of(x.rows(), r, ranks);
       const MatrixXfRow local = x.middleRows(shard.first, shard.rows());
-      work(r, clustering::Rows(local, shard, comm));
+      work(r, clustering::Rows(local, parts_over(comm, shard)));
     });
   for (auto& t : threads) t.join();
 }

@@ -2,13 +2,14 @@
 #pragma once
 #include <Eigen/Core>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "prt/communicator.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/plugin.hpp"
+#include "prt/row_parts.hpp"
 
 namespace prt {
 
@@ -18,23 +19,23 @@ class PartKeeper;  // prt/part_keeper.hpp
 
 // What a data-driven basis is fitted to: the mesh, the direction set and the
 // traced visibility (1 bit per vertex and direction). In a distributed bake
-// each rank holds the bits of its shard only: `visibility` has a row per
-// vertex [shard.first, shard.last) of the mesh, and sums over vertices go
-// through segment_sum (prt/segment_sum.hpp) over `comm`, so that every rank
-// fits the same basis, bit for bit the one a single process fits. The
-// defaults are one process holding every vertex.
+// each part of the run holds the bits of its shard only: `visibility` has a
+// row per vertex parts->shard() of the mesh, and sums over vertices go
+// through the parts (prt/row_parts.hpp), so that every part fits the same
+// basis, bit for bit the one a single process fits. The defaults are one
+// process holding every vertex.
 struct FitData {
   const Mesh* mesh = nullptr;
   const DirectionSet* directions = nullptr;
   const VisibilityBits* visibility = nullptr;
-  Shard shard;                         // total == 0: the whole mesh
-  const Communicator* comm = nullptr;  // null: solo()
-  // Where a long fit may keep its state (rank 0 writes, every rank reads),
-  // so that a killed bake resumes inside it; null: nowhere.
+  std::shared_ptr<const RowParts> parts;  // null: one process, every vertex
+  // Where a long fit may keep its state (the first part writes, every part
+  // reads), so that a killed bake resumes inside it; null: nowhere.
   const PartKeeper* checkpoint = nullptr;
 
-  Shard rows() const;  // the shard, or the whole mesh by default
-  const Communicator& communicator() const { return comm ? *comm : solo(); }
+  // The parts, or a single part holding the whole mesh by default.
+  std::shared_ptr<const RowParts> row_parts() const;
+  Shard rows() const { return row_parts()->shard(); }
 };
 
 enum class Domain { sphere, hemisphere };
@@ -111,8 +112,8 @@ class Basis : public PluginObject {
   // Capability: fitting to data (data-driven bases such as eigentransport).
   virtual bool can_fit() const { return false; }
   virtual void fit(const FitData&) {}
-  // Capability: fit() works from a shard of the visibility per rank (FitData's
-  // shard and comm), so prt-mpi can bake with this basis. A basis without it
+  // Capability: fit() works from a shard of the visibility per part of the
+  // run (FitData::parts), so prt-mpi can bake with this basis. A basis without it
   // is refused by prt-mpi before any ray.
   virtual bool can_fit_distributed() const { return false; }
 

@@ -1,13 +1,18 @@
 // What a distributed run needs from its message passing, so that the
-// framework and its plug-ins do not link MPI: prt-mpi implements it over MPI,
-// and a single process uses solo(). Ranks hold shards of whole segments of
-// rows (vertices); sums over rows go through segment_sum (segment_sum.hpp),
-// whose fixed tree makes them bit-identical for any number of ranks.
+// framework does not link MPI: prt-mpi implements it over MPI, and a single
+// process uses solo(). The run layer: algorithms see a RowParts
+// (prt/row_parts.hpp, made by parts_over in prt/communicator_parts.hpp),
+// never a communicator. Ranks hold shards of whole segments of rows
+// (vertices); sums over rows go through segment_sum (segment_sum.hpp), whose
+// fixed tree makes them bit-identical for any number of ranks.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "prt/row_parts.hpp"
+#include "prt/row_ranges.hpp"
 
 namespace prt {
 
@@ -28,25 +33,7 @@ class Communicator {
 // One process: rank 0 of 1.
 const Communicator& solo();
 
-// Rows are grouped in segments of this many; a rank holds whole segments.
-// Segments are also the leaves of segment_sum's tree, so they are fixed by
-// the row count alone.
-constexpr Eigen::Index kSegmentRows = 8192;
-
-// The rows [first, last) of `total` that a rank holds: whole segments, as
-// evenly as they divide.
-struct Shard {
-  Eigen::Index first = 0, last = 0, total = 0;
-  Eigen::Index rows() const { return last - first; }
-};
-Shard shard_of(Eigen::Index total, int rank, int ranks);
-inline Shard whole(Eigen::Index total) {
-  return {0, total, total};
-}
-
 // Typed helpers over a communicator.
-std::vector<char> to_bytes(const std::vector<double>& values);
-std::vector<double> to_doubles(const std::vector<char>& bytes);
 // Each rank's values, in rank order, on every rank.
 std::vector<std::vector<double>> allgather(const Communicator& comm,
                                            const std::vector<double>& values);

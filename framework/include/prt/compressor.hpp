@@ -2,10 +2,10 @@
 #pragma once
 #include <optional>
 
-#include "prt/communicator.hpp"
 #include "prt/error.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
+#include "prt/row_parts.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt {
@@ -14,19 +14,24 @@ class RenderedMetric;
 class PartKeeper;  // prt/part_keeper.hpp
 
 // Where a distributed compressor's rows sit (prt-mpi): the signal it is given
-// holds rows [shard.first, shard.last) of the whole; sums over rows go
-// through segment_sum on `comm`, so the result equals one process's.
+// holds rows parts->shard() of the whole; sums over rows go through the parts
+// (prt/row_parts.hpp), so the result equals one process's.
 struct Distribution {
-  const Communicator* comm = &solo();
-  Shard shard;
+  std::shared_ptr<const RowParts> parts;  // null: one process, every row
   // Where a long encode keeps its state, at most every checkpoint_seconds,
   // and finds it again when the bake is rerun after a kill (the bake's
-  // checkpoint folder; a distributed run's ranks share it, so a distributed
-  // encode keeps parts named by its shard, decides when to keep on one rank
-  // for all, and resumes on every rank or none). Null: nothing is kept.
+  // checkpoint folder; a distributed run's parts share it, so a distributed
+  // encode keeps parts named by its shard, decides when to keep on one part
+  // for all, and resumes on every part or none). Null: nothing is kept.
   const PartKeeper* checkpoint = nullptr;
   double checkpoint_seconds = 60;
-  static Distribution whole_signal(Eigen::Index rows) { return {&solo(), whole(rows)}; }
+
+  bool distributed() const { return parts && parts->distributed(); }
+  // The parts, or a single part holding all `rows` rows by default.
+  std::shared_ptr<const RowParts> row_parts(Eigen::Index rows) const {
+    return parts ? parts : single_part(rows);
+  }
+  static Distribution whole_signal(Eigen::Index rows) { return {single_part(rows)}; }
 };
 
 class Compressor : public PluginObject {
@@ -35,15 +40,15 @@ class Compressor : public PluginObject {
   // `mesh` (may be null) gives compressors that care the triangles, for
   // overdraw reduction and geometry-coherent clustering.
   virtual CompressedTransfer encode(const TransferSignal& signal, const Mesh* mesh) const = 0;
-  // Capability: encode_shard runs on shards of the signal across ranks. An
+  // Capability: encode_shard runs on shards of the signal across parts. An
   // empty answer means yes; otherwise it says why not (e.g. a parameter that
   // needs every vertex in one process).
   virtual std::string why_not_distributed() const { return "it does not run distributed"; }
-  // Encodes this rank's rows; rank 0 returns the whole compressed form, the
-  // other ranks their rows of it. One rank: encode().
+  // Encodes this part's rows; the first part returns the whole compressed
+  // form, the others their rows of it. One part: encode().
   virtual CompressedTransfer encode_shard(const TransferSignal& local, const Mesh* mesh,
                                           const Distribution& where) const {
-    if (where.comm->size() == 1) return encode(local, mesh);
+    if (!where.distributed()) return encode(local, mesh);
     throw Error("this compressor " + why_not_distributed());
   }
   // Capability: encode reads the rows through signal.rows() and releases

@@ -116,4 +116,10 @@ class PluginRegistry {
   std::map<std::filesystem::path, std::shared_ptr<boost::dll::shared_library>> modules_;
 };
 
+// The renderer that draws on the GPU (Renderer::draws_on_gpu) for prt-view
+// and `prt bench --gpu`: `preferred` (the scene's renderer) when it does, else
+// the first registered renderer that does. Throws prt::Error naming the
+// renderers found when none does.
+std::string gpu_renderer(PluginRegistry& registry, const std::string& preferred);
+
 }  // namespace prt

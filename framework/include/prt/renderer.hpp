@@ -39,6 +39,10 @@ class Renderer : public PluginObject {
   // Figures of the last render, e.g. relight_seconds (per-cluster constants),
   // draw_seconds, overdraw (triangles drawn / triangles in the mesh).
   virtual std::map<std::string, double> statistics() const { return {}; }
+  // Capability: draws with OpenGL on the GPU. prt-view and `prt bench --gpu`
+  // use such a renderer (the scene's when it is one, else the first
+  // registered: gpu_renderer in prt/registry.hpp), never one by name.
+  virtual bool draws_on_gpu() const { return false; }
 };
 
 }  // namespace prt

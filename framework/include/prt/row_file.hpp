@@ -13,7 +13,7 @@
 
 namespace prt {
 
-class RowFile {
+class RowFile final : public OutOfCoreRows {
  public:
   // An unnamed rows x cols float file in `folder` (removed from the folder
   // at once: it lives as long as this object, and a killed process leaves
@@ -29,15 +29,14 @@ class RowFile {
   // Maps the written rows (read only); write() is refused after it.
   void map();
 
-  Eigen::Index rows() const { return rows_; }
-  const std::filesystem::path& folder() const { return where_; }
-  Eigen::Index cols() const { return cols_; }
-  Eigen::Map<const MatrixXfRow> matrix() const;
+  Eigen::Index rows() const override { return rows_; }
+  const std::filesystem::path& folder() const override { return where_; }
+  Eigen::Index cols() const override { return cols_; }
+  Eigen::Map<const MatrixXfRow> matrix() const override;
   // Drops the resident pages that hold any of rows [first, last) (a page
-  // shared with a neighbour is read again from the page cache if needed).
-  void release(Eigen::Index first, Eigen::Index last) const;
-  // Drops every resident page (after a pass that read rows at random).
-  void release_all() const { release(0, rows_); }
+  // shared with a neighbour is read again from the page cache if needed);
+  // release_all() after a pass that read rows at random.
+  void release(Eigen::Index first, Eigen::Index last) const override;
 
  private:
   RowFile(int fd, Eigen::Index rows, Eigen::Index cols, std::filesystem::path where);

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -11,8 +12,23 @@
 
 namespace prt {
 
-class RowFile;
 using MatrixXfRow = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// Rows kept out of memory (a transfer larger than the bake's memory budget):
+// what a signal needs of them. The run's RowFile (prt/row_file.hpp), a
+// mapped file, is one; the signal does not know which.
+class OutOfCoreRows {
+ public:
+  virtual ~OutOfCoreRows() = default;
+  virtual Eigen::Index rows() const = 0;
+  virtual Eigen::Index cols() const = 0;
+  virtual Eigen::Map<const MatrixXfRow> matrix() const = 0;
+  // Lets the resident pages of rows [first, last) go.
+  virtual void release(Eigen::Index first, Eigen::Index last) const = 0;
+  void release_all() const { release(0, rows()); }
+  // The folder that holds them: where a derived signal's rows may go too.
+  virtual const std::filesystem::path& folder() const = 0;
+};
 
 // v x n transfer, one row per vertex. For diffuse transfer n is the basis size
 // and the exit radiance is row . light (per colour channel of the light). For
@@ -29,10 +45,10 @@ struct TransferSignal {
   int channel_groups = 1;
   std::array<int, 3> group_of_channel{0, 0, 0};
   // Out of core (a transfer larger than the bake's memory budget): the rows
-  // are in this mapped file and `coefficients` is empty. Readers that accept
+  // are there (a mapped file) and `coefficients` is empty. Readers that accept
   // it (Compressor::reads_rows_from_file) read rows() and release() what
   // they are done with; load() brings the rows into memory for the others.
-  std::shared_ptr<const RowFile> file;
+  std::shared_ptr<const OutOfCoreRows> file;
 
   bool glossy() const { return kind == "glossy"; }
   bool on_disk() const { return file != nullptr; }

@@ -11,9 +11,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "prt/communicator.hpp"
 #include "prt/direction_set.hpp"
 #include "prt/mesh.hpp"
+#include "prt/row_parts.hpp"
 
 namespace prt {
 
@@ -132,17 +132,16 @@ Eigen::MatrixXd visible_transpose_times(const Mesh& mesh, const DirectionSet& se
                                         const VisibilityBits& visibility,
                                         const Eigen::MatrixXd& left);
 
-// T^T left over the vertices of a shard (the bits' and left's rows are the
-// mesh's vertices [shard.first, shard.last)), summed over every rank's
-// shard by segment_sum: one partial per segment of vertices, added along a
-// fixed tree. Within a segment, directions are summed along chains of 64
+// T^T left over the vertices of this part's shard (the bits' and left's rows
+// are the mesh's vertices parts.shard()), summed over every part's shard
+// (RowParts::sum): one partial per segment of vertices, added along a fixed
+// tree. Within a segment, directions are summed along chains of 64
 // consecutive directions, each carried from the one before it (as
-// visible_times' vertices). The result is on every rank, the same bits for
-// any number of ranks and cores (not those of visible_transpose_times, which
+// visible_times' vertices). The result is on every part, the same bits for
+// any number of parts and cores (not those of visible_transpose_times, which
 // adds every vertex in one running sum, directly).
 Eigen::MatrixXd visible_transpose_sum(const Mesh& mesh, const DirectionSet& set,
                                       const TransposedVisibility& transposed,
-                                      const PaddedRows& left, const Shard& shard,
-                                      const Communicator& comm);
+                                      const PaddedRows& left, const RowParts& parts);
 
 }  // namespace prt

@@ -12,6 +12,7 @@
 
 #include "coupled_slabs.hpp"
 #include "kept_state.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/error.hpp"
 #include "prt/frame.hpp"
 #include "prt/glossy.hpp"
@@ -419,7 +420,7 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
     times.add("trace visibility (slabs)", clock.seconds());
     if (!basis_kept[0]) {
       clock = Stopwatch();
-      FitData fit{&mesh, &set, &bits, shard, &comm};
+      FitData fit{&mesh, &set, &bits, parts_over(comm, shard)};
       fit.checkpoint = &store;
       plan.basis->fit(fit);
       times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());

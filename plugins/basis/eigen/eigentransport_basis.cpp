@@ -22,7 +22,7 @@
 #include "prt/part_keeper.hpp"
 #include "prt/plugin.hpp"
 #include "prt/row_blocks.hpp"
-#include "prt/segment_sum.hpp"
+#include "prt/row_parts.hpp"
 #include "prt/transport.hpp"
 #include "prt/visible_products.hpp"
 
@@ -87,19 +87,20 @@ bool cholesky_qr_pass(Eigen::MatrixXd& m, const Eigen::MatrixXd& gram, Eigen::In
 }
 
 // The same for a matrix with a row per vertex, each rank holding its
-// shard's rows: the Gram matrices are sums over segments (segment_sum), and
-// a small or ill-conditioned matrix is gathered whole to every rank for
+// shard's rows: the Gram matrices are sums over segments (RowParts::sum),
+// and a small or ill-conditioned matrix is gathered whole to every rank for
 // Householder QR, so that every rank, and a single process, get the same
 // bits.
-void orthonormalize_rows(Eigen::MatrixXd& m, const Shard& shard, const Communicator& comm) {
+void orthonormalize_rows(Eigen::MatrixXd& m, const RowParts& parts) {
+  const Shard shard = parts.shard();
   const Eigen::Index cols = m.cols();
   auto householder_gathered = [&] {
-    if (comm.size() <= 1) return householder_columns(m);
+    if (!parts.distributed()) return householder_columns(m);
     std::vector<double> mine(std::size_t(m.rows() * cols));
     Eigen::Map<RowMajor>(mine.data(), m.rows(), cols) = m;
     Eigen::MatrixXd whole_matrix(shard.total, cols);
     Eigen::Index at = 0;
-    for (const auto& part : allgather(comm, mine)) {
+    for (const auto& part : parts.allgather(mine)) {
       const Eigen::Index rows = Eigen::Index(part.size()) / std::max<Eigen::Index>(1, cols);
       whole_matrix.middleRows(at, rows) = Eigen::Map<const RowMajor>(part.data(), rows, cols);
       at += rows;
@@ -119,15 +120,15 @@ void orthonormalize_rows(Eigen::MatrixXd& m, const Shard& shard, const Communica
       }
       return std::vector<double>(gram.data(), gram.data() + gram.size());
     };
-    const std::vector<double> sum = segment_sum(shard, partial, comm);
+    const std::vector<double> sum = parts.sum(partial);
     const Eigen::MatrixXd gram = Eigen::Map<const Eigen::MatrixXd>(sum.data(), cols, cols);
     if (!cholesky_qr_pass(m, gram, shard.first)) return householder_gathered();
   }
 }
 
 // The column sums of a matrix with a row per vertex, over every rank's shard.
-Eigen::RowVectorXd column_sums_of_rows(const Eigen::MatrixXd& m, const Shard& shard,
-                                       const Communicator& comm) {
+Eigen::RowVectorXd column_sums_of_rows(const Eigen::MatrixXd& m, const RowParts& parts) {
+  const Shard shard = parts.shard();
   const auto partial = [&](Eigen::Index segment) {
     const Eigen::Index begin = segment_begin(segment) - shard.first,
                        end = segment_end(segment, shard.total) - shard.first;
@@ -137,7 +138,7 @@ Eigen::RowVectorXd column_sums_of_rows(const Eigen::MatrixXd& m, const Shard& sh
     for (Eigen::Index r = begin; r < end; ++r) sums += m.row(r);
     return std::vector<double>(sums.data(), sums.data() + sums.size());
   };
-  const std::vector<double> sum = segment_sum(shard, partial, comm);
+  const std::vector<double> sum = parts.sum(partial);
   if (sum.empty()) return Eigen::RowVectorXd::Zero(m.cols());
   return Eigen::Map<const Eigen::RowVectorXd>(sum.data(), m.cols());
 }
@@ -150,15 +151,15 @@ class CentredTransport {
  public:
   CentredTransport(const Mesh& mesh, const DirectionSet& set, const VisibilityBits& visibility,
                    const TransposedVisibility& transposed, const Eigen::VectorXd& root_weights,
-                   const Eigen::RowVectorXd& mean, const Shard& shard, const Communicator& comm)
+                   const Eigen::RowVectorXd& mean, const RowParts& parts)
       : mesh_(mesh),
         set_(set),
         visibility_(visibility),
         transposed_(transposed),
         root_weights_(root_weights),
         mean_(mean),
-        shard_(shard),
-        comm_(comm) {}
+        parts_(parts),
+        shard_(parts.shard()) {}
 
   // q = C right: this shard's rows.
   void times(const Eigen::MatrixXd& right, Eigen::MatrixXd& q) {
@@ -173,8 +174,8 @@ class CentredTransport {
     padded_left_.assign(left);
     Eigen::MatrixXd product =
         root_weights_.asDiagonal() *
-        visible_transpose_sum(mesh_, set_, transposed_, padded_left_, shard_, comm_);
-    product.noalias() -= mean_.transpose() * column_sums_of_rows(left, shard_, comm_);
+        visible_transpose_sum(mesh_, set_, transposed_, padded_left_, parts_);
+    product.noalias() -= mean_.transpose() * column_sums_of_rows(left, parts_);
     return product;
   }
 
@@ -185,8 +186,8 @@ class CentredTransport {
   const TransposedVisibility& transposed_;
   const Eigen::VectorXd& root_weights_;
   const Eigen::RowVectorXd& mean_;
-  const Shard& shard_;
-  const Communicator& comm_;
+  const RowParts& parts_;
+  const Shard shard_;
   PaddedRows padded_right_, padded_left_, padded_out_;
 };
 
@@ -261,10 +262,10 @@ class Eigentransport final : public Basis {
     resolution_ = r;
     root_weights_ = set.weights.cwiseSqrt();
     // This process's vertices (a rank's shard, or all), and every sum over
-    // vertices by segment_sum over the ranks: a seed gives the same basis,
-    // bit for bit, whatever the number of cores or ranks.
-    const Shard shard = data.rows();
-    const Communicator& comm = data.communicator();
+    // vertices through the run's parts: a seed gives the same basis, bit for
+    // bit, whatever the number of cores or ranks.
+    const auto parts = data.row_parts();
+    const Shard shard = parts->shard();
     const VisibilityBits& visibility = *data.visibility;
     if (Eigen::Index(visibility.vertices()) != shard.rows() ||
         Eigen::Index(mesh.vertex_count()) != shard.total)
@@ -274,10 +275,10 @@ class Eigentransport final : public Basis {
     const Eigen::Index v = shard.total;
     const TransposedVisibility transposed(visibility);
     double transport_energy = 0;  // ||T W||_F^2
-    mean_ = column_sums(mesh, set, transposed, shard, comm, transport_energy) / double(v);
-    CentredTransport c(mesh, set, visibility, transposed, root_weights_, mean_, shard, comm);
+    mean_ = column_sums(mesh, set, transposed, *parts, transport_energy) / double(v);
+    CentredTransport c(mesh, set, visibility, transposed, root_weights_, mean_, *parts);
     const Eigen::MatrixXd q =
-        range_of(c, data, std::min<Eigen::Index>({max_d_ + oversampling_, s, v}));
+        range_of(c, data, *parts, std::min<Eigen::Index>({max_d_ + oversampling_, s, v}));
     // ||C||_F^2 = ||T W||_F^2 - v ||mean||^2 (C's rows are centred). It loses
     // digits when the mean holds nearly all the energy (the error is ~eps
     // ||T W||^2); below 1e-12 ||T W||^2 the rows are the same up to rounding,
@@ -293,13 +294,12 @@ class Eigentransport final : public Basis {
   // iteration it kept: Q is orth(C Z) of that iteration's Z (s x columns,
   // small; the same on every rank, so rank 0 keeps it), and the same bits
   // follow. Returns this shard's rows of Q.
-  Eigen::MatrixXd range_of(CentredTransport& c, const FitData& data, Eigen::Index columns) const {
-    const Shard shard = data.rows();
-    const Communicator& comm = data.communicator();
+  Eigen::MatrixXd range_of(CentredTransport& c, const FitData& data, const RowParts& parts,
+                           Eigen::Index columns) const {
     const Eigen::Index s = data.directions->size();
-    Eigen::MatrixXd q(shard.rows(), columns);
-    const int resume_after = kept_iteration(data.checkpoint, comm, s, columns);
-    const PartKeeper* keep = data.checkpoint && comm.rank() == 0 ? data.checkpoint : nullptr;
+    Eigen::MatrixXd q(parts.shard().rows(), columns);
+    const int resume_after = kept_iteration(data.checkpoint, parts, s, columns);
+    const PartKeeper* keep = data.checkpoint && parts.first() ? data.checkpoint : nullptr;
     if (resume_after >= 0) {
       log_info("resuming: the eigentransport fit after power iteration " +
                std::to_string(resume_after + 1) + " of " + std::to_string(power_iterations_) +
@@ -312,7 +312,7 @@ class Eigentransport final : public Basis {
       for (auto& x : omega.reshaped()) x = gaussian(rng);
       c.times(omega, q);
     }
-    orthonormalize_rows(q, shard, comm);
+    orthonormalize_rows(q, parts);
     for (int i = resume_after + 1; i < power_iterations_; ++i) {
       Eigen::MatrixXd z = c.transpose_times(q);
       orthonormalize(z);
@@ -324,7 +324,7 @@ class Eigentransport final : public Basis {
           keep = nullptr;
         }
       c.times(z, q);
-      orthonormalize_rows(q, shard, comm);
+      orthonormalize_rows(q, parts);
     }
     return q;
   }
@@ -399,14 +399,15 @@ class Eigentransport final : public Basis {
   // packet per pair, where a pass of its own re-derived each cosine and
   // added it to a per-direction sum (0.13 s for the bunny, 8% of the fit).
   Eigen::RowVectorXd column_sums(const Mesh& mesh, const DirectionSet& set,
-                                 const TransposedVisibility& transposed, const Shard& shard,
-                                 const Communicator& comm, double& energy) const {
+                                 const TransposedVisibility& transposed, const RowParts& parts,
+                                 double& energy) const {
+    const Shard shard = parts.shard();
     Eigen::MatrixXd ones_and_normals(shard.rows(), 4);
     for (Eigen::Index p = 0; p < shard.rows(); ++p)
       ones_and_normals.row(p) << 1.0,
           mesh.normals[std::size_t(shard.first + p)].cast<double>().transpose();
     const Eigen::MatrixXd sums = visible_transpose_sum(
-        mesh, set, transposed, PaddedRows(ones_and_normals), shard, comm);  // s x 4
+        mesh, set, transposed, PaddedRows(ones_and_normals), parts);  // s x 4
     const Eigen::VectorXd weights = root_weights_.cwiseAbs2();
     const Eigen::VectorXd squares =
         (sums.rightCols<3>().cwiseProduct(set.directions).rowwise().sum() / M_PI);
@@ -418,12 +419,12 @@ class Eigentransport final : public Basis {
 
   // The last power iteration a killed fit kept (rank 0 reads, and tells
   // every rank), or -1: none, or none that fits this fit's shape.
-  int kept_iteration(const PartKeeper* store, const Communicator& comm, Eigen::Index s,
+  int kept_iteration(const PartKeeper* store, const RowParts& parts, Eigen::Index s,
                      Eigen::Index columns) const {
     if (!store) return -1;
     std::vector<char> bytes(sizeof(std::int32_t), 0);
     std::int32_t iteration = -1;
-    if (comm.rank() == 0 && store->has("eigen.iteration")) try {
+    if (parts.first() && store->has("eigen.iteration")) try {
         const Eigen::MatrixXd kept = store->load_doubles("eigen.iteration");
         const int i = kept.size() == 1 ? static_cast<int>(kept(0, 0)) : -1;
         const Eigen::MatrixXd z = i >= 0 ? store->load_doubles(kept_z_name(i)) : Eigen::MatrixXd();
@@ -437,7 +438,7 @@ class Eigentransport final : public Basis {
                     e.what());
       }
     std::memcpy(bytes.data(), &iteration, sizeof iteration);
-    comm.broadcast(bytes, 0);
+    parts.broadcast(bytes, 0);
     std::memcpy(&iteration, bytes.data(), sizeof iteration);
     return iteration;
   }

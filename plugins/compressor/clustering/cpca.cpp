@@ -128,7 +128,7 @@ bool refill_empty(const Rows& rows, std::vector<std::int32_t>& labels, std::vect
     for (std::size_t p = 0; p < labels.size(); ++p)
       if (labels[p] == largest && errors[p] > worst_error)
         worst_error = errors[p], worst = rows.shard.first + std::int64_t(p);
-    worst = allreduce_argmax(rows.comm, worst_error, worst).second;
+    worst = rows.parts->argmax(worst_error, worst).second;
     if (worst >= rows.shard.first && worst < rows.shard.last) {
       labels[std::size_t(worst - rows.shard.first)] = j;
       errors[std::size_t(worst - rows.shard.first)] = 0;
@@ -279,7 +279,7 @@ class CpcaRun {
     }
     resumed_ = true;
     adaptive_kept_ = kept->phase == 1;
-    if (rows_.comm.rank() == 0)
+    if (rows_.parts->first())
       log_info("resuming: CPCA at " +
                (adaptive_kept_ ? "adaptive pass " + std::to_string(kept->iteration + 1)
                                : "component " + std::to_string(kept->component) + ", pass " +
@@ -297,7 +297,7 @@ class CpcaRun {
   // all keep the same pass.
   void keep_before_pass(int phase, int component, int iteration) {
     if (!keep_ || refitter_.models().empty() ||
-        !rows_.any(rows_.comm.rank() == 0 && since_kept_.seconds() >= options_.lbg.keep_seconds))
+        !rows_.any(rows_.parts->first() && since_kept_.seconds() >= options_.lbg.keep_seconds))
       return;
     if (!keep_cpca_state(*keep_, rows_,
                          {phase, component, iteration, sequence_++, result_.labels,

@@ -4,7 +4,7 @@
 // and adaptive CPCA needs (PCA is the case of one cluster). Each cluster is
 // solved from its n x n scatter or, with fewer members than dimensions, its
 // m x m Gram matrix, eight at a time in one batched eigen-solve; sums over
-// rows go through segment_sum, and the ranks split the solves, so the bits
+// rows go through the run's parts (RowParts::sum_blocks), and the ranks split the solves, so the bits
 // are the same for any number of threads or ranks.
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -19,7 +19,6 @@
 #include "prt/compressor.hpp"
 #include "prt/error.hpp"
 #include "prt/progress.hpp"
-#include "prt/segment_sum.hpp"
 #include "prt/symmetric_eigen.hpp"
 
 namespace prt::clustering {
@@ -35,7 +34,7 @@ std::map<int, MatrixXfRow> gathered_rows(const Rows& rows,
                                          const std::vector<bool>& gathered,
                                          const std::vector<double>& counts) {
   const Eigen::Index n = rows.cols();
-  const int rank = rows.comm.rank(), ranks = rows.comm.size();
+  const int rank = rows.parts->index(), ranks = rows.parts->count();
   std::map<int, MatrixXfRow> out;
   // Per root: every rank sends, for each gathered cluster the root solves,
   // its local member count and rows.
@@ -53,7 +52,7 @@ std::map<int, MatrixXfRow> gathered_rows(const Rows& rows,
         mine.insert(mine.end(), row, row + sizeof(float) * std::size_t(n));
       }
     }
-    const std::vector<std::vector<char>> parts = rows.comm.gather(mine, root);
+    const std::vector<std::vector<char>> parts = rows.parts->gather(mine, root);
     if (root != rank) continue;
     std::vector<std::size_t> read(std::size_t(ranks), 0);
     for (std::size_t i = std::size_t(root); i < which.size(); i += std::size_t(ranks)) {
@@ -175,7 +174,7 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
   const Eigen::Index n = rows.cols();
   // Every rank receives every rank's subtree roots: the bound is shared.
   const std::size_t group =
-      std::max<std::size_t>(1, kGroupBytes / std::size_t(rows.comm.size()) /
+      std::max<std::size_t>(1, kGroupBytes / std::size_t(rows.parts->count()) /
                                    (sizeof(double) * std::size_t(n) * std::size_t(n)));
   std::vector<int> scattered;
   for (std::size_t i = 0; i < which.size(); ++i)
@@ -187,10 +186,8 @@ std::map<int, Eigen::MatrixXd> cluster_scatter(const Rows& rows,
     std::fill(wanted.begin(), wanted.end(), false);
     for (std::size_t i = start; i < std::min(scattered.size(), start + group); ++i)
       wanted[std::size_t(which[std::size_t(scattered[i])])] = true;
-    total.merge(segment_sum_blocks(
-        rows.shard,
-        [&](Eigen::Index s) { return segment_scatter(rows, labels, means, wanted, s, scratch); },
-        rows.comm));
+    total.merge(rows.parts->sum_blocks(
+        [&](Eigen::Index s) { return segment_scatter(rows, labels, means, wanted, s, scratch); }));
   }
   std::map<int, Eigen::MatrixXd> scatter;
   for (int i : scattered) {
@@ -413,14 +410,14 @@ struct ClusterSolve {
 // Each rank solved every size-th cluster: the ranks share their models.
 void share_models(const Rows& rows, const std::vector<int>& which,
                   std::vector<ClusterModel>& models) {
-  const int rank = rows.comm.rank(), ranks = rows.comm.size();
+  const int rank = rows.parts->index(), ranks = rows.parts->count();
   std::vector<double> mine;
   for (std::size_t i = std::size_t(rank); i < which.size(); i += std::size_t(ranks)) {
     const ClusterModel& m = models[std::size_t(which[i])];
     mine.insert(mine.end(), m.basis.data(), m.basis.data() + m.basis.size());
     mine.insert(mine.end(), m.eigenvalues.data(), m.eigenvalues.data() + m.eigenvalues.size());
   }
-  const auto all = allgather(rows.comm, mine);
+  const auto all = rows.parts->allgather(mine);
   for (int r = 0; r < ranks; ++r) {
     std::size_t at = 0;
     for (std::size_t i = std::size_t(r); i < which.size(); i += std::size_t(ranks)) {
@@ -466,7 +463,7 @@ std::vector<ClusterModel> fit_models(const Rows& rows, const std::vector<std::in
       cluster_scatter(rows, labels, means, which, gathered);
   // Each rank solves every size-th cluster and the ranks share the results
   // (the same solver on the same matrix gives the same bits anywhere).
-  const int rank = rows.comm.rank(), ranks = rows.comm.size();
+  const int rank = rows.parts->index(), ranks = rows.parts->count();
   // Eight clusters per solve (largest_eigenpairs_batch: a cluster's result
   // does not depend on which clusters share its batch), the batches on every
   // core.

@@ -26,7 +26,7 @@ inline bool keep_on_ranks(const Rows& rows, const char* who, const std::function
     }
   };
   if (rows.any(failed(own_parts))) return false;
-  return !rows.any(rows.comm.rank() == 0 && failed(shared_parts));
+  return !rows.any(rows.parts->first() && failed(shared_parts));
 }
 
 }  // namespace prt::clustering

@@ -18,7 +18,6 @@
 #include "prt/part_keeper.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_blocks.hpp"
-#include "prt/segment_sum.hpp"
 
 namespace prt::clustering {
 
@@ -130,7 +129,7 @@ RowMatrixXd hyperbox_init(const Rows& rows, int k, std::mt19937_64& rng) {
     hi = hi.cwiseMax(rows.x.middleRows(begin, height).colwise().maxCoeff().cast<double>());
     rows.release(begin, begin + height);
   }
-  allreduce_min_max(rows.comm, lo, hi);
+  rows.parts->min_max(lo, hi);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   RowMatrixXd means(k, n);
   for (int j = 0; j < k; ++j)
@@ -169,7 +168,7 @@ RowMatrixXd kmeans_plus_plus_init(const Rows& rows, int k, std::mt19937_64& rng)
       mine.push_back(t);
     }
     std::vector<double> sums;
-    for (const auto& part : allgather(rows.comm, mine))
+    for (const auto& part : rows.parts->allgather(mine))
       sums.insert(sums.end(), part.begin(), part.end());
     if (Eigen::Index(sums.size()) != segments)
       throw Error("k-means++: ranks hold a wrong number of segments");
@@ -199,7 +198,7 @@ RowMatrixXd kmeans_plus_plus_init(const Rows& rows, int k, std::mt19937_64& rng)
           break;
         }
     }
-    chosen = static_cast<Eigen::Index>(allreduce_argmax(rows.comm, 0.0, found).second);
+    chosen = static_cast<Eigen::Index>(rows.parts->argmax(0.0, found).second);
   }
   return means;
 }
@@ -216,7 +215,7 @@ Eigen::Index farthest_member(const Rows& rows, const std::vector<std::int32_t>& 
     if (d > best_distance) best_distance = d, best = rows.shard.first + p;
   }
   rows.release_all();
-  return static_cast<Eigen::Index>(allreduce_argmax(rows.comm, best_distance, best).second);
+  return static_cast<Eigen::Index>(rows.parts->argmax(best_distance, best).second);
 }
 
 // Recomputes means; refills each empty cluster by splitting the most
@@ -349,7 +348,7 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
   const PartKeeper* keep = options.keep;  // null once keeping failed, on every rank alike
   int sequence = kept ? kept->sequence + 1 : 0;
   if (kept) {
-    if (rows.comm.rank() == 0)
+    if (rows.parts->first())
       log_info("resuming: LBG at iteration " + std::to_string(kept->next_iteration + 1) +
                ", kept in " + options.keep->where());
     result.means = std::move(kept->means);
@@ -381,7 +380,7 @@ Clusters lbg(const Rows& rows, const LbgOptions& options) {
     if (refilled == 0 && (energy == 0 || (previous - energy) / previous < options.tolerance)) break;
     previous = energy;
     // Rank 0's clock decides for every rank, so that all keep the same iteration.
-    if (keep && rows.any(rows.comm.rank() == 0 && since_kept.seconds() >= options.keep_seconds)) {
+    if (keep && rows.any(rows.parts->first() && since_kept.seconds() >= options.keep_seconds)) {
       if (!keep_state(*keep, rows,
                       {iteration + 1, sequence++, previous, energy, result.means, result.labels}))
         keep = nullptr;

@@ -164,7 +164,7 @@ inline CompressedTransfer finish(const std::string& name, const CoherenceOptions
                                  const std::vector<clustering::ClusterModel>& models,
                                  const Mesh* mesh) {
   CompressedTransfer c = clustering::assemble(rows, labels, models, name);
-  if (rows.comm.rank() == 0) report_budget_used(name, p, c);
+  if (rows.parts->first()) report_budget_used(name, p, c);
   if (!rows.distributed()) {
     improve_coherence(o, p, rows, mesh, c);
     rows.release_all();  // moved vertices were re-read where they lie
@@ -172,7 +172,7 @@ inline CompressedTransfer finish(const std::string& name, const CoherenceOptions
   }
   if (o.reclassify) p.fail("reclassify", "needs every vertex in one process");
   clustering::gather_rows(rows, c);
-  if (rows.comm.rank() == 0) {
+  if (rows.parts->first()) {
     CoherenceOptions without = o;
     without.reclassify = false;
     improve_coherence(without, p, rows, mesh, c);
@@ -191,7 +191,7 @@ inline std::string why_not_distributed(const CoherenceOptions& o, const clusteri
 }
 
 inline clustering::Rows rows_of(const TransferSignal& signal, const Distribution& where) {
-  return clustering::Rows(signal, where.shard, *where.comm);
+  return clustering::Rows(signal, where.row_parts(signal.vertices()));
 }
 
 // Refuses NaN/Inf transfer with the vertex that holds it.

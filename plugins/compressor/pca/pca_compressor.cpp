@@ -39,7 +39,7 @@ class PrincipalComponents final : public Compressor {
     const std::vector<std::int32_t> labels(std::size_t(signal.vertices()), 0);
     CompressedTransfer compressed =
         clustering::assemble(rows, labels, clustering::fit_models(rows, labels, 1, {c}), "pca");
-    if (rows.comm.rank() == 0) compressor_params::report_budget_used("pca", params_, compressed);
+    if (rows.parts->first()) compressor_params::report_budget_used("pca", params_, compressed);
     clustering::gather_rows(rows, compressed);
     return compressed;
   }

@@ -89,6 +89,7 @@ class OpenGLRenderer final : public Renderer {
   }
 
   std::map<std::string, double> statistics() const override { return stats_; }
+  bool draws_on_gpu() const override { return true; }
 
  private:
   // ---- resources ---------------------------------------------------------

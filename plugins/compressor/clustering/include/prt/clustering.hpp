@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "prt/communicator.hpp"
+#include "prt/row_parts.hpp"
 #include "prt/mesh.hpp"
 #include "prt/transfer.hpp"
 
@@ -29,7 +29,8 @@ using RowsRef = Eigen::Ref<const MatrixXfRow>;
 
 // The rows of the signal this process holds and where they sit in the whole:
 // all of them in a single process, a shard of whole segments in a distributed
-// run. Every sum over rows goes through segment_sum, so a result depends on
+// run. Every sum over rows goes through the parts' fixed tree
+// (prt/row_parts.hpp), so a result depends on
 // neither the thread count nor the rank count. Labels, errors and weights
 // are per local row; means and models are the same on every rank. A signal
 // whose rows are in a file (out of core) is read in passes: each pass
@@ -37,11 +38,11 @@ using RowsRef = Eigen::Ref<const MatrixXfRow>;
 struct Rows {
   explicit Rows(RowsRef x);  // contiguous rows in memory
   explicit Rows(const TransferSignal& signal);
-  Rows(const MatrixXfRow& local, const Shard& shard, const Communicator& comm);
-  Rows(const TransferSignal& local, const Shard& shard, const Communicator& comm);
+  Rows(const MatrixXfRow& local, std::shared_ptr<const RowParts> parts);
+  Rows(const TransferSignal& local, std::shared_ptr<const RowParts> parts);
   Eigen::Map<const MatrixXfRow> x;
-  Shard shard;
-  const Communicator& comm;
+  std::shared_ptr<const RowParts> parts;  // never null
+  Shard shard;                            // parts->shard()
   const TransferSignal* signal = nullptr;  // set when made from one: releases go to it
 
   // Lets local rows [begin, end) go when they are in a file (no-op in memory).
@@ -50,7 +51,7 @@ struct Rows {
   }
   void release_all() const { release(0, local()); }
 
-  bool distributed() const { return comm.size() > 1; }
+  bool distributed() const { return parts->distributed(); }
   Eigen::Index local() const { return x.rows(); }
   Eigen::Index total() const { return shard.total; }
   Eigen::Index cols() const { return x.cols(); }
