@@ -13,11 +13,11 @@
 #include "prt/basis.hpp"
 #include "prt/basis_metric.hpp"
 #include "prt/brdf.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/error.hpp"
 #include "prt/hemisphere.hpp"
 #include "prt/mesh.hpp"
 #include "prt/quadrature.hpp"
-#include "prt/communicator_parts.hpp"
 #include "prt/registry.hpp"
 #include "prt/transport.hpp"
 #include "scenes.hpp"
@@ -396,7 +396,8 @@ static void basis_check_11(Kit& kit) {
       const VisibilityBits bits =
           test::shard_bits(r.visibility, std::size_t(shard.first), std::size_t(shard.last));
       try {
-        bases[std::size_t(comm.rank())]->fit({&scene, &lattice, &bits, prt::parts_over(comm, shard)});
+        bases[std::size_t(comm.rank())]->fit(
+            {&scene, &lattice, &bits, prt::parts_over(comm, shard)});
       } catch (const std::exception& e) {
         errors[std::size_t(comm.rank())] = e.what();
       }

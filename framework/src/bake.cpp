@@ -133,17 +133,13 @@ void require_distributable(const SceneSpec& scene, const BakePlan& plan,
 
 // Stages 1-2 as this run makes them: sharded over ranks (fitted or not), or
 // through the checkpoint in one process (the direct part kept for bounces).
-TransferSignal transfer_of(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& set,
-                           const RunOptions& options, const Shard& shard, bool on_disk,
-                           StageTimes& times, std::uint64_t& rays_cast, BakeData& data) {
+TransferOutcome transfer_of(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                            const RunOptions& options, const Shard& shard, bool on_disk) {
   const Communicator& comm = options.comm ? *options.comm : solo();
   if (comm.size() > 1)
-    return plan.fit ? fitted_shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard,
-                                            comm, on_disk)
-                    : shard_transfer(plan, data.mesh, set, options, times, rays_cast, shard, comm,
-                                     on_disk);
-  return checkpointed_transfer(plan, scene, data.mesh, set, options, times, data.metrics,
-                               plan.bounces > 0 ? &data.direct : nullptr, rays_cast, on_disk);
+    return plan.fit ? fitted_shard_transfer(plan, mesh, set, options, shard, comm, on_disk)
+                    : shard_transfer(plan, mesh, set, options, shard, comm, on_disk);
+  return checkpointed_transfer(plan, mesh, set, options, plan.bounces > 0, on_disk);
 }
 
 // A distributed bake's file gets the other ranks' rows from their slabs as
@@ -215,17 +211,21 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const bool on_disk = transfer_on_disk(plan, data.mesh, shard.rows(), options);
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
-  std::uint64_t rays_cast = 0;
-  TransferSignal transfer =
-      transfer_of(scene, plan, set, options, shard, on_disk, times, rays_cast, data);
+  TransferOutcome stage = transfer_of(plan, data.mesh, set, options, shard, on_disk);
+  for (const auto& [name, seconds] : stage.times.stages) times.add(name, seconds);
+  data.metrics = std::move(stage.metrics);
+  data.direct = std::move(stage.direct);
+  TransferSignal transfer = std::move(stage.transfer);
+  // The stages after it take the basis stage 2 returned (fitted, or the plan's).
+  const BakePlan fitted = plan.with_basis(stage.basis);
   clock = Stopwatch();
   // Compression minimises the error of what is rendered (after a fit: the
   // fitted basis's metric).
-  const RenderedMetric metric = rendered_metric(plan);
-  data.compressed =
-      options.compress || plan.sparse_terms > 0
-          ? compress_stage(plan, transfer, data.mesh, scene.compressor.where, metric, encode_where)
-          : exact_form(transfer);
+  const RenderedMetric metric = rendered_metric(fitted);
+  data.compressed = options.compress || plan.sparse_terms > 0
+                        ? compress_stage(fitted, transfer, data.mesh, scene.compressor.where,
+                                         metric, encode_where)
+                        : exact_form(transfer);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
   const CompressionReport report =
@@ -236,11 +236,11 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   if (!text.empty() && text.back() == '\n') text.pop_back();
   options.message(text);
   if (distributed)
-    stream_from_slabs(plan, options, comm.size(), std::move(transfer), data);
+    stream_from_slabs(fitted, options, comm.size(), std::move(transfer), data);
   else  // in memory, or in its file (write_bake reads it from there)
     data.transfer = std::move(transfer);
-  describe(scene, plan, set, options, data);
-  data.metrics["rays_cast"] = static_cast<double>(rays_cast);
+  describe(scene, fitted, set, options, data);
+  data.metrics["rays_cast"] = static_cast<double>(stage.rays_cast);
   data.metrics["squared_error"] = report.squared_error;
   data.metrics["stored_floats"] = data.compressed.stored_floats();
   return data;

@@ -130,6 +130,10 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   BakePlan plan;
   PluginChoice basis = scene.basis, compressor = scene.compressor;
   plan.basis = registry.create<Basis>(basis.name, basis.params, basis.where);
+  plan.new_basis = [&registry, basis] {
+    Params params = basis.params;
+    return registry.create<Basis>(basis.name, params, basis.where);
+  };
   plan.compressor =
       registry.create<Compressor>(compressor.name, compressor.params, compressor.where);
   plan.basis_record = record_of(scene.basis, registry, PluginKind::basis);

@@ -69,20 +69,22 @@ BounceCheckpoint bounce_checkpoint(const RunOptions& options) {
 // The fitted basis, or the one a killed run kept once its fit ended. The fit
 // keeps its own state in the checkpoint as it goes (eigentransport: after
 // each power iteration).
-void fit_basis(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-               const VisibilityBits& visibility, const RunOptions& options, StageTimes& times) {
+std::shared_ptr<const Basis> fit_basis(const BakePlan& plan, const Mesh& mesh,
+                                       const DirectionSet& set, const VisibilityBits& visibility,
+                                       const RunOptions& options, StageTimes& times) {
   const CheckpointStore* store = options.checkpoint;
   if (store && store->has(kFittedBasisMarker)) {
-    load_kept_basis_state(*store, *plan.basis);
     options.message("resuming: the fitted basis kept in " + store->folder().string());
-    return;
+    return kept_basis(*store, plan.new_basis);
   }
   Stopwatch clock;
   FitData fit{&mesh, &set, &visibility};
   fit.checkpoint = store;
-  plan.basis->fit(fit);
+  const std::shared_ptr<Basis> fitted = plan.new_basis();
+  fitted->fit(fit);
   times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
-  if (store) keep_fitted_basis(*store, *plan.basis, plan.basis_record.name);
+  if (store) keep_fitted_basis(*store, *fitted, plan.basis_record.name);
+  return fitted;
 }
 
 void add_bounces(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
@@ -196,11 +198,20 @@ TransferSignal glossy_stage(const BakePlan& plan, const Mesh& mesh, const Direct
 
 }  // namespace
 
-TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                              TransportResult result, const RunOptions& options, StageTimes& times,
-                              std::map<std::string, double>& metrics, TransferSignal* direct) {
+TransferOutcome transfer_stage(const BakePlan& given, const Mesh& mesh, const DirectionSet& set,
+                               TransportResult result, const RunOptions& options,
+                               bool want_direct) {
+  TransferOutcome out;
+  out.rays_cast = result.rays_cast;
+  StageTimes& times = out.times;
+  std::map<std::string, double>& metrics = out.metrics;
+  TransferSignal* direct = want_direct && given.bounces > 0 ? &out.direct : nullptr;
   Stopwatch clock;
-  if (plan.fit) fit_basis(plan, mesh, set, result.visibility, options, times);
+  // A fitted basis flows forward in a plan of its own.
+  const BakePlan plan =
+      given.fit ? given.with_basis(fit_basis(given, mesh, set, result.visibility, options, times))
+                : given;
+  out.basis = plan.basis;
   // Projected from the bits when they were kept (or traced before by a sweep).
   const bool have_bits =
       result.visibility.vertices() == mesh.vertex_count() && result.visibility.vertices() > 0;
@@ -227,10 +238,14 @@ TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh, const Dire
                                    options, "subsurface");
     times.add("subsurface (hierarchical diffusion)", clock.seconds());
   }
-  if (plan.glossy)
-    return glossy_stage(plan, mesh, set, result, scattered, options, times, metrics, direct);
+  if (plan.glossy) {
+    out.transfer =
+        glossy_stage(plan, mesh, set, result, scattered, options, times, metrics, direct);
+    return out;
+  }
   if (plan.subsurface) result.transfer.coefficients += scattered;
-  return std::move(result.transfer);
+  out.transfer = std::move(result.transfer);
+  return out;
 }
 
 namespace {
@@ -254,20 +269,20 @@ TransferSignal stack_channels(const std::vector<TransferSignal>& parts,
 
 // A channel transfer kept by an earlier run (its direct part and metrics too;
 // the fitted basis when this channel fitted it).
-TransferSignal kept_channel(const BakePlan& channel, const CheckpointStore& store,
-                            const std::string& prefix, TransferSignal* direct,
-                            std::map<std::string, double>& metrics) {
-  TransferSignal part;
+TransferOutcome kept_channel(const BakePlan& channel, const CheckpointStore& store,
+                             const std::string& prefix, bool want_direct) {
+  TransferOutcome out;
+  TransferSignal& part = out.transfer;
   part.kind = channel.glossy ? "glossy" : "diffuse";
   part.exit_rows = channel.glossy ? channel.glossy_operator.rows() : 1;
   part.coefficients = store.load_floats(prefix + "transfer");
-  if (direct) {
-    *direct = part;
-    direct->coefficients = store.load_floats(prefix + "direct");
+  if (want_direct) {
+    out.direct = part;
+    out.direct.coefficients = store.load_floats(prefix + "direct");
   }
-  read_metrics(store.load_text(prefix + "metrics"), metrics);
-  if (channel.fit) load_kept_basis_state(store, *channel.basis);
-  return part;
+  read_metrics(store.load_text(prefix + "metrics"), out.metrics);
+  out.basis = channel.fit ? kept_basis(store, channel.new_basis) : channel.basis;
+  return out;
 }
 
 // Keeps a finished channel transfer; its stages' own parts are done with.
@@ -284,10 +299,9 @@ void keep_channel(const CheckpointStore& store, const std::string& prefix,
 
 }  // namespace
 
-TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                                 TransportResult traced, const RunOptions& options,
-                                 StageTimes& times, std::map<std::string, double>& metrics,
-                                 TransferSignal* direct) {
+TransferOutcome channel_transfers(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                                  TransportResult traced, const RunOptions& options,
+                                  bool want_direct) {
   const MaterialChannels& channels = plan.channels;
   std::string which;
   for (int c = 0; c < 3; ++c)
@@ -295,10 +309,16 @@ TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh, const D
              std::to_string(channels.group_of_channel[std::size_t(c)] + 1);
   options.message("colour material: " + std::to_string(channels.groups.size()) +
                   " transfers, one per distinct channel (" + which + ")");
+  want_direct = want_direct && plan.bounces > 0;
+  TransferOutcome out;
+  out.rays_cast = traced.rays_cast;
+  out.basis = plan.basis;
   std::vector<TransferSignal> parts, directs;
   for (std::size_t g = 0; g < channels.groups.size(); ++g) {
-    BakePlan channel = plan;
-    channel.fit = plan.fit && g == 0;  // the basis is shared: fitted once, to the same rays
+    // The basis is shared: fitted once, by the first channel, to the same
+    // rays; the others take the fitted one.
+    BakePlan channel = plan.with_basis(out.basis);
+    channel.fit = plan.fit && g == 0;
     const ChannelMaterial& material = channels.groups[g];
     channel.brdf = material.brdf;
     channel.bounce_albedo = material.bounce_albedo;
@@ -314,25 +334,29 @@ TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh, const D
         options.checkpoint_prefix + "channel-" + std::to_string(g + 1) + ".";
     const std::string& prefix = channel_options.checkpoint_prefix;
     const CheckpointStore* store = options.checkpoint;
-    TransferSignal channel_direct;
+    TransferOutcome part;
     if (store && store->has(prefix + "transfer")) {
       options.message("resuming: channel transfer " + std::to_string(g + 1) + " of " +
                       std::to_string(channels.groups.size()) + " kept in " +
                       store->folder().string());
-      parts.push_back(
-          kept_channel(channel, *store, prefix, direct ? &channel_direct : nullptr, metrics));
+      part = kept_channel(channel, *store, prefix, want_direct);
     } else {
       // The rays are traced once; every channel but the last works on a copy.
       TransportResult rays = g + 1 < channels.groups.size() ? traced : std::move(traced);
-      parts.push_back(transfer_stage(channel, mesh, set, std::move(rays), channel_options, times,
-                                     metrics, direct ? &channel_direct : nullptr));
+      part = transfer_stage(channel, mesh, set, std::move(rays), channel_options, want_direct);
       if (store)
-        keep_channel(*store, prefix, parts.back(), direct ? &channel_direct : nullptr, metrics);
+        keep_channel(*store, prefix, part.transfer, want_direct ? &part.direct : nullptr,
+                     part.metrics);
     }
-    if (direct) directs.push_back(std::move(channel_direct));
+    for (const auto& [name, seconds] : part.times.stages) out.times.add(name, seconds);
+    for (const auto& [name, value] : part.metrics) out.metrics[name] = value;
+    out.basis = part.basis;
+    parts.push_back(std::move(part.transfer));
+    if (want_direct) directs.push_back(std::move(part.direct));
   }
-  if (direct) *direct = stack_channels(directs, channels);
-  return stack_channels(parts, channels);
+  if (want_direct) out.direct = stack_channels(directs, channels);
+  out.transfer = stack_channels(parts, channels);
+  return out;
 }
 
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,

@@ -8,9 +8,9 @@
 
 #include "../common/scenes.hpp"
 #include "../common/thread_communicator.hpp"
-#include "prt/communicator_parts.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/hemisphere.hpp"
 #include "prt/registry.hpp"
 #include "prt/relight.hpp"
@@ -190,10 +190,11 @@ TEST_CASE("eigentransport: ranks fitting from shards of the bits get the one-pro
     for (const auto& basis : bases) CHECK(basis == fitted(*one));  // bit for bit
   }
   // Bits that are not the shard's are refused.
-  CHECK_THROWS_WITH(make("eigen", {})
-                        ->fit({&scene, &lattice, &r.visibility,
-                               parts_over(solo(), shard_of(Eigen::Index(scene.vertex_count()), 0, 2))}),
-                    Catch::Contains("visibility of"));
+  CHECK_THROWS_WITH(
+      make("eigen", {})
+          ->fit({&scene, &lattice, &r.visibility,
+                 parts_over(solo(), shard_of(Eigen::Index(scene.vertex_count()), 0, 2))}),
+      Catch::Contains("visibility of"));
 }
 
 TEST_CASE("eigentransport: identical transport rows (rank 0) give a finite orthonormal basis",

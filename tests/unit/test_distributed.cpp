@@ -12,9 +12,9 @@
 #include <thread>
 
 #include "../common/thread_communicator.hpp"
-#include "prt/communicator_parts.hpp"
 #include "prt/checkpoint.hpp"
 #include "prt/clustering.hpp"
+#include "prt/communicator_parts.hpp"
 #include "prt/segment_sum.hpp"
 
 using namespace prt;

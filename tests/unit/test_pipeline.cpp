@@ -68,6 +68,33 @@ TEST_CASE("a sweep's traced rays give the same transfer as a fresh bake", "[pipe
   Progress::set_enabled(true);
 }
 
+TEST_CASE("the plan is a value: a fit returns a new basis and leaves the plan's alone",
+          "[pipeline]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  const SceneSpec s = scene(registry, "lambert", "plugin = \"eigen\"\nd = 8");
+  const BakePlan plan = plan_bake(s, registry);
+  REQUIRE(plan.fit);
+  StageTimes times;
+  const BakeData first = bake(s, plan, {true}, times);
+  // The plan's basis is unfitted after the bake; the file has the fitted state.
+  CHECK_THROWS_WITH(plan.basis->save(), Catch::Contains("not fitted"));
+  CHECK_FALSE(first.basis_state.matrices.empty());
+  // So the same plan bakes again to the same bits (nothing carried over).
+  const BakeData second = bake(s, plan, {true}, times);
+  CHECK(second.transfer.coefficients == first.transfer.coefficients);
+  CHECK(second.basis_state.matrices == first.basis_state.matrices);
+  // Stage 2 returns the fitted basis, its times and its rays.
+  const TransferOutcome outcome =
+      transfer_stage(plan, s.load_mesh(), s.directions(),
+                     trace_stage(plan, s.load_mesh(), s.directions(), {true}), {true});
+  CHECK(outcome.basis != plan.basis);
+  CHECK(outcome.basis->save().matrices == first.basis_state.matrices);
+  CHECK(outcome.rays_cast > 0);
+  CHECK_FALSE(outcome.times.stages.empty());
+  Progress::set_enabled(true);
+}
+
 TEST_CASE("the plan refuses what cannot work before any ray", "[pipeline]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
   // A window needs frequency bands; Haar has none.

@@ -148,3 +148,22 @@ TEST_CASE("PRT_PLUGIN_PATH adds directories after the build's", "[registry]") {
   CHECK(dirs[1] == case_dir("good"));
   CHECK(dirs[2] == case_dir("throwing"));
 }
+
+TEST_CASE("the GPU renderer is asked for by capability, not by name", "[registry]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  // The scene's renderer when it draws on the GPU, else the first that does.
+  CHECK(gpu_renderer(registry, "opengl") == "opengl");
+  CHECK(gpu_renderer(registry, "cpu") == "opengl");
+  CHECK(gpu_renderer(registry, "") == "opengl");
+  // A plug-in folder with the CPU renderer alone has none: one message that
+  // names what it found.
+  const fs::path only_cpu = fs::temp_directory_path() / "prt-gpu-renderer-test";
+  fs::remove_all(only_cpu);
+  fs::create_directories(only_cpu);
+  fs::copy_file(fs::path(PRT_BUILD_PLUGIN_DIR) / "libprt-renderer-cpu.so",
+                only_cpu / "libprt-renderer-cpu.so");
+  PluginRegistry cpu_only({only_cpu});
+  CHECK_THROWS_WITH(gpu_renderer(cpu_only, "cpu"),
+                    Catch::Contains("no renderer plug-in draws on the GPU (found: cpu)"));
+  fs::remove_all(only_cpu);
+}

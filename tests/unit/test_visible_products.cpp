@@ -99,8 +99,9 @@ TEST_CASE("visible products over shards: rows of the whole, sums the same bits o
   const Eigen::MatrixXd right = Eigen::MatrixXd::Random(set.size(), 11);
   const Eigen::MatrixXd whole_product = visible_times(scene, set, traced.visibility, right);
   const Shard all = whole(Eigen::Index(scene.vertex_count()));
-  const Eigen::MatrixXd one = visible_transpose_sum(
-      scene, set, TransposedVisibility(traced.visibility), PaddedRows(left), *single_part(all.total));
+  const Eigen::MatrixXd one =
+      visible_transpose_sum(scene, set, TransposedVisibility(traced.visibility), PaddedRows(left),
+                            *single_part(all.total));
   CHECK(relative_error(one, visible_transpose_times(scene, set, traced.visibility, left)) < 1e-13);
   for (int ranks : {2, 3, 4}) {  // 4: a rank holds no segment
     CAPTURE(ranks);
@@ -111,9 +112,8 @@ TEST_CASE("visible products over shards: rows of the whole, sums the same bits o
       const VisibilityBits bits =
           test::shard_bits(traced.visibility, std::size_t(shard.first), std::size_t(shard.last));
       const PaddedRows rows(Eigen::MatrixXd(left.middleRows(shard.first, shard.rows())));
-      sums[std::size_t(comm.rank())] =
-          visible_transpose_sum(scene, set, TransposedVisibility(bits), rows,
-                                *parts_over(comm, shard));
+      sums[std::size_t(comm.rank())] = visible_transpose_sum(scene, set, TransposedVisibility(bits),
+                                                             rows, *parts_over(comm, shard));
       PaddedRows out;
       visible_times(scene, set, bits, PaddedRows(right), out, std::size_t(shard.first));
       products[std::size_t(comm.rank())] = out.matrix();

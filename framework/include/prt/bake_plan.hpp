@@ -1,6 +1,7 @@
 // The bake plan: what a bake will do, decided and validated from the scene
 // before any ray is traced.
 #pragma once
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -19,10 +20,16 @@ namespace prt {
 // Everything a bake will do, decided and validated from the scene before any
 // ray is traced: the plug-ins (created, so their parameters are checked),
 // what to keep, fit, project and compress.
+// A value: nothing a bake does changes it. A basis fitted to the scene's rays
+// (fit) is a new object, made by new_basis and returned by stage 2
+// (TransferOutcome::basis); the stages after it take with_basis(fitted).
 struct BakePlan {
-  std::shared_ptr<Basis> basis;  // light basis (a sphere basis)
-  std::shared_ptr<Basis> exit;   // glossy only: exit basis (a hemisphere basis)
-  std::shared_ptr<Compressor> compressor;
+  std::shared_ptr<const Basis> basis;  // light basis (a sphere basis)
+  std::shared_ptr<const Basis> exit;   // glossy only: exit basis (a hemisphere basis)
+  std::shared_ptr<const Compressor> compressor;
+  // A fresh light basis with the scene's parameters, to fit or to load a
+  // kept fitted state into.
+  std::function<std::shared_ptr<Basis>()> new_basis;
   PluginRecord basis_record, exit_record, compressor_record;
   bool glossy = false, subsurface = false, fit = false;
   int bounces = 0;
@@ -41,6 +48,13 @@ struct BakePlan {
   // Colour channels that need transfers of their own (one group: the scene's
   // channels agree, and the fields above are its material).
   MaterialChannels channels;
+
+  // The same plan with `fitted` as its light basis.
+  BakePlan with_basis(std::shared_ptr<const Basis> fitted) const {
+    BakePlan copy = *this;
+    copy.basis = std::move(fitted);
+    return copy;
+  }
 };
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry);
 

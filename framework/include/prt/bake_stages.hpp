@@ -22,19 +22,28 @@ class Progress;
 //    while tracing when nothing needs the bits.
 TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                             const RunOptions& options);
+// Stage 2's result: the transfer, the light basis its rows are in (the
+// plan's, or the one fitted here: the plan is never changed), the direct
+// part before any bounce (when asked for and the plan bounces; empty
+// otherwise), and what the stage took and found.
+struct TransferOutcome {
+  TransferSignal transfer;
+  TransferSignal direct;
+  std::shared_ptr<const Basis> basis;
+  StageTimes times;
+  std::map<std::string, double> metrics;
+  std::uint64_t rays_cast = 0;
+};
 // 2. Transfer: fit (data-driven bases), project, bounces, subsurface, glossy
-//    matrices, glossy bounces. Consumes the visibility and hits; metrics
-//    gets its figures; `direct` (optional) the transfer before any bounce.
-TransferSignal transfer_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                              TransportResult traced, const RunOptions& options, StageTimes& times,
-                              std::map<std::string, double>& metrics,
-                              TransferSignal* direct = nullptr);
+//    matrices, glossy bounces. Consumes the visibility and hits.
+TransferOutcome transfer_stage(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                               TransportResult traced, const RunOptions& options,
+                               bool want_direct = false);
 // 2'. The same per distinct colour-channel material (plan.channels), the
 //    rays traced once; the transfers stacked in each row.
-TransferSignal channel_transfers(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                                 TransportResult traced, const RunOptions& options,
-                                 StageTimes& times, std::map<std::string, double>& metrics,
-                                 TransferSignal* direct = nullptr);
+TransferOutcome channel_transfers(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                                  TransportResult traced, const RunOptions& options,
+                                  bool want_direct = false);
 // 2''. A transfer that each vertex gets alone (no fitted basis, bounces,
 //    subsurface light or per-channel transfers) in slabs of vertices:
 //    vertices [first, last) traced and projected (glossy: their matrices).
@@ -47,38 +56,34 @@ bool per_vertex_transfer_after_fit(const BakePlan& plan);
 bool fitted_per_vertex_transfer(const BakePlan& plan);
 // Either: a transfer whose rows are computed (and can be kept) apart.
 bool transfer_by_rows(const BakePlan& plan);
-TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                             const RayCaster* caster, const std::vector<Frame>& frames,
-                             std::size_t first, std::size_t last, std::uint64_t& rays_cast,
-                             Progress* progress = nullptr);
+TransferOutcome slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                              const RayCaster* caster, const std::vector<Frame>& frames,
+                              std::size_t first, std::size_t last, Progress* progress = nullptr);
 // Stages 1-2 through options.checkpoint: slab by slab when the transfer is
 // per-vertex, else whole (with the fitted basis); parts already kept are
 // loaded, not computed. Without a checkpoint: trace_stage + transfer_stage.
 // on_disk (a per-vertex transfer only): the rows go to a RowFile in the
 // checkpoint folder instead of memory.
-TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
-                                     const DirectionSet& set, const RunOptions& options,
-                                     StageTimes& times, std::map<std::string, double>& metrics,
-                                     TransferSignal* direct, std::uint64_t& rays_cast,
-                                     bool on_disk = false);
+TransferOutcome checkpointed_transfer(const BakePlan& plan, const Mesh& mesh,
+                                      const DirectionSet& set, const RunOptions& options,
+                                      bool want_direct = false, bool on_disk = false);
 // A distributed bake's stages 1-2: the ranks trace the slabs of a per-vertex
 // transfer as each comes free, into options.checkpoint (a folder every rank
 // sees); then each takes its shard's rows from the slabs. rays_cast: all ranks'.
-TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                              const RunOptions& options, StageTimes& times,
-                              std::uint64_t& rays_cast, const Shard& shard,
-                              const Communicator& comm, bool on_disk = false);
+TransferOutcome shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                               const RunOptions& options, const Shard& shard,
+                               const Communicator& comm, bool on_disk = false);
 // The same for a fitted basis (fitted_per_vertex_transfer): each rank traces
 // its shard's visibility in slabs, the ranks fit the basis together
 // (Basis::can_fit_distributed; one process: shard = whole, comm = solo()),
 // and each projects its rows. The bits' slabs, the fit's own state, the
 // fitted basis and each shard's rows are kept in options.checkpoint.
-TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
-                                     const DirectionSet& set, const RunOptions& options,
-                                     StageTimes& times, std::uint64_t& rays_cast,
-                                     const Shard& shard, const Communicator& comm,
-                                     bool on_disk = false);
-// Every rank's rows as rank 0 writes the file: its own from memory, the
+TransferOutcome fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
+                                      const DirectionSet& set, const RunOptions& options,
+                                      const Shard& shard, const Communicator& comm,
+                                      bool on_disk = false);
+// Every rank's rows as rank 0 writes the file (`plan`: with the fitted
+// basis, as stage 2 returned it): its own from memory, the
 // other ranks' read from the checkpoint's slabs a slab at a time (rank 0
 // never holds the whole transfer). `store` must outlive the result.
 BakeData::StreamedRows kept_transfer(const BakePlan& plan, const CheckpointStore& store,

@@ -12,6 +12,7 @@
 
 #include "coupled_slabs.hpp"
 #include "kept_state.hpp"
+#include "prt/basis.hpp"
 #include "prt/communicator_parts.hpp"
 #include "prt/error.hpp"
 #include "prt/frame.hpp"
@@ -36,26 +37,19 @@ void set_shape(const BakePlan& plan, TransferSignal& signal) {
   }
 }
 
-// Stage 2 (and the fit) from the traced rays.
-TransferSignal transfer_from_rays(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
-                                  const DirectionSet& set, TransportResult traced,
-                                  const RunOptions& options, StageTimes& times,
-                                  std::map<std::string, double>& metrics, TransferSignal* direct,
-                                  std::uint64_t& rays_cast) {
-  rays_cast = traced.rays_cast;
+// Stage 2 (and the fit) from the traced rays, the tracing's time first.
+TransferOutcome transfer_from_rays(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                                   TransportResult traced, const RunOptions& options,
+                                   bool want_direct) {
+  StageTimes times;
   times.add(plan.keep_visibility ? "trace" : "trace + project", traced.trace_seconds);
-  if (plan.channels.groups.size() <= 1)
-    return transfer_stage(plan, mesh, set, std::move(traced), options, times, metrics, direct);
-  return channel_transfers(plan, mesh, set, std::move(traced), options, times, metrics, direct);
-}
-
-// Stages 1-2 as they run without a checkpoint.
-TransferSignal traced_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
-                               const DirectionSet& set, const RunOptions& options,
-                               StageTimes& times, std::map<std::string, double>& metrics,
-                               TransferSignal* direct, std::uint64_t& rays_cast) {
-  return transfer_from_rays(plan, scene, mesh, set, trace_stage(plan, mesh, set, options), options,
-                            times, metrics, direct, rays_cast);
+  TransferOutcome out =
+      plan.channels.groups.size() <= 1
+          ? transfer_stage(plan, mesh, set, std::move(traced), options, want_direct)
+          : channel_transfers(plan, mesh, set, std::move(traced), options, want_direct);
+  times.stages.insert(times.stages.end(), out.times.stages.begin(), out.times.stages.end());
+  out.times = std::move(times);
+  return out;
 }
 
 // A slab is kept once both its parts exist (the transfer is saved last).
@@ -80,10 +74,9 @@ Eigen::Index transfer_dimension(const BakePlan& plan) {
 
 // Rows [first, last) of a per-vertex transfer, slab by slab through the
 // checkpoint: kept slabs are loaded, the others computed and kept.
-TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                                const RunOptions& options, StageTimes& times,
-                                std::uint64_t& rays_cast, std::size_t first, std::size_t last,
-                                bool on_disk) {
+TransferOutcome slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                                 const RunOptions& options, std::size_t first, std::size_t last,
+                                 bool on_disk) {
   const CheckpointStore& store = *options.checkpoint;
   const auto slabs = transfer_slabs(first, last, options.slab_vertices);
   const std::size_t kept = say_kept_slabs(
@@ -94,7 +87,9 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
   if (plan.shadowed && kept < slabs.size()) caster.emplace(mesh);
   const std::vector<Frame> frames =
       plan.glossy && kept < slabs.size() ? tangent_frames(mesh) : std::vector<Frame>();
-  TransferSignal out;
+  TransferOutcome result;
+  result.basis = plan.basis;
+  TransferSignal& out = result.transfer;
   set_shape(plan, out);
   const Eigen::Index rows_total = static_cast<Eigen::Index>(last - first),
                      cols = transfer_dimension(plan);
@@ -105,7 +100,6 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
     out.coefficients.resize(rows_total, cols);
   Progress progress("bake transfer", double(last - first), plan.shadowed ? "rays" : "",
                     options.quiet);
-  rays_cast = 0;
   for (const auto& slab : slabs) {
     MatrixXfRow rows;
     std::uint64_t rays = 0;
@@ -114,9 +108,10 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
       rays = kept_rays(store, slab);
       progress.add(double(slab.last - slab.first), double(rays));
     } else {
-      rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames, slab.first,
-                           slab.last, rays, &progress)
-                 .coefficients;
+      TransferOutcome computed = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames,
+                                               slab.first, slab.last, &progress);
+      rows = std::move(computed.transfer.coefficients);
+      rays = computed.rays_cast;
       keep_slab(store, slab, rows, rays);
     }
     const Eigen::Index at = static_cast<Eigen::Index>(slab.first - first);
@@ -124,46 +119,44 @@ TransferSignal slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const Di
       file->write(at, rows);
     else
       out.coefficients.middleRows(at, rows.rows()) = rows;
-    rays_cast += rays;
+    result.rays_cast += rays;
   }
   if (file) {
     file->map();
     out.file = std::move(file);
   }
-  times.add(plan.glossy ? "trace + glossy matrices (slabs)" : "trace + project (slabs)",
-            clock.seconds());
-  return out;
+  result.times.add(plan.glossy ? "trace + glossy matrices (slabs)" : "trace + project (slabs)",
+                   clock.seconds());
+  return result;
 }
 
-TransferSignal whole_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
-                              const DirectionSet& set, const RunOptions& options, StageTimes& times,
-                              std::map<std::string, double>& metrics, TransferSignal* direct,
-                              std::uint64_t& rays_cast) {
+TransferOutcome whole_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                               const RunOptions& options, bool want_direct) {
   const CheckpointStore& store = *options.checkpoint;
+  const bool direct = want_direct && plan.bounces > 0;
   if (store.has("transfer")) {
     options.message("resuming: the transfer kept in " + store.folder().string());
-    TransferSignal out;
-    set_shape(plan, out);
-    out.coefficients = store.load_floats("transfer");
+    TransferOutcome out;
+    set_shape(plan, out.transfer);
+    out.transfer.coefficients = store.load_floats("transfer");
     if (direct) {
-      *direct = out;
-      direct->coefficients = store.load_floats("direct");
+      out.direct = out.transfer;
+      out.direct.coefficients = store.load_floats("direct");
     }
-    if (plan.fit) load_kept_basis_state(store, *plan.basis);
-    read_metrics(store.load_text("metrics"), metrics);
-    rays_cast = static_cast<std::uint64_t>(store.load_doubles("rays")(0, 0));
+    out.basis = plan.fit ? kept_basis(store, plan.new_basis) : plan.basis;
+    read_metrics(store.load_text("metrics"), out.metrics);
+    out.rays_cast = static_cast<std::uint64_t>(store.load_doubles("rays")(0, 0));
     return out;
   }
   // Traced in slabs, each kept; the stages after it keep their own parts
   // (the fit's iterations and basis, each bounce, each channel's transfer).
-  TransferSignal out =
-      transfer_from_rays(plan, scene, mesh, set, slabbed_trace(plan, mesh, set, options), options,
-                         times, metrics, direct, rays_cast);
-  if (plan.fit) keep_basis_state(store, *plan.basis);
-  if (direct) store.save("direct", direct->coefficients);
-  store.save_text("metrics", metrics_text(metrics));
-  store.save("rays", Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(rays_cast))));
-  store.save("transfer", out.coefficients);  // last: its presence marks the stage done
+  TransferOutcome out = transfer_from_rays(plan, mesh, set, slabbed_trace(plan, mesh, set, options),
+                                           options, want_direct);
+  if (plan.fit) keep_basis_state(store, *out.basis);
+  if (direct) store.save("direct", out.direct.coefficients);
+  store.save_text("metrics", metrics_text(out.metrics));
+  store.save("rays", Eigen::MatrixXd(Eigen::MatrixXd::Constant(1, 1, double(out.rays_cast))));
+  store.save("transfer", out.transfer.coefficients);  // last: its presence marks the stage done
   return out;
 }
 
@@ -203,44 +196,44 @@ bool transfer_by_rows(const BakePlan& plan) {
   return per_vertex_transfer(plan) || fitted_per_vertex_transfer(plan);
 }
 
-TransferSignal slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                             const RayCaster* caster, const std::vector<Frame>& frames,
-                             std::size_t first, std::size_t last, std::uint64_t& rays_cast,
-                             Progress* progress) {
+TransferOutcome slab_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                              const RayCaster* caster, const std::vector<Frame>& frames,
+                              std::size_t first, std::size_t last, Progress* progress) {
   if (!per_vertex_transfer(plan))
     throw Error(
         "bake: this transfer couples vertices (fitted basis, bounces, subsurface or "
         "per-channel transfers) and cannot be computed in slabs");
   TransportResult traced =
       trace_slab(plan, mesh, set, caster, first, last, plan.keep_visibility, false, progress);
-  rays_cast = traced.rays_cast;
-  if (!plan.glossy) return std::move(traced.transfer);
-  return glossy_transfer(mesh, set, traced.visibility, *plan.basis, plan.glossy_operator, frames,
-                         plan.glossy_method, nullptr, first);
+  TransferOutcome out;
+  out.basis = plan.basis;
+  out.rays_cast = traced.rays_cast;
+  out.transfer =
+      plan.glossy ? glossy_transfer(mesh, set, traced.visibility, *plan.basis, plan.glossy_operator,
+                                    frames, plan.glossy_method, nullptr, first)
+                  : std::move(traced.transfer);
+  return out;
 }
 
-TransferSignal checkpointed_transfer(const BakePlan& plan, const SceneSpec& scene, const Mesh& mesh,
-                                     const DirectionSet& set, const RunOptions& options,
-                                     StageTimes& times, std::map<std::string, double>& metrics,
-                                     TransferSignal* direct, std::uint64_t& rays_cast,
-                                     bool on_disk) {
+TransferOutcome checkpointed_transfer(const BakePlan& plan, const Mesh& mesh,
+                                      const DirectionSet& set, const RunOptions& options,
+                                      bool want_direct, bool on_disk) {
   if (on_disk && (!options.checkpoint || options.traced || !transfer_by_rows(plan)))
     throw Error("bake: only a per-vertex transfer with a checkpoint folder is kept on disk");
-  if (!options.checkpoint || options.traced)
-    return traced_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
+  if (!options.checkpoint || options.traced)  // stages 1-2 as they run without a checkpoint
+    return transfer_from_rays(plan, mesh, set, trace_stage(plan, mesh, set, options), options,
+                              want_direct);
   if (per_vertex_transfer(plan))
-    return slabbed_transfer(plan, mesh, set, options, times, rays_cast, 0, mesh.vertex_count(),
-                            on_disk);
+    return slabbed_transfer(plan, mesh, set, options, 0, mesh.vertex_count(), on_disk);
   if (fitted_per_vertex_transfer(plan))  // the bits in slabs, the fit, then the rows
-    return fitted_shard_transfer(plan, mesh, set, options, times, rays_cast,
-                                 whole(Eigen::Index(mesh.vertex_count())), solo(), on_disk);
-  return whole_transfer(plan, scene, mesh, set, options, times, metrics, direct, rays_cast);
+    return fitted_shard_transfer(plan, mesh, set, options, whole(Eigen::Index(mesh.vertex_count())),
+                                 solo(), on_disk);
+  return whole_transfer(plan, mesh, set, options, want_direct);
 }
 
-TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
-                              const RunOptions& options, StageTimes& times,
-                              std::uint64_t& rays_cast, const Shard& shard,
-                              const Communicator& comm, bool on_disk) {
+TransferOutcome shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
+                               const RunOptions& options, const Shard& shard,
+                               const Communicator& comm, bool on_disk) {
   if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
   const CheckpointStore& store = *options.checkpoint;
   const std::size_t v = mesh.vertex_count();
@@ -264,19 +257,19 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
       continue;  // another rank has it
     if (plan.shadowed && !caster) caster.emplace(mesh);
     if (plan.glossy && frames.empty()) frames = tangent_frames(mesh);
-    std::uint64_t rays = 0;
-    const MatrixXfRow rows = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr, frames,
-                                           slab.first, slab.last, rays, nullptr)
-                                 .coefficients;
-    keep_slab(store, slab, rows, rays);
+    const TransferOutcome computed = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr,
+                                                   frames, slab.first, slab.last, nullptr);
+    keep_slab(store, slab, computed.transfer.coefficients, computed.rays_cast);
     ++traced_here;
   }
   caster.reset();
   comm.barrier();  // every slab is kept
-  times.add("trace + project (" + std::to_string(traced_here) + " slabs on this rank)",
-            clock.seconds());
+  TransferOutcome result;
+  result.basis = plan.basis;
+  result.times.add("trace + project (" + std::to_string(traced_here) + " slabs on this rank)",
+                   clock.seconds());
   // This rank's rows (in memory, or in a file of its own), and the rays of every slab.
-  TransferSignal out;
+  TransferSignal& out = result.transfer;
   set_shape(plan, out);
   const Eigen::Index cols = transfer_dimension(plan);
   std::shared_ptr<RowFile> file;
@@ -284,9 +277,8 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
     file = RowFile::create(store.folder(), shard.rows(), cols);
   else
     out.coefficients.resize(shard.rows(), cols);
-  rays_cast = 0;
   for (const auto& slab : slabs) {
-    rays_cast += kept_rays(store, slab);
+    result.rays_cast += kept_rays(store, slab);
     const std::size_t first = std::max(slab.first, std::size_t(shard.first)),
                       last = std::min(slab.last, std::size_t(shard.last));
     if (first >= last) continue;
@@ -302,7 +294,7 @@ TransferSignal shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dire
     file->map();
     out.file = std::move(file);
   }
-  return out;
+  return result;
 }
 
 namespace {
@@ -384,14 +376,14 @@ VisibilityBits kept_visibility(const BakePlan& plan, const Mesh& mesh, const Dir
 
 }  // namespace
 
-TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
-                                     const DirectionSet& set, const RunOptions& options,
-                                     StageTimes& times, std::uint64_t& rays_cast,
-                                     const Shard& shard, const Communicator& comm, bool on_disk) {
+TransferOutcome fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
+                                      const DirectionSet& set, const RunOptions& options,
+                                      const Shard& shard, const Communicator& comm, bool on_disk) {
   if (!options.checkpoint) throw Error("bake: a fit through slabs needs a checkpoint folder");
   if (!fitted_per_vertex_transfer(plan))
     throw Error("bake: a fit through slabs needs a diffuse transfer each vertex gets alone");
   const CheckpointStore& store = *options.checkpoint;
+  TransferOutcome result;
   // Rank 0 says whether the basis was kept, for every rank: a rank that
   // looked itself could see the marker rank 0 writes in this very run.
   std::vector<char> basis_kept(1, 0);
@@ -400,14 +392,14 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
   const SlabRange own{std::size_t(shard.first), std::size_t(shard.last)};
   const bool rows_kept = basis_kept[0] && (own.first == own.last || slab_kept(store, own));
   if (basis_kept[0]) {
-    load_kept_basis_state(store, *plan.basis);
+    result.basis = kept_basis(store, plan.new_basis);
     options.message("resuming: the fitted basis kept in " + store.folder().string());
   }
-  const Eigen::Index cols = transfer_dimension(plan);
   const std::string run = comm.size() > 1 ? run_id(comm) : std::string("solo");
   MatrixXfRow rows;
   std::uint64_t rays = 0;  // the whole mesh's
   if (rows_kept) {
+    const Eigen::Index cols = transfer_dimension(plan.with_basis(result.basis));
     rows = own.first < own.last ? kept_rows(store, own, cols) : MatrixXfRow(0, cols);
     rays = kept_visibility_rays(store);
   } else {
@@ -417,35 +409,35 @@ TransferSignal fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
     Stopwatch clock;
     const VisibilityBits bits =
         kept_visibility(plan, mesh, set, options, own, comm, run, !basis_kept[0], rays);
-    times.add("trace visibility (slabs)", clock.seconds());
+    result.times.add("trace visibility (slabs)", clock.seconds());
     if (!basis_kept[0]) {
       clock = Stopwatch();
       FitData fit{&mesh, &set, &bits, parts_over(comm, shard)};
       fit.checkpoint = &store;
-      plan.basis->fit(fit);
-      times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
-      if (comm.rank() == 0) {
-        keep_fitted_basis(store, *plan.basis, plan.basis_record.name);
-      }
+      const std::shared_ptr<Basis> fitted = plan.new_basis();
+      fitted->fit(fit);
+      result.basis = fitted;
+      result.times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
+      if (comm.rank() == 0) keep_fitted_basis(store, *fitted, plan.basis_record.name);
     }
     clock = Stopwatch();
-    rows = project_visibility(mesh, set, bits, *plan.basis, own.first).coefficients;
+    rows = project_visibility(mesh, set, bits, *result.basis, own.first).coefficients;
     if (own.first < own.last) keep_slab(store, own, rows, rays);
-    times.add("project", clock.seconds());
+    result.times.add("project", clock.seconds());
   }
-  rays_cast = rays;
+  result.rays_cast = rays;
   comm.barrier();  // every rank's rows are kept (rank 0 writes the file from them)
-  TransferSignal out;
+  TransferSignal& out = result.transfer;
   set_shape(plan, out);
   if (on_disk) {
-    auto file = RowFile::create(store.folder(), shard.rows(), cols);
+    auto file = RowFile::create(store.folder(), shard.rows(), rows.cols());
     file->write(0, rows);
     file->map();
     out.file = std::move(file);
   } else {
     out.coefficients = std::move(rows);
   }
-  return out;
+  return result;
 }
 
 namespace {

@@ -26,6 +26,13 @@ void load_kept_basis_state(const CheckpointStore& store, Basis& basis) {
   basis.load(state);
 }
 
+std::shared_ptr<const Basis> kept_basis(const CheckpointStore& store,
+                                        const std::function<std::shared_ptr<Basis>()>& make) {
+  std::shared_ptr<Basis> basis = make();
+  load_kept_basis_state(store, *basis);
+  return basis;
+}
+
 void keep_fitted_basis(const CheckpointStore& store, const Basis& basis, const std::string& name) {
   keep_basis_state(store, basis);
   store.save_text(kFittedBasisMarker, name);  // last: marks the basis kept

@@ -1,7 +1,9 @@
 // What the bake's stages keep in a checkpoint besides rows of a transfer: a
 // fitted basis's state and the metrics of the stages done.
 #pragma once
+#include <functional>
 #include <map>
+#include <memory>
 #include <string>
 
 namespace prt {
@@ -15,6 +17,9 @@ inline constexpr const char* kFittedBasisMarker = "fitted-basis";
 // One part per matrix, under "basis_state.".
 void keep_basis_state(const CheckpointStore& store, const Basis& basis);
 void load_kept_basis_state(const CheckpointStore& store, Basis& basis);
+// A fresh basis made by `make`, with the state kept in `store` loaded.
+std::shared_ptr<const Basis> kept_basis(const CheckpointStore& store,
+                                        const std::function<std::shared_ptr<Basis>()>& make);
 // The state, then the marker (naming the plug-in) that says it is whole.
 void keep_fitted_basis(const CheckpointStore& store, const Basis& basis, const std::string& name);
 

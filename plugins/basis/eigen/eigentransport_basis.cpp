@@ -172,9 +172,8 @@ class CentredTransport {
   // C^T left (s x columns), summed over the ranks.
   Eigen::MatrixXd transpose_times(const Eigen::MatrixXd& left) {
     padded_left_.assign(left);
-    Eigen::MatrixXd product =
-        root_weights_.asDiagonal() *
-        visible_transpose_sum(mesh_, set_, transposed_, padded_left_, parts_);
+    Eigen::MatrixXd product = root_weights_.asDiagonal() *
+                              visible_transpose_sum(mesh_, set_, transposed_, padded_left_, parts_);
     product.noalias() -= mean_.transpose() * column_sums_of_rows(left, parts_);
     return product;
   }
@@ -406,8 +405,8 @@ class Eigentransport final : public Basis {
     for (Eigen::Index p = 0; p < shard.rows(); ++p)
       ones_and_normals.row(p) << 1.0,
           mesh.normals[std::size_t(shard.first + p)].cast<double>().transpose();
-    const Eigen::MatrixXd sums = visible_transpose_sum(
-        mesh, set, transposed, PaddedRows(ones_and_normals), parts);  // s x 4
+    const Eigen::MatrixXd sums =
+        visible_transpose_sum(mesh, set, transposed, PaddedRows(ones_and_normals), parts);  // s x 4
     const Eigen::VectorXd weights = root_weights_.cwiseAbs2();
     const Eigen::VectorXd squares =
         (sums.rightCols<3>().cwiseProduct(set.directions).rowwise().sum() / M_PI);

@@ -4,8 +4,8 @@
 // and adaptive CPCA needs (PCA is the case of one cluster). Each cluster is
 // solved from its n x n scatter or, with fewer members than dimensions, its
 // m x m Gram matrix, eight at a time in one batched eigen-solve; sums over
-// rows go through the run's parts (RowParts::sum_blocks), and the ranks split the solves, so the bits
-// are the same for any number of threads or ranks.
+// rows go through the run's parts (RowParts::sum_blocks), and the ranks split the solves, so the
+// bits are the same for any number of threads or ranks.
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 

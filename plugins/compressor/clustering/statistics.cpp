@@ -30,7 +30,9 @@ Rows::Rows(const TransferSignal& signal)
       signal(&signal) {}
 
 Rows::Rows(const MatrixXfRow& local, std::shared_ptr<const RowParts> parts)
-    : x(local.data(), local.rows(), local.cols()), parts(std::move(parts)), shard(this->parts->shard()) {
+    : x(local.data(), local.rows(), local.cols()),
+      parts(std::move(parts)),
+      shard(this->parts->shard()) {
   if (local.rows() != shard.rows())
     throw Error("clustering: " + std::to_string(local.rows()) + " local rows for a shard of " +
                 std::to_string(shard.rows()));
@@ -75,21 +77,20 @@ bool Rows::any(bool mine) const {
 
 ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labels, int k) {
   const Eigen::Index n = rows.cols();
-  const auto total = rows.parts->sum(
-      [&](Eigen::Index s) {
-        const auto [begin, end] = rows.segment_rows(s);
-        std::vector<double> out(std::size_t(k) * (n + 1), 0.0);
-        for (Eigen::Index p = begin; p < end; ++p) {
-          const std::int32_t l = labels[std::size_t(p)];
-          if (l < 0) continue;
-          double* sum = &out[std::size_t(l) * n];
-          const float* row = rows.x.row(p).data();
-          for (Eigen::Index d = 0; d < n; ++d) sum[d] += double(row[d]);
-          out[std::size_t(k) * n + l] += 1;
-        }
-        rows.release(begin, end);
-        return out;
-      });
+  const auto total = rows.parts->sum([&](Eigen::Index s) {
+    const auto [begin, end] = rows.segment_rows(s);
+    std::vector<double> out(std::size_t(k) * (n + 1), 0.0);
+    for (Eigen::Index p = begin; p < end; ++p) {
+      const std::int32_t l = labels[std::size_t(p)];
+      if (l < 0) continue;
+      double* sum = &out[std::size_t(l) * n];
+      const float* row = rows.x.row(p).data();
+      for (Eigen::Index d = 0; d < n; ++d) sum[d] += double(row[d]);
+      out[std::size_t(k) * n + l] += 1;
+    }
+    rows.release(begin, end);
+    return out;
+  });
   ClusterSums result{RowMatrixXd::Zero(k, n), std::vector<double>(k, 0.0)};
   if (total.empty()) return result;
   result.sums = Eigen::Map<const RowMatrixXd>(total.data(), k, n);
@@ -99,14 +100,13 @@ ClusterSums cluster_sums(const Rows& rows, const std::vector<std::int32_t>& labe
 
 std::vector<double> cluster_counts(const Rows& rows, const std::vector<std::int32_t>& labels,
                                    int k) {
-  std::vector<double> total = rows.parts->sum(
-      [&](Eigen::Index s) {
-        const auto [begin, end] = rows.segment_rows(s);
-        std::vector<double> out(std::size_t(k), 0.0);
-        for (Eigen::Index p = begin; p < end; ++p)
-          if (labels[std::size_t(p)] >= 0) out[std::size_t(labels[std::size_t(p)])] += 1;
-        return out;
-      });
+  std::vector<double> total = rows.parts->sum([&](Eigen::Index s) {
+    const auto [begin, end] = rows.segment_rows(s);
+    std::vector<double> out(std::size_t(k), 0.0);
+    for (Eigen::Index p = begin; p < end; ++p)
+      if (labels[std::size_t(p)] >= 0) out[std::size_t(labels[std::size_t(p)])] += 1;
+    return out;
+  });
   if (total.empty()) total.assign(std::size_t(k), 0.0);
   return total;
 }

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "prt/row_parts.hpp"
 #include "prt/mesh.hpp"
+#include "prt/row_parts.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt {
@@ -41,8 +41,8 @@ struct Rows {
   Rows(const MatrixXfRow& local, std::shared_ptr<const RowParts> parts);
   Rows(const TransferSignal& local, std::shared_ptr<const RowParts> parts);
   Eigen::Map<const MatrixXfRow> x;
-  std::shared_ptr<const RowParts> parts;  // never null
-  Shard shard;                            // parts->shard()
+  std::shared_ptr<const RowParts> parts;   // never null
+  Shard shard;                             // parts->shard()
   const TransferSignal* signal = nullptr;  // set when made from one: releases go to it
 
   // Lets local rows [begin, end) go when they are in a file (no-op in memory).
