@@ -17,6 +17,8 @@
 #include <numeric>
 #include <set>
 #include <sstream>
+#include <type_traits>
+#include <variant>
 
 #include "commands.hpp"
 #include "prt/bake_file.hpp"
@@ -64,24 +66,20 @@ std::vector<Override> parse_sweep(const std::string& text) {
   return values;
 }
 
-// A value typed as TOML would type it.
+// A value typed as the scene parser types it (prt::parse_value).
 void assign(toml::table& table, const std::string& key, const std::string& value) {
-  char* end = nullptr;
-  if (value == "true" || value == "false") {
-    table.insert_or_assign(key, value == "true");
-    return;
-  }
-  const long long integer = std::strtoll(value.c_str(), &end, 10);
-  if (!value.empty() && *end == '\0') {
-    table.insert_or_assign(key, static_cast<std::int64_t>(integer));
-    return;
-  }
-  const double real = std::strtod(value.c_str(), &end);
-  if (!value.empty() && *end == '\0') {
-    table.insert_or_assign(key, real);
-    return;
-  }
-  table.insert_or_assign(key, value);
+  std::visit(
+      [&](const auto& typed) {
+        using T = std::decay_t<decltype(typed)>;
+        if constexpr (std::is_same_v<T, std::vector<double>>) {
+          toml::array list;
+          for (double x : typed) list.push_back(x);
+          table.insert_or_assign(key, std::move(list));
+        } else {
+          table.insert_or_assign(key, typed);
+        }
+      },
+      parse_value(value));
 }
 
 std::string scene_with(const std::string& text, const std::string& file,

@@ -7,7 +7,6 @@
 #include "prt/basis_metric.hpp"
 #include "prt/error.hpp"
 #include "prt/row_blocks.hpp"
-#include "prt/row_file.hpp"
 
 namespace prt {
 
@@ -99,30 +98,11 @@ void RenderedMetric::unwhiten(CompressedTransfer& compressed, int exit_rows) con
 }
 
 TransferSignal RenderedMetric::whiten(const TransferSignal& signal) const {
-  TransferSignal out = signal;
-  out.file.reset();
-  const Eigen::Index rows = signal.vertices(), cols = signal.dimension();
-  const auto source = signal.rows();
-  std::shared_ptr<RowFile> file;
-  if (signal.on_disk())
-    file = RowFile::create(signal.file->folder(), rows, cols);
-  else
-    out.coefficients.resize(rows, cols);
-  for_each_row_block(Eigen::Index(0), rows, Eigen::Index(256),
-                     [&](Eigen::Index begin, Eigen::Index end) {
-                       Eigen::MatrixXd block = source.middleRows(begin, end - begin).cast<double>();
-                       whiten_rows(block, signal.exit_rows);
-                       if (file)
-                         file->write(begin, block.cast<float>());
-                       else
-                         out.coefficients.middleRows(begin, end - begin) = block.cast<float>();
-                       signal.release(begin, end);
-                     });
-  if (file) {
-    file->map();
-    out.file = std::move(file);
-  }
-  return out;
+  return map_row_blocks(signal, Eigen::Index(256), [&](Eigen::Ref<const MatrixXfRow> rows) {
+    Eigen::MatrixXd block = rows.cast<double>();
+    whiten_rows(block, signal.exit_rows);
+    return MatrixXfRow(block.cast<float>());
+  });
 }
 
 CompressedTransfer encode_in_metric(const Compressor& compressor, const TransferSignal& signal,

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -116,5 +117,14 @@ CompressedTransfer keep_largest(const TransferSignal& signal, int terms);
 
 // Squared error sum over vertices of |t_p - reconstruction_p|^2.
 double squared_error(const MatrixXfRow& exact, const MatrixXfRow& approximation);
+
+// A signal of the same shape and kind whose rows are map(rows [begin, end) of
+// `signal`), block by block (in parallel), kept where `signal`'s are: in
+// memory, or in a new file beside its rows
+// (a RowFile: framework/src/map_row_blocks.cpp). Each block of `signal` is
+// released once read, so an out-of-core signal is read in one pass.
+using RowBlockMap = std::function<MatrixXfRow(Eigen::Ref<const MatrixXfRow> rows)>;
+TransferSignal map_row_blocks(const TransferSignal& signal, Eigen::Index block_rows,
+                              const RowBlockMap& map);
 
 }  // namespace prt
