@@ -16,7 +16,12 @@ while [ $# -gt 0 ]; do
 done
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
+# Configured once; again when CMake arguments are given (scripts/test.sh
+# requires every optional part, which a build for the demo may have left
+# out: packages installed since are found then).
 if [ ! -f "$root/build/CMakeCache.txt" ]; then
   cmake -S "$root" -B "$root/build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "${cmake_args[@]}"
+elif [ ${#cmake_args[@]} -gt 0 ]; then
+  cmake -S "$root" -B "$root/build" "${cmake_args[@]}"
 fi
 cmake --build "$root/build" --parallel "$(nproc)" "${targets[@]}"

@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # One command from a fresh Debian 12 machine to an image: installs the
-# dependencies and data, builds the CLI and the plug-ins the scene names (not
-# the tests: scripts/test.sh builds the rest), bakes the default scene
+# packages the CLI needs (not the viewer's, Python's or the tests') and the
+# data, builds the CLI and the plug-ins the scene names (scripts/test.sh
+# installs and builds the rest), bakes the default scene
 # (bunny00.off under a Blender HDRI, shadowed order-10 SH) and renders it to
 # out/bunny.png.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 scene="${1:-$root/scenes/bunny.toml}"
-bash "$root/scripts/setup.sh"
+bash "$root/scripts/setup.sh" --demo
 # A plug-in's target is prt_<kind>_<name>; its kind is its section's role
 # ([basis] and [exit] name bases); a role the scene leaves out takes the
 # scene reader's default (framework/src/scene.cpp: sh, none, cpu).

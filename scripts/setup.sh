@@ -1,19 +1,32 @@
 #!/usr/bin/env bash
 # Installs every Debian package PRT needs and fetches the real data (CGAL meshes,
 # Blender HDR environment maps) into data/. Idempotent and non-interactive.
+#   scripts/setup.sh [--demo]   (--demo: only the CLI's packages, for scripts/demo.sh)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export DEBIAN_FRONTEND=noninteractive
 
+# What the CLI and the plug-ins build from (scripts/demo.sh installs these
+# alone: --demo), then the rest: the OpenGL renderer and prt-view, prt-mpi, the
+# Python module, the tests and their tools.
+demo_packages=(
+  build-essential cmake pkg-config ninja-build
+  libeigen3-dev libembree-dev libopenmesh-dev libboost-dev libboost-filesystem-dev
+  libtbb-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libopenexr-dev
+  libhdf5-dev libstb-dev liblapack-dev
+)
 packages=(
-  build-essential cmake pkg-config ninja-build clang-format clang
-  libeigen3-dev libembree-dev libopenmesh-dev libglfw3-dev libglm-dev
-  libboost-dev libboost-filesystem-dev catch2 libtbb-dev libtomlplusplus-dev
-  libcli11-dev nlohmann-json3-dev libopenexr-dev libhdf5-dev hdf5-tools libstb-dev libepoxy-dev libimgui-dev
-  liblapack-dev xvfb xauth libgl1-mesa-dri openmpi-bin libopenmpi-dev
+  "${demo_packages[@]}" clang-format clang libglfw3-dev libglm-dev catch2 hdf5-tools
+  libepoxy-dev libimgui-dev xvfb xauth libgl1-mesa-dri openmpi-bin libopenmpi-dev
   python3-h5py python3-matplotlib python3-sklearn python3-numpy python3-pil
   pybind11-dev python3-dev python3-pytest python3-tqdm python3-nbclient python3-nbformat python3-ipykernel
 )
+if [ "${1:-}" = "--demo" ]; then
+  packages=("${demo_packages[@]}")
+elif [ $# -gt 0 ]; then
+  echo "usage: scripts/setup.sh [--demo]" >&2
+  exit 2
+fi
 
 sudo_cmd=()
 [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)

@@ -4,6 +4,8 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
-bash "$root/scripts/build.sh"
+# Every optional part (OpenGL, Python, tests) is required here: a missing
+# package fails the configure instead of leaving tests out.
+bash "$root/scripts/build.sh" -DPRT_REQUIRE_ALL=ON
 cd "$root/build"
 ctest --output-on-failure --parallel "$(nproc)" --timeout 900
