@@ -67,8 +67,8 @@ static void basis_check_0(Kit& kit) {
   extremes << 0, 0, 1, 0, 0, -1, 1, 0, 0, 0, 1, 0, 1e-12, 0, 1, 0, -1e-12, -1;
   extremes.row(4).normalize(), extremes.row(5).normalize();
   const Eigen::MatrixXd v = basis->evaluate(extremes);
-  KIT_CHECK(kit, v.rows() == 6);
-  KIT_CHECK(kit, v.cols() == basis->size());
+  KIT_CHECK_EQUAL(kit, v.rows(), 6);
+  KIT_CHECK_EQUAL(kit, v.cols(), basis->size());
   KIT_CHECK(kit, v.allFinite());
 }
 
@@ -79,7 +79,7 @@ static void basis_check_1(Kit& kit) {
   const Eigen::MatrixXd y = basis->evaluate(set.directions);
   const Eigen::MatrixXd gram = y.transpose() * set.weights.asDiagonal() * y;
   const int n = basis->size();
-  KIT_CHECK(kit, (gram - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff() < 1e-9);
+  KIT_CHECK_AT_MOST(kit, (gram - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff(), 1e-9);
 }
 
 static void basis_check_2(Kit& kit) {
@@ -88,7 +88,7 @@ static void basis_check_2(Kit& kit) {
   const Eigen::MatrixXd c = random_coefficients(4, basis->size(), 1);
   const Eigen::MatrixXd samples = c * basis->evaluate(set.directions).transpose();
   const Eigen::MatrixXd projected = basis->project(samples, set);
-  KIT_CHECK(kit, (projected - c).norm() / c.norm() < 1e-9);
+  KIT_CHECK_AT_MOST(kit, (projected - c).norm() / c.norm(), 1e-9);
 }
 
 static void basis_check_3(Kit& kit) {
@@ -97,11 +97,11 @@ static void basis_check_3(Kit& kit) {
   const Eigen::MatrixXd f = random_coefficients(2, set.size(), 2);
   const Eigen::MatrixXd pf = basis->project(f, set);
   const Eigen::MatrixXd combined = basis->project(3.0 * f.row(0) - 0.5 * f.row(1), set);
-  KIT_CHECK(kit, (combined - (3.0 * pf.row(0) - 0.5 * pf.row(1))).norm() < 1e-9 * pf.norm());
+  KIT_CHECK_AT_MOST(kit, (combined - (3.0 * pf.row(0) - 0.5 * pf.row(1))).norm(), 1e-9 * pf.norm());
   for (double scale : {1e-6, 1e6}) {
     const Eigen::MatrixXd scaled = basis->project(scale * f, set);
     KIT_REQUIRE(kit, scaled.allFinite());
-    KIT_CHECK(kit, (scaled / scale - pf).norm() < 1e-12 * pf.norm());
+    KIT_CHECK_AT_MOST(kit, (scaled / scale - pf).norm(), 1e-12 * pf.norm());
   }
   KIT_CHECK(kit,
             basis->project(Eigen::MatrixXd::Zero(1, set.size()), set).cwiseAbs().maxCoeff() == 0.0);
@@ -150,8 +150,8 @@ static void basis_check_4(Kit& kit) {
            "weights sum to " << native->weights.sum() << "; the "
                              << (basis->domain() == Domain::hemisphere ? "hemisphere" : "sphere")
                              << " measures " << domain_measure(*basis));
-  KIT_CHECK(kit, std::abs(native->weights.sum() - domain_measure(*basis)) <
-                     1e-9 * domain_measure(*basis));
+  KIT_CHECK_AT_MOST(kit, std::abs(native->weights.sum() - domain_measure(*basis)),
+                    1e-9 * domain_measure(*basis));
   KIT_CHECK(kit, native->weights.minCoeff() >= 0);
   KIT_CHECK(kit, native->directions.rowwise().norm().isApprox(Eigen::VectorXd::Ones(native->size()),
                                                               1e-9));
@@ -171,7 +171,7 @@ static void basis_check_5(Kit& kit) {
   const double scale = std::max(expected.norm(), 1e-3 * std::sqrt(domain_measure(*basis)));
   KIT_INFO(kit,
            "function integrals differ by " << (own - expected).norm() / scale << " (relative)");
-  KIT_CHECK(kit, (own - expected).norm() < 0.02 * scale);
+  KIT_CHECK_AT_MOST(kit, (own - expected).norm(), 0.02 * scale);
   if (basis->orthonormal() && basis->size() <= 100) {
     // The Gram matrix on the independent rule (accurate to ~1e-3 for smooth bases).
     Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(basis->size(), basis->size());
@@ -183,7 +183,7 @@ static void basis_check_5(Kit& kit) {
     const double off =
         (gram - Eigen::MatrixXd::Identity(basis->size(), basis->size())).cwiseAbs().maxCoeff();
     KIT_INFO(kit, "independent Gram matrix is off the identity by " << off);
-    KIT_CHECK(kit, off < 0.02);
+    KIT_CHECK_AT_MOST(kit, off, 0.02);
   }
 }
 
@@ -199,13 +199,13 @@ static void basis_check_6(Kit& kit) {
       Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Matrix3d b = Eigen::AngleAxisd(-1.9, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const Eigen::MatrixXd ra = basis->rotation_matrix(a), rb = basis->rotation_matrix(b);
-  KIT_CHECK(kit, (ra * rb - basis->rotation_matrix(a * b)).cwiseAbs().maxCoeff() < 1e-10);
+  KIT_CHECK_AT_MOST(kit, (ra * rb - basis->rotation_matrix(a * b)).cwiseAbs().maxCoeff(), 1e-10);
   // Rotating coefficients equals projecting f(A^T d).
   const Eigen::VectorXd c = random_coefficients(1, basis->size(), 3).transpose();
   const Directions back = set.directions * a;
   const Eigen::RowVectorXd samples = (basis->evaluate(back) * c).transpose();
   const Eigen::VectorXd reprojected = basis->project(samples, set).transpose();
-  KIT_CHECK(kit, (ra * c - reprojected).norm() / c.norm() < 1e-9);
+  KIT_CHECK_AT_MOST(kit, (ra * c - reprojected).norm() / c.norm(), 1e-9);
   // A rotation of functions keeps their norms: an orthonormal basis's
   // rotation matrix is orthogonal.
   if (basis->orthonormal()) {
@@ -220,7 +220,7 @@ static void basis_check_7(Kit& kit) {
   [[maybe_unused]] auto& [registry, basis, set] = fixture;
   const std::vector<int> bands = basis->coefficient_bands();
   if (!bands.empty()) {
-    KIT_CHECK(kit, bands.size() == static_cast<std::size_t>(basis->size()));
+    KIT_CHECK_EQUAL(kit, bands.size(), basis->size());
     KIT_CHECK(kit, *std::min_element(bands.begin(), bands.end()) >= 0);
     KIT_CHECK(kit, std::is_sorted(bands.begin(), bands.end()));
     if (basis->can_rotate()) {  // a rotation never mixes bands
@@ -228,7 +228,7 @@ static void basis_check_7(Kit& kit) {
           Eigen::AngleAxisd(1.1, Eigen::Vector3d(3, 1, 2).normalized()).toRotationMatrix());
       for (int i = 0; i < basis->size(); ++i)
         for (int j = 0; j < basis->size(); ++j)
-          if (bands[i] != bands[j]) KIT_CHECK(kit, std::abs(r(i, j)) < 1e-12);
+          if (bands[i] != bands[j]) KIT_CHECK_AT_MOST(kit, std::abs(r(i, j)), 1e-12);
     }
   }
   if (!basis->can_fit()) {  // fitting a basis that does not fit changes nothing
@@ -240,11 +240,11 @@ static void basis_check_7(Kit& kit) {
     KIT_CHECK(kit, basis->evaluate(set.directions) == before);
   }
   KIT_CHECK(kit, basis->approximation_terms() >= 0);
-  KIT_CHECK(kit, basis->approximation_terms() <= basis->size());
+  KIT_CHECK_AT_MOST(kit, basis->approximation_terms(), basis->size());
   if (!basis->has_fast_projection(set)) {  // the default projection is the matrix's
     const Eigen::MatrixXd f = random_coefficients(2, set.size(), 9);
-    KIT_CHECK(kit, (basis->project(f, set) - f * basis->projection_matrix(set)).norm() <=
-                       1e-12 * f.norm() * basis->projection_matrix(set).norm());
+    KIT_CHECK_AT_MOST(kit, (basis->project(f, set) - f * basis->projection_matrix(set)).norm(),
+                      1e-12 * f.norm() * basis->projection_matrix(set).norm());
   }
 }
 
@@ -255,7 +255,7 @@ static void basis_check_8(Kit& kit) {
   Params fresh_params;
   auto fresh = registry.create<Basis>(kit.plugin, fresh_params);
   fresh->load(state);
-  KIT_CHECK(kit, fresh->size() == basis->size());
+  KIT_CHECK_EQUAL(kit, fresh->size(), basis->size());
   KIT_CHECK(kit, fresh->evaluate(set.directions) == basis->evaluate(set.directions));
 }
 
@@ -282,13 +282,13 @@ static void basis_check_9(Kit& kit) {
       }
       const Eigen::MatrixXd v = b->evaluate(extremes);
       KIT_CHECK(kit, v.allFinite());
-      KIT_CHECK(kit, v.cols() == b->size());
+      KIT_CHECK_EQUAL(kit, v.cols(), b->size());
       if (value == spec.min) {  // small enough for the round trip
         const DirectionSet native = b->native_directions().value_or(gauss_product_sphere(64));
         const Eigen::MatrixXd c = random_coefficients(2, b->size(), 5);
         const Eigen::MatrixXd back =
             b->project(c * b->evaluate(native.directions).transpose(), native);
-        KIT_CHECK(kit, (back - c).norm() <= 1e-8 * c.norm());
+        KIT_CHECK_AT_MOST(kit, (back - c).norm(), 1e-8 * c.norm());
       }
     }
   }
@@ -353,7 +353,7 @@ static void basis_check_10(Kit& kit) {
     const DirectionSet native = b->native_directions().value_or(gauss_product_sphere(64));
     const Eigen::MatrixXd y = b->evaluate(native.directions);
     KIT_REQUIRE(kit, b->size() > 0);
-    KIT_CHECK(kit, y.cols() == b->size());  // size() must follow every parameter
+    KIT_CHECK_EQUAL(kit, y.cols(), b->size());  // size() must follow every parameter
     KIT_CHECK(kit, y.allFinite());
     if (y.cols() != b->size()) continue;
     if (b->orthonormal()) {
@@ -365,7 +365,7 @@ static void basis_check_10(Kit& kit) {
     // Projection (by whichever method the parameters choose) gives one
     // finite coefficient per function.
     const Eigen::MatrixXd p_matrix = b->projection_matrix(native);
-    KIT_CHECK(kit, p_matrix.cols() == b->size());
+    KIT_CHECK_EQUAL(kit, p_matrix.cols(), b->size());
     KIT_CHECK(kit, p_matrix.allFinite());
   }
 }

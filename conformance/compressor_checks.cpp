@@ -60,11 +60,12 @@ static void compressor_check_0(Kit& kit) {
   const TransferSignal s = test_signal();
   const CompressedTransfer c = fixture.make()->encode(s, nullptr);
   KIT_REQUIRE_NOTHROW(kit, c.validate(s.vertices()));
-  KIT_CHECK(kit, c.dimension == s.dimension());
+  KIT_CHECK_EQUAL(kit, c.dimension, s.dimension());
   KIT_CHECK(kit, c.decode().allFinite());
   const CompressionReport r = measure(s, c, nullptr, 0);
-  KIT_CHECK(kit, std::abs(r.squared_error - se(s, c)) <= 1.2e-5 * se(s, c));  // Catch's Approx
-  KIT_CHECK(kit, r.stored_floats == c.stored_floats());
+  KIT_CHECK_AT_MOST(kit, std::abs(r.squared_error - se(s, c)),
+                    1.2e-5 * se(s, c));  // Catch's Approx
+  KIT_CHECK_EQUAL(kit, r.stored_floats, c.stored_floats());
 }
 
 static void compressor_check_1(Kit& kit) {
@@ -77,7 +78,7 @@ static void compressor_check_1(Kit& kit) {
     full = {{"components", s.dimension()}, {"clusters", 4}};
   else if (fixture.has("clusters"))
     full = {{"clusters", s.vertices()}};
-  KIT_CHECK(kit, se(s, fixture.make(full)->encode(s, nullptr)) <= 1e-10 * energy);
+  KIT_CHECK_AT_MOST(kit, se(s, fixture.make(full)->encode(s, nullptr)), 1e-10 * energy);
 }
 
 static void compressor_check_2(Kit& kit) {
@@ -89,7 +90,7 @@ static void compressor_check_2(Kit& kit) {
       const double e =
           se(s, fixture.make({{"components", n}, {"clusters", 6}})->encode(s, nullptr));
       KIT_INFO(kit, "components " << n);
-      KIT_CHECK(kit, e <= previous * (1 + 1e-9) + 1e-12);
+      KIT_CHECK_AT_MOST(kit, e, previous * (1 + 1e-9) + 1e-12);
       previous = e;
     }
   }
@@ -99,7 +100,8 @@ static void compressor_check_2(Kit& kit) {
       const double e =
           se(s, fixture.make({{"clusters", k}, {"components", 1}})->encode(s, nullptr));
       KIT_INFO(kit, "clusters " << k);
-      KIT_CHECK(kit, e <= previous * 1.01 + 1e-12);  // k-means local optima may reverse by a hair
+      KIT_CHECK_AT_MOST(kit, e,
+                        previous * 1.01 + 1e-12);  // k-means local optima may reverse by a hair
       previous = e;
     }
   }
@@ -127,7 +129,7 @@ static void compressor_check_4(Kit& kit) {
         fixture.make({{"clusters", 8}, {"components", 24}})->encode(*s, nullptr);
     KIT_REQUIRE_NOTHROW(kit, c.validate(s->vertices()));
     KIT_CHECK(kit, c.decode().allFinite());
-    KIT_CHECK(kit, se(*s, c) <= 1e-10 * (1 + s->coefficients.cast<double>().squaredNorm()));
+    KIT_CHECK_AT_MOST(kit, se(*s, c), 1e-10 * (1 + s->coefficients.cast<double>().squaredNorm()));
   }
 }
 

@@ -20,6 +20,23 @@ bool Kit::expect_less(double a, double b, const char* a_text, const char* b_text
   return expect(a < b, text.str(), file, line);
 }
 
+bool Kit::expect_at_most(double measured, double bound, const char* measured_text,
+                         const char* bound_text, const char* file, int line) {
+  std::ostringstream text;
+  text.precision(6);
+  text << measured_text << " <= " << bound_text << ": measured " << measured
+       << ", expected at most " << bound;
+  return expect(measured <= bound, text.str(), file, line);  // NaN fails
+}
+
+bool Kit::expect_equal(double measured, double expected, const char* measured_text,
+                       const char* expected_text, const char* file, int line) {
+  std::ostringstream text;
+  text << measured_text << " == " << expected_text << ": measured " << measured << ", expected "
+       << expected;
+  return expect(measured == expected, text.str(), file, line);
+}
+
 Kit::Note::Note(Kit& kit, std::string text) : kit_(kit) {
   kit_.notes_.push_back(std::move(text));
 }

@@ -31,6 +31,13 @@ class Kit {
   // a < b, with both values in the failure's message.
   bool expect_less(double a, double b, const char* a_text, const char* b_text, const char* file,
                    int line);
+  // measured <= bound: the failure says what was measured, the bound (the
+  // tolerance the check allows) and both expressions.
+  bool expect_at_most(double measured, double bound, const char* measured_text,
+                      const char* bound_text, const char* file, int line);
+  // measured == expected (counts and sizes), both values in the message.
+  bool expect_equal(double measured, double expected, const char* measured_text,
+                    const char* expected_text, const char* file, int line);
 
   // A note attached to every failure while it lives (Catch's INFO).
   class Note {
@@ -69,6 +76,11 @@ std::vector<std::string> run_check(const Check& check, PluginRegistry& registry,
 #define KIT_CHECK(kit, ...) \
   (kit).expect(static_cast<bool>(__VA_ARGS__), #__VA_ARGS__, __FILE__, __LINE__)
 #define KIT_CHECK_LESS(kit, a, b) (kit).expect_less((a), (b), #a, #b, __FILE__, __LINE__)
+#define KIT_CHECK_AT_MOST(kit, measured, bound) \
+  (kit).expect_at_most((measured), (bound), #measured, #bound, __FILE__, __LINE__)
+#define KIT_CHECK_EQUAL(kit, measured, expected)                                              \
+  (kit).expect_equal(static_cast<double>(measured), static_cast<double>(expected), #measured, \
+                     #expected, __FILE__, __LINE__)
 #define KIT_REQUIRE(kit, ...)                                         \
   if (!KIT_CHECK(kit, __VA_ARGS__)) throw ::prt::conformance::Abort { \
     }

@@ -421,12 +421,18 @@ int bench(Context& context, const BenchArgs& args) {
   std::vector<SceneSpec> scenes;
   std::vector<BakePlan> plans;
   for (const auto& config : configs) {
-    scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config), base.file,
-                                      context.registry));
     try {  // every plug-in created and every parameter checked, before any ray
+      scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config),
+                                        base.file, context.registry));
       plans.push_back(plan_bake(scenes.back(), context.registry));
     } catch (const Error& e) {
-      throw Error("configuration \"" + label_of(config) + "\": " + e.what());
+      // The swept scene is the base scene rewritten: a line of it is not a
+      // line of the user's file, so the message names the --sweep instead.
+      std::string message = e.what();
+      const std::size_t at = message.find(": error: ");
+      if (at != std::string::npos) message = message.substr(at + 9);
+      throw Error(base.file.string() + ", --sweep configuration \"" + label_of(config) +
+                  "\": " + message);
     }
   }
 

@@ -177,7 +177,8 @@ void check_value(const ParamSchema& schema, const std::string& key, ParamEntry& 
     std::vector<std::string> valid;
     for (const auto& s : schema.specs) valid.push_back(s.name);
     std::string message =
-        schema.owner + ": unknown parameter \"" + elide(key) + "\"; valid: " + join(valid, ", ");
+        schema.owner + ": unknown parameter \"" + elide(key) + "\"; " +
+        (valid.empty() ? std::string("it takes no parameters") : "valid: " + join(valid, ", "));
     const std::string suggestion = closest_match(key, valid);
     if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
     throw Error(entry.where, message);

@@ -391,7 +391,12 @@ const PluginDescriptor& PluginRegistry::find(PluginKind kind, const std::string&
   std::string message = std::string("no ") + to_string(kind) + " plug-in named \"" + name +
                         "\"; available: " + (list.empty() ? "(none found)" : list);
   const std::string suggestion = closest_match(name, available);
-  if (!suggestion.empty()) message += " (did you mean \"" + suggestion + "\"?)";
+  if (!suggestion.empty())
+    message += " (did you mean \"" + suggestion + "\"?)";
+  else  // a Python class registered in another process is not on any path
+    message +=
+        "; a plug-in written in Python exists only in the Python process that registers it "
+        "(docs/python.md), a library file only on the plug-in path (PRT_PLUGIN_PATH)";
   throw Error(where, message);
 }
 

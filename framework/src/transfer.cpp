@@ -29,12 +29,34 @@ MatrixXfRow CompressedTransfer::decode() const {
 }
 
 void CompressedTransfer::validate(Eigen::Index vertex_count, bool finite) const {
-  if (vertices() != vertex_count || weights.rows() != vertices() || weights.cols() != components ||
-      means.cols() != dimension || static_cast<Eigen::Index>(representatives.size()) != clusters())
-    throw Error("compressed transfer has inconsistent sizes");
-  for (const auto& r : representatives)
+  // Each array by its name (as Python's prt.CompressedTransfer names it) and shape.
+  const auto shape = [](Eigen::Index rows, Eigen::Index cols) {
+    return std::to_string(rows) + " x " + std::to_string(cols);
+  };
+  const auto refuse = [](const std::string& what) {
+    throw Error("compressed transfer has inconsistent sizes: " + what);
+  };
+  if (vertices() != vertex_count)
+    refuse("cluster_of_vertex has " + std::to_string(vertices()) + " entries for " +
+           std::to_string(vertex_count) + " vertices");
+  if (weights.rows() != vertices() || weights.cols() != components)
+    refuse("weights is " + shape(weights.rows(), weights.cols()) + ", expected " +
+           shape(vertices(), components) + " (vertices x components)");
+  if (means.cols() != dimension)
+    refuse("means is " + shape(means.rows(), means.cols()) + ", expected clusters x " +
+           std::to_string(dimension) + " (the dimension)");
+  if (static_cast<Eigen::Index>(representatives.size()) != clusters())
+    refuse("representatives has " + std::to_string(representatives.size()) + " blocks for " +
+           std::to_string(clusters()) + " clusters (rows of means)");
+  for (std::size_t k = 0; k < representatives.size(); ++k) {
+    const MatrixXfRow& r = representatives[k];
     if (r.rows() > components || r.cols() != dimension)
-      throw Error("compressed transfer has a representative block of the wrong size");
+      throw Error("compressed transfer has a representative block of the wrong size: "
+                  "representatives[" +
+                  std::to_string(k) + "] is " + shape(r.rows(), r.cols()) + ", expected at most " +
+                  std::to_string(components) + " x " + std::to_string(dimension) +
+                  " (components x dimension)");
+  }
   for (auto k : cluster_of_vertex)
     if (k < 0 || k >= clusters()) throw Error("compressed transfer: cluster index out of range");
   if (!supercluster_of_cluster.empty() &&

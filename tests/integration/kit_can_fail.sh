@@ -24,5 +24,14 @@ expect failed "projection reconstructs functions in the span"
 expect failed "rotation is consistent with re-projection and composes"
 expect passed "basis values are finite everywhere, poles included"
 expect passed "projection is linear and scales from 1e-6 to 1e6"
-echo "$((5 - failures)) passed, $failures failed"
+# A failure says what was measured and what the check allows.
+gram=$(PRT_PLUGIN_PATH="$plugins" "$kit" --plugin wrong "an orthonormal basis has an identity Gram matrix" 2>&1)
+if grep -q "maxCoeff() <= 1e-9: measured [0-9.e+-]*, expected at most 1e-09" <<<"$gram"; then
+  echo "ok   the Gram failure prints the measured deviation and the tolerance"
+else
+  echo "FAIL the Gram failure does not print measured and expected values:"
+  echo "$gram" | head -n 20
+  failures=$((failures + 1))
+fi
+echo "$((6 - failures)) passed, $failures failed"
 [ "$failures" -eq 0 ]

@@ -3,6 +3,9 @@
 //   prt_basis_conformance --plugin NAME      (PRT_KIT_KIND basis)
 //   prt_compressor_conformance --plugin NAME (PRT_KIT_KIND compressor)
 #define CATCH_CONFIG_RUNNER
+// A failure's expression, measured value and tolerance on one line each (the
+// default 80 columns wraps them mid-word).
+#define CATCH_CONFIG_CONSOLE_WIDTH 300
 #include <catch2/catch.hpp>
 
 #include "kit.hpp"

@@ -27,7 +27,10 @@ def test_kit_fails_a_basis_missing_its_normalisation():
 def test_kit_fails_a_compressor_with_an_inconsistent_form():
     failures = run_check("compressor", "keeps_mean_only", "the compressed form is consistent and "
                          "finite")
-    assert failures and "inconsistent form" in "\n".join(failures)
+    text = "\n".join(failures)
+    assert failures and "inconsistent form" in text
+    # It names the array and its shape against the signal's.
+    assert "cluster_of_vertex has" in text and "entries for" in text, text
 
 
 def test_wrong_shape_is_one_clear_error():
