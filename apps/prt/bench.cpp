@@ -414,7 +414,6 @@ int bench(Context& context, const BenchArgs& args) {
       args.out.empty() ? fs::path("bench_" + base.file.stem().string()) : fs::path(args.out);
   if (fs::exists(out) && !fs::is_directory(out))
     throw Error(out.string() + ": the bench output folder exists and is not a directory");
-  fs::create_directories(out / "images");
 
   const std::vector<std::vector<Override>> configs = configurations(args.sweeps);
   // Validate every configuration before any work; each plan serves its bake.
@@ -431,11 +430,12 @@ int bench(Context& context, const BenchArgs& args) {
       std::string message = e.what();
       const std::size_t at = message.find(": error: ");
       if (at != std::string::npos) message = message.substr(at + 9);
-      throw Error(base.file.string() + ", --sweep configuration \"" + label_of(config) +
-                  "\": " + message);
+      throw Error(SourceLocation{base.file.string()},
+                  "--sweep configuration \"" + label_of(config) + "\": " + message);
     }
   }
 
+  fs::create_directories(out / "images");  // once every configuration is valid
   // Resume: configurations already in results.jsonl are skipped.
   const fs::path results = out / "results.jsonl";
   const std::set<std::string> done = finished_labels(results);

@@ -88,6 +88,10 @@ head -c 5000 /dev/urandom >"$work/corrupt.h5"
 expect_error "corrupt bake" 'corrupt.h5: error: not a PRT bake file' -- render good.toml --bake corrupt.h5
 
 expect_error "missing bake" 'out.h5: error: bake file not found' -- render good.toml
+expect_error "sweep of a parameter the plug-in lacks" \
+  'good.toml: error: --sweep configuration "clusters=64": compressor "none": unknown parameter "clusters"; it takes no parameters' \
+  -- bench good.toml --sweep compressor.clusters=64,256 --out sweep_out
+report "a refused sweep writes no folder" "$([ -e "$work/sweep_out" ] && echo ' sweep_out was created;')" "none"
 
 good_scene | sed 's/^rays = 64/rays = 0/' >"$work/range.toml"
 { good_scene; printf '[compressor]\nplugin = "pca"\n%s = 1\n' "$(head -c 1000000 /dev/zero | tr '\0' k)"; } >"$work/long_key.toml"
