@@ -1,3 +1,5 @@
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <fstream>
@@ -157,7 +159,8 @@ TEST_CASE("the GPU renderer is asked for by capability, not by name", "[registry
   CHECK(gpu_renderer(registry, "") == "opengl");
   // A plug-in folder with the CPU renderer alone has none: one message that
   // names what it found.
-  const fs::path only_cpu = fs::temp_directory_path() / "prt-gpu-renderer-test";
+  const fs::path only_cpu =
+      fs::temp_directory_path() / ("prt-gpu-renderer-test-" + std::to_string(::getpid()));
   fs::remove_all(only_cpu);
   fs::create_directories(only_cpu);
   fs::copy_file(fs::path(PRT_BUILD_PLUGIN_DIR) / "libprt-renderer-cpu.so",
