@@ -304,10 +304,8 @@ std::vector<std::vector<std::pair<std::string, ParamValue>>> combinations(
   for (const auto& spec : schema.specs) {
     std::vector<ParamValue> values;
     if (spec.type == ParamType::boolean) values = {false, true};
-    if (spec.type == ParamType::string && spec.choices[0]) {
-      std::stringstream list(spec.choices);
-      for (std::string c; std::getline(list, c, '|');) values.push_back(c);
-    }
+    if (spec.type == ParamType::string)
+      for (const std::string& choice : choices_of(spec)) values.push_back(choice);
     if (values.empty()) continue;
     std::vector<std::vector<std::pair<std::string, ParamValue>>> next;
     for (const auto& partial : out)

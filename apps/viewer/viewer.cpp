@@ -57,16 +57,9 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
   // it does. Its drawing methods, if it has a "method" choice, are what the
   // viewer switches between; the scene's choice (or --method) starts.
   renderer_name_ = gpu_renderer(registry_, scene_.renderer.name);
-  for (const ParamSpecRecord& spec :
-       registry_.find(PluginKind::renderer, renderer_name_).schema().specs) {
-    if (std::string(spec.name) != "method") continue;
-    std::string choices = spec.choices;
-    for (std::size_t at = 0; at <= choices.size();) {
-      const std::size_t bar = std::min(choices.find('|', at), choices.size());
-      methods_.push_back(choices.substr(at, bar - at));
-      at = bar + 1;
-    }
-  }
+  if (const ParamSpecRecord* spec =
+          registry_.find(PluginKind::renderer, renderer_name_).schema().find("method"))
+    methods_ = choices_of(*spec);
   std::string method = options.method;
   if (method.empty() && renderer_name_ == scene_.renderer.name &&
       scene_.renderer.params.has("method"))

@@ -212,7 +212,7 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   if (!distributed)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
   TransferOutcome stage = transfer_of(plan, data.mesh, set, options, shard, on_disk);
-  for (const auto& [name, seconds] : stage.times.stages) times.add(name, seconds);
+  times.append(stage.times);
   data.metrics = std::move(stage.metrics);
   data.direct = std::move(stage.direct);
   TransferSignal transfer = std::move(stage.transfer);

@@ -135,6 +135,10 @@ std::string range_text(const ParamSpecRecord& spec) {
 
 }  // namespace
 
+std::vector<std::string> choices_of(const ParamSpecRecord& spec) {
+  return split(spec.choices, '|');
+}
+
 void Params::set(const std::string& key, ParamValue value, SourceLocation where) {
   if (where.file.empty()) where = section_;
   entries_[key] = ParamEntry{std::move(value), std::move(where), false};
@@ -159,9 +163,9 @@ namespace {
 
 // A string among its spec's choices (when it has any).
 void check_choice(const ParamSpecRecord& spec, const std::string& what, const ParamEntry& entry) {
-  if (spec.choices[0] == '\0') return;
+  const auto choices = choices_of(spec);
+  if (choices.empty()) return;
   const std::string& text = std::get<std::string>(entry.value);
-  const auto choices = split(spec.choices, '|');
   if (std::find(choices.begin(), choices.end(), text) != choices.end()) return;
   std::string message = what + " = \"" + text + "\" is not one of: " + join(choices, ", ");
   const std::string suggestion = closest_match(text, choices);

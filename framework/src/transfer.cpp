@@ -51,11 +51,12 @@ void CompressedTransfer::validate(Eigen::Index vertex_count, bool finite) const 
   for (std::size_t k = 0; k < representatives.size(); ++k) {
     const MatrixXfRow& r = representatives[k];
     if (r.rows() > components || r.cols() != dimension)
-      throw Error("compressed transfer has a representative block of the wrong size: "
-                  "representatives[" +
-                  std::to_string(k) + "] is " + shape(r.rows(), r.cols()) + ", expected at most " +
-                  std::to_string(components) + " x " + std::to_string(dimension) +
-                  " (components x dimension)");
+      throw Error(
+          "compressed transfer has a representative block of the wrong size: "
+          "representatives[" +
+          std::to_string(k) + "] is " + shape(r.rows(), r.cols()) + ", expected at most " +
+          std::to_string(components) + " x " + std::to_string(dimension) +
+          " (components x dimension)");
   }
   for (auto k : cluster_of_vertex)
     if (k < 0 || k >= clusters()) throw Error("compressed transfer: cluster index out of range");

@@ -80,10 +80,8 @@ std::shared_ptr<const Basis> fit_basis(const BakePlan& plan, const Mesh& mesh,
   Stopwatch clock;
   FitData fit{&mesh, &set, &visibility};
   fit.checkpoint = store;
-  const std::shared_ptr<Basis> fitted = plan.new_basis();
-  fitted->fit(fit);
+  auto fitted = fit_fresh_basis(plan.new_basis, plan.basis_record.name, fit, store);
   times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
-  if (store) keep_fitted_basis(*store, *fitted, plan.basis_record.name);
   return fitted;
 }
 
@@ -348,7 +346,7 @@ TransferOutcome channel_transfers(const BakePlan& plan, const Mesh& mesh, const 
         keep_channel(*store, prefix, part.transfer, want_direct ? &part.direct : nullptr,
                      part.metrics);
     }
-    for (const auto& [name, seconds] : part.times.stages) out.times.add(name, seconds);
+    out.times.append(part.times);
     for (const auto& [name, value] : part.metrics) out.metrics[name] = value;
     out.basis = part.basis;
     parts.push_back(std::move(part.transfer));

@@ -72,6 +72,10 @@ std::size_t edit_distance(const std::string& a, const std::string& b);
 // The closest candidate within a small edit distance, or "" if none is close.
 std::string closest_match(const std::string& word, const std::vector<std::string>& candidates);
 
+// The values a choice parameter allows, in the schema's order (its
+// `choices`, "a|b|c"); empty for any other parameter.
+std::vector<std::string> choices_of(const ParamSpecRecord& spec);
+
 // The one parser of parameter values: a value written as in a scene file
 // (true, 12, 0.5, [1, 2], "text") is typed exactly as the scene parser types
 // it; anything TOML does not read as one value (a bare word such as

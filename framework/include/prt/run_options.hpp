@@ -17,6 +17,10 @@ struct TransportResult;
 struct StageTimes {
   std::vector<std::pair<std::string, double>> stages;
   void add(const std::string& name, double seconds) { stages.emplace_back(name, seconds); }
+  // Another stage's times after these, in their order.
+  void append(const StageTimes& later) {
+    stages.insert(stages.end(), later.stages.begin(), later.stages.end());
+  }
   std::string table() const;
 };
 

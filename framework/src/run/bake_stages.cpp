@@ -47,7 +47,7 @@ TransferOutcome transfer_from_rays(const BakePlan& plan, const Mesh& mesh, const
       plan.channels.groups.size() <= 1
           ? transfer_stage(plan, mesh, set, std::move(traced), options, want_direct)
           : channel_transfers(plan, mesh, set, std::move(traced), options, want_direct);
-  times.stages.insert(times.stages.end(), out.times.stages.begin(), out.times.stages.end());
+  times.append(out.times);
   out.times = std::move(times);
   return out;
 }
@@ -414,11 +414,10 @@ TransferOutcome fitted_shard_transfer(const BakePlan& plan, const Mesh& mesh,
       clock = Stopwatch();
       FitData fit{&mesh, &set, &bits, parts_over(comm, shard)};
       fit.checkpoint = &store;
-      const std::shared_ptr<Basis> fitted = plan.new_basis();
-      fitted->fit(fit);
-      result.basis = fitted;
+      // Every rank fits; rank 0 keeps the result.
+      result.basis = fit_fresh_basis(plan.new_basis, plan.basis_record.name, fit,
+                                     comm.rank() == 0 ? &store : nullptr);
       result.times.add("fit basis (" + plan.basis_record.name + ")", clock.seconds());
-      if (comm.rank() == 0) keep_fitted_basis(store, *fitted, plan.basis_record.name);
     }
     clock = Stopwatch();
     rows = project_visibility(mesh, set, bits, *result.basis, own.first).coefficients;

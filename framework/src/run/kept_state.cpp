@@ -9,13 +9,8 @@
 namespace prt {
 
 namespace {
-constexpr const char* kBasisStatePrefix = "basis_state.";
-}
 
-void keep_basis_state(const CheckpointStore& store, const Basis& basis) {
-  for (const auto& [name, matrix] : basis.save().matrices)
-    store.save(kBasisStatePrefix + name, matrix);
-}
+constexpr const char* kBasisStatePrefix = "basis_state.";
 
 void load_kept_basis_state(const CheckpointStore& store, Basis& basis) {
   const std::string prefix = kBasisStatePrefix;
@@ -24,6 +19,13 @@ void load_kept_basis_state(const CheckpointStore& store, Basis& basis) {
     if (part.rfind(prefix, 0) == 0)
       state.matrices[part.substr(prefix.size())] = store.load_doubles(part);
   basis.load(state);
+}
+
+}  // namespace
+
+void keep_basis_state(const CheckpointStore& store, const Basis& basis) {
+  for (const auto& [name, matrix] : basis.save().matrices)
+    store.save(kBasisStatePrefix + name, matrix);
 }
 
 std::shared_ptr<const Basis> kept_basis(const CheckpointStore& store,
@@ -36,6 +38,15 @@ std::shared_ptr<const Basis> kept_basis(const CheckpointStore& store,
 void keep_fitted_basis(const CheckpointStore& store, const Basis& basis, const std::string& name) {
   keep_basis_state(store, basis);
   store.save_text(kFittedBasisMarker, name);  // last: marks the basis kept
+}
+
+std::shared_ptr<const Basis> fit_fresh_basis(const std::function<std::shared_ptr<Basis>()>& make,
+                                             const std::string& name, const FitData& data,
+                                             const CheckpointStore* keep_in) {
+  const std::shared_ptr<Basis> fitted = make();
+  fitted->fit(data);
+  if (keep_in) keep_fitted_basis(*keep_in, *fitted, name);
+  return fitted;
 }
 
 std::string metrics_text(const std::map<std::string, double>& metrics) {
