@@ -129,11 +129,12 @@ void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   BakePlan plan;
   PluginChoice basis = scene.basis, compressor = scene.compressor;
-  plan.basis = registry.create<Basis>(basis.name, basis.params, basis.where);
+  // The one way the light basis is made: the plan's, and a fresh one to fit.
   plan.new_basis = [&registry, basis] {
     Params params = basis.params;
     return registry.create<Basis>(basis.name, params, basis.where);
   };
+  plan.basis = plan.new_basis();
   plan.compressor =
       registry.create<Compressor>(compressor.name, compressor.params, compressor.where);
   plan.basis_record = record_of(scene.basis, registry, PluginKind::basis);
