@@ -102,6 +102,13 @@ def strip(folder, results, path, width=160):
     sheet.save(path)
 
 
+def gpu_text(record):
+    """The GPU frame time, or why there is none."""
+    if "gpu_frame_seconds" not in record:
+        return "not asked (--gpu)"
+    return f"{1000 * record['gpu_frame_seconds']:.1f}"
+
+
 def main(folder, title):
     with open(os.path.join(folder, "results.json")) as f:
         results = json.load(f)
@@ -132,7 +139,7 @@ def main(folder, title):
             f"| {r['label']} | {r['bake_seconds']:.2f} | {r['encode_seconds']:.2f} | "
             f"{r['bytes'] / 1e6:.3f} | {r['file_bytes'] / 1e6:.2f} | {r['bytes_per_vertex']:.1f} | "
             f"{1000 * r['relight_seconds']:.2f} | "
-            f"{1000 * r['gpu_frame_seconds']:.1f} | {r['transfer_se']:.4g} | {r['rms']:.4g} | "
+            f"{gpu_text(r)} | {r['transfer_se']:.4g} | {r['rms']:.4g} | "
             f"{r['p99']:.4g} | {r['max']:.4g} | {r['image_error']:.4g} |")
     lines += ["", "## Images", "",
               "Ground truth | configuration | error heat-map (4 x absolute difference, inferno), "

@@ -13,12 +13,12 @@ demo_packages=(
   build-essential cmake pkg-config ninja-build
   libeigen3-dev libembree-dev libopenmesh-dev libboost-dev libboost-filesystem-dev
   libtbb-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libopenexr-dev
-  libhdf5-dev libstb-dev liblapack-dev
+  libhdf5-dev libstb-dev liblapack-dev libxxhash-dev
 )
 packages=(
   "${demo_packages[@]}" clang-format clang libglfw3-dev libglm-dev catch2 hdf5-tools
   libepoxy-dev libimgui-dev xvfb xauth libgl1-mesa-dri openmpi-bin libopenmpi-dev
-  python3-h5py python3-matplotlib python3-sklearn python3-numpy python3-pil
+  python3-h5py python3-matplotlib python3-sklearn python3-skimage python3-numpy python3-pil
   pybind11-dev python3-dev python3-pytest python3-tqdm python3-nbclient python3-nbformat python3-ipykernel
 )
 if [ "${1:-}" = "--demo" ]; then

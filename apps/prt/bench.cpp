@@ -15,12 +15,14 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <type_traits>
 #include <variant>
 
 #include "commands.hpp"
+#include "reference_options.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/compressor.hpp"
@@ -196,10 +198,12 @@ std::set<std::string> finished_labels(const fs::path& results) {
 struct Reused {
   std::map<std::string, TransportResult> traces;
   std::map<std::string, std::pair<BakeData, double>> projections;  // transfer, seconds
-  std::map<std::string, std::vector<Rendered>> truths;
+  std::map<std::string, std::vector<Reference>> truths;
   // Ground truth under each light's band-limited reconstruction, per light
   // basis setting: the error budget's middle term.
-  std::map<std::string, std::vector<Eigen::MatrixX3f>> limited_truths;
+  std::map<std::string, std::vector<Reference>> limited_truths;
+  std::optional<ReferenceCache> cache;  // references kept on disk between runs
+  const ReferenceCache* kept() const { return cache ? &*cache : nullptr; }
 };
 
 // One configuration's bake: rays and projection reused, compression its own.
@@ -261,6 +265,7 @@ struct Measured {
   double relight_seconds = 0, gpu_seconds = 0;
   double rms = 0, p99 = 0, max_error = 0, image_error = 0;
   double truncation_rms = 0, projection_rms = 0, compression_rms = 0;  // the error budget
+  double noise_floor = 0;  // the ground truth's standard error (per-vertex RMS), mean over lights
 };
 
 // The images of light 0: the configuration's, the truth's, their difference.
@@ -326,20 +331,21 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
       SceneSpec rotated = scene;
       rotated.lighting.set(keys::lighting::rotation.name(),
                            keys::lighting::rotation(scene.lighting) + 360.0 * light / args.lights);
-      StageTimes times;
-      truth_list.push_back(render_ground_truth(rotated, data.mesh, context.registry, quiet, times));
+      truth_list.push_back(reference_radiance(rotated, data.mesh, rotated.load_environment(),
+                                              camera, quiet, reused.kept()));
     }
-    const Rendered& truth = truth_list[light];
-    const ErrorStats e = vertex_error(relit.vertex_radiance, truth.vertex_radiance);
+    const Reference& truth = truth_list[light];
+    m.noise_floor += truth.noise_floor() / args.lights;
+    const ErrorStats e = vertex_error(relit.vertex_radiance, truth.radiance);
     m.rms += e.rms / args.lights, m.p99 += e.p99 / args.lights;
     // Error budget: light truncation, transfer projection, compression.
     auto& limited_list = reused.limited_truths[limited_key];
     if (static_cast<int>(limited_list.size()) <= light)
       limited_list.push_back(band_limited_truth(scene, data.mesh, relighting, turning.environment(),
-                                                l, camera, quiet));
+                                                l, camera, quiet, reused.kept()));
     const Eigen::MatrixX3f exact = relighting.relight(exact_kernel, l, camera).vertex_radiance;
-    const ErrorBudget budget =
-        error_budget(truth.vertex_radiance, limited_list[light], exact, relit.vertex_radiance);
+    const ErrorBudget budget = error_budget(truth.radiance, limited_list[light].radiance, exact,
+                                            relit.vertex_radiance);
     m.truncation_rms += budget.truncation / args.lights;
     m.projection_rms += budget.projection / args.lights;
     m.compression_rms += budget.compression / args.lights;
@@ -347,7 +353,7 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
     RenderInput input = relighting.input(data.compressed, relit, l, camera);
     input.background = nullptr;
     const Image image = cpu->render(input);
-    const Image truth_image = render_radiance(*cpu, data.mesh, truth.vertex_radiance, camera);
+    const Image truth_image = render_radiance(*cpu, data.mesh, truth.radiance, camera);
     m.image_error += mean_absolute_difference(image, truth_image) / args.lights;
     if (light != 0) continue;
     write_images(image, truth_image, scene, out, label);
@@ -371,12 +377,16 @@ nlohmann::ordered_json result_line(const std::string& label, std::size_t index, 
   record["file_bytes"] = b.file_bytes;
   record["bytes_per_vertex"] = b.bytes / double(b.data.mesh.vertex_count());
   record["relight_seconds"] = m.relight_seconds;
-  record["gpu_frame_seconds"] = m.gpu_seconds;
+  if (m.gpu_seconds > 0) record["gpu_frame_seconds"] = m.gpu_seconds;  // only when --gpu
   record["transfer_se"] = b.se;
   record["rms"] = m.rms;
   record["light_truncation_rms"] = m.truncation_rms;
   record["projection_rms"] = m.projection_rms;
   record["compression_rms"] = m.compression_rms;
+  record["noise_floor"] = m.noise_floor;
+  // Against a noisy reference E[rms^2] = error^2 + floor^2: within twice the
+  // floor the reference cannot rank this configuration.
+  record["resolved"] = m.rms > 2 * m.noise_floor;
   record["p99"] = m.p99;
   record["max"] = m.max_error;
   record["image_error"] = m.image_error;
@@ -423,6 +433,7 @@ int bench(Context& context, const BenchArgs& args) {
     try {  // every plug-in created and every parameter checked, before any ray
       scenes.push_back(SceneSpec::parse(scene_with(base.text, base.file.string(), config),
                                         base.file, context.registry));
+      apply_samples(args.reference, scenes.back());
       plans.push_back(plan_bake(scenes.back(), context.registry));
     } catch (const Error& e) {
       // The swept scene is the base scene rewritten: a line of it is not a
@@ -441,6 +452,7 @@ int bench(Context& context, const BenchArgs& args) {
   const std::set<std::string> done = finished_labels(results);
   std::ofstream log(results, std::ios::app);
   Reused reused;
+  reused.cache = reference_cache(args.reference);
   Progress progress("bench", double(configs.size()), "", context.quiet);
   for (std::size_t i = 0; i < configs.size(); ++i) {
     const std::string label = label_of(configs[i]);

@@ -1,5 +1,9 @@
 #include "commands.hpp"
 
+#include <cmath>
+#include <optional>
+#include <tuple>
+
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -12,6 +16,8 @@
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_file.hpp"
+#include "image_outputs.hpp"
+#include "reference_options.hpp"
 
 #ifndef PRT_SOURCE_DIR
 #define PRT_SOURCE_DIR "."
@@ -68,8 +74,9 @@ struct Comparison {
   const Camera& camera;
 };
 
-void print_error_budget(const Comparison& with, const Eigen::MatrixX3f& truth,
-                        const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times);
+void print_error_budget(const Comparison& with, const Reference& truth,
+                        const Eigen::MatrixX3f& compressed, Context& context,
+                        const ReferenceCache* cache, StageTimes& times);
 
 // The scene's renderer, or the one --renderer names with its --renderer-param values.
 void override_renderer(Context& context, const RenderArgs& args, SceneSpec& scene) {
@@ -82,49 +89,62 @@ void override_renderer(Context& context, const RenderArgs& args, SceneSpec& scen
   scene.renderer = std::move(choice);
 }
 
-// prt render --compare: the render against the Monte Carlo ground truth, then
-// what each part of the approximation costs.
-void compare_with_truth(Context& context, const SceneSpec& scene, const BakeData& data,
-                        const Rendered& result, StageTimes& times) {
-  const Rendered truth =
-      render_ground_truth(scene, data.mesh, context.registry, {context.quiet}, times);
-  const ErrorStats e = vertex_error(result.vertex_radiance, truth.vertex_radiance);
+// prt render --compare: the render against the Monte Carlo ground truth
+// (with its noise floor, reused from the cache when it holds it), the image
+// metrics and error images, then what each part of the approximation costs.
+void compare_with_truth(Context& context, const RenderArgs& args, const SceneSpec& scene,
+                        const BakeData& data, const Rendered& result, StageTimes& times,
+                        const fs::path& output) {
+  const std::optional<ReferenceCache> cache = reference_cache(args.reference);
+  const ReferenceCache* kept = cache ? &*cache : nullptr;
+  const Environment environment = scene.load_environment();
+  const Camera camera = scene.make_camera(data.mesh);
+  Stopwatch clock;
+  const Reference truth =
+      reference_radiance(scene, data.mesh, environment, camera, {context.quiet}, kept);
+  times.add(truth.cached.empty() ? "ground truth (Monte Carlo)" : "ground truth (cached)",
+            clock.seconds());
+  clock = Stopwatch();
+  const Image truth_image =
+      render_reference(scene, data.mesh, context.registry, truth.radiance, environment);
+  times.add("rasterise the ground truth", clock.seconds());
+  const double floor = truth.noise_floor();
+  std::printf("%s\n", reference_summary(truth).c_str());
+  const ErrorStats e = vertex_error(result.vertex_radiance, truth.radiance);
   std::printf(
-      "error against ground truth (%lld samples/vertex): RMS per vertex %.6g (relative %.4f),"
+      "error against ground truth (%d samples/vertex): RMS per vertex %.6g (relative %.4f; %s),"
       " 99th percentile %.6g, max %.6g\n",
-      static_cast<long long>(keys::ground_truth::samples(scene.ground_truth)), e.rms,
-      e.relative_rms, e.p99, e.max);
-  const DarkPixels dark = count_dark_pixels(
-      result.image, truth.image, static_cast<float>(keys::camera::exposure(scene.camera)));
+      truth.samples, e.rms, e.relative_rms, noise_note(e.rms, floor).c_str(), e.p99, e.max);
+  const float exposure = static_cast<float>(keys::camera::exposure(scene.camera));
+  const DarkPixels dark = count_dark_pixels(result.image, truth_image, exposure);
   std::printf(
       "pixels darker than half the ground truth (of %lld with ground-truth luminance > 40 of "
       "255 at the scene's exposure): %lld\n",
       dark.lit, dark.dark);
-  // One relighting, light vector and camera for every comparison below.
+  write_comparison(result.image, truth_image, exposure, comparison_files(output));
+  // One relighting and light vector for every comparison below.
   const Relighting relighting(scene, data, context.registry);
-  const Environment environment = scene.load_environment();
   const Eigen::MatrixX3d light = relighting.light(environment);
-  const Camera camera = scene.make_camera(data.mesh);
   if (!scene.point_lights.empty()) {  // the nearest-direction rule against its reference
     Relighting brute(scene, data, context.registry);
     brute.use_brute_force(256);
     const Relit reprojected = brute.relight(data.compressed, light, camera);
-    const ErrorStats b = vertex_error(reprojected.vertex_radiance, truth.vertex_radiance);
+    const ErrorStats b = vertex_error(reprojected.vertex_radiance, truth.radiance);
     std::printf(
         "error of brute-force re-projection of the point lights (%s) against the same "
-        "ground truth: RMS per vertex %.6g (relative %.4f)\n",
-        brute.point_light_rule().c_str(), b.rms, b.relative_rms);
+        "ground truth: RMS per vertex %.6g (relative %.4f; %s)\n",
+        brute.point_light_rule().c_str(), b.rms, b.relative_rms, noise_note(b.rms, floor).c_str());
   }
   if (data.direct.coefficients.size()) {  // what the bounces bring
     const Relit direct = relighting.relight(exact_form(data.direct), light, camera);
-    const ErrorStats d = vertex_error(direct.vertex_radiance, truth.vertex_radiance);
+    const ErrorStats d = vertex_error(direct.vertex_radiance, truth.radiance);
     std::printf(
         "error of the same transfer without its %d bounces (exact, no compression) against "
-        "the same ground truth: RMS per vertex %.6g (relative %.4f)\n",
-        data.bounces, d.rms, d.relative_rms);
+        "the same ground truth: RMS per vertex %.6g (relative %.4f; %s)\n",
+        data.bounces, d.rms, d.relative_rms, noise_note(d.rms, floor).c_str());
   }
-  print_error_budget({scene, data, relighting, environment, light, camera}, truth.vertex_radiance,
-                     result.vertex_radiance, context, times);
+  print_error_budget({scene, data, relighting, environment, light, camera}, truth,
+                     result.vertex_radiance, context, kept, times);
 }
 
 int render(Context& context, const RenderArgs& args) {
@@ -140,18 +160,23 @@ int render(Context& context, const RenderArgs& args) {
   const FileKind image_kind = output.extension() == ".exr" ? FileKind::exr : FileKind::png;
   check_output({output, image_kind, "image", args.output.empty()}, inputs, args.force);
   image_format(output);  // an unknown extension is refused before any work
+  if (args.compare)
+    check_comparison_files(comparison_files(output), inputs, args.force, args.output.empty());
+  apply_samples(args.reference, scene);
 
   Rendered result;
   if (args.ground_truth) {
     const Mesh mesh = scene.load_mesh();
-    result = render_ground_truth(scene, mesh, context.registry, {context.quiet}, times);
+    const std::optional<ReferenceCache> cache = reference_cache(args.reference);
+    result = render_ground_truth(scene, mesh, context.registry, {context.quiet}, times, nullptr,
+                                 cache ? &*cache : nullptr);
   } else {
     clock = Stopwatch();
     const BakeData data = read_bake(bake_file);
     check_bake_records(bake_file.string(), data, context.registry);
     times.add("read bake file", clock.seconds());
     result = render(scene, data, context.registry, times, {context.quiet});
-    if (args.compare) compare_with_truth(context, scene, data, result, times);
+    if (args.compare) compare_with_truth(context, args, scene, data, result, times, output);
   }
   clock = Stopwatch();
   const float exposure =
@@ -170,23 +195,30 @@ int render(Context& context, const RenderArgs& args) {
 // (ground truth under the band-limited light against the full one), the
 // transfer's projection (exact PRT against the band-limited truth) and the
 // compression (compressed against exact PRT). RMS per vertex, as above.
-void print_error_budget(const Comparison& with, const Eigen::MatrixX3f& truth,
-                        const Eigen::MatrixX3f& compressed, Context& context, StageTimes& times) {
+void print_error_budget(const Comparison& with, const Reference& truth,
+                        const Eigen::MatrixX3f& compressed, Context& context,
+                        const ReferenceCache* cache, StageTimes& times) {
   const auto& [scene, data, relighting, environment, light, camera] = with;
   Stopwatch clock;
-  const Eigen::MatrixX3f limited_truth =
-      band_limited_truth(scene, data.mesh, relighting, environment, light, camera, {context.quiet});
+  const Reference limited_truth = band_limited_truth(scene, data.mesh, relighting, environment,
+                                                     light, camera, {context.quiet}, cache);
   times.add("ground truth under the band-limited light", clock.seconds());
   const Eigen::MatrixX3f exact =
       relighting.relight(exact_form(data.transfer), light, camera).vertex_radiance;
-  const ErrorBudget budget = error_budget(truth, limited_truth, exact, compressed);
-  std::printf("error budget (per-vertex RMS):\n");
-  for (const auto& [what, error] :
-       {std::pair{"light truncation (band-limited vs full ground truth)", budget.truncation},
-        {"transfer projection (exact PRT vs band-limited ground truth)", budget.projection},
-        {"compression (compressed vs exact PRT)", budget.compression},
-        {"total (compressed PRT vs full ground truth)", budget.total}})
-    std::printf("  %-62s %.6g\n", what, error);
+  const ErrorBudget budget =
+      error_budget(truth.radiance, limited_truth.radiance, exact, compressed);
+  // A difference of two references carries both their noises.
+  const double floor = truth.noise_floor(), limited_floor = limited_truth.noise_floor();
+  const double both = std::hypot(floor, limited_floor);
+  std::printf("error budget (per-vertex RMS; each term's noise floor beside it):\n");
+  for (const auto& [what, error, noise] :
+       {std::tuple{"light truncation (band-limited vs full ground truth)", budget.truncation, both},
+        {"transfer projection (exact PRT vs band-limited ground truth)", budget.projection,
+         limited_floor},
+        {"compression (compressed vs exact PRT)", budget.compression, 0.0},
+        {"total (compressed PRT vs full ground truth)", budget.total, floor}})
+    std::printf("  %-62s %.6g  (%s)\n", what, error,
+                noise > 0 ? noise_note(error, noise).c_str() : "exact: no Monte Carlo noise");
 }
 
 // "key=value" from the command line, typed as TOML would type the value.

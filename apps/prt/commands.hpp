@@ -18,12 +18,21 @@ struct Context {
 
 int bake(Context& context, const BakeArgs& args);
 
+// How the Monte Carlo reference is made and kept (render --compare, bench,
+// compare-bases): reference_options.cpp.
+struct ReferenceArgs {
+  std::int64_t samples = 0;  // 0: the scene's [ground_truth] samples
+  std::string cache;         // "": ReferenceCache::default_folder()
+  bool no_cache = false;
+};
+
 struct RenderArgs {
   std::string scene, bake, output;
   bool ground_truth = false, compare = false, force = false;
   float exposure = 0.0f;                         // 0: the scene's [camera] exposure
   std::string renderer;                          // overrides the scene's [renderer] plugin
   std::vector<std::string> renderer_parameters;  // key=value for it
+  ReferenceArgs reference;
 };
 int render(Context& context, const RenderArgs& args);
 
@@ -55,6 +64,7 @@ struct BenchArgs {
   std::vector<std::string> sweeps;  // section.key=v1,v2,...
   int lights = 2;                   // the scene's light plus rotated copies
   bool gpu = false, no_report = false, force = false;
+  ReferenceArgs reference;
 };
 int bench(Context& context, const BenchArgs& args);
 
@@ -72,6 +82,7 @@ int stability(Context& context, const StabilityArgs& args);
 struct CompareArgs {
   std::string scene, bases, csv, json;
   bool force = false;
+  ReferenceArgs reference;
 };
 int compare_bases(Context& context, const CompareArgs& args);
 

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "reference_options.hpp"
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
 #include "prt/output_file.hpp"
@@ -48,6 +49,7 @@ struct Row {
   int coefficients = 0;
   double bytes = 0, shading_rms = 0, shading_relative = 0, seconds = 0;
   double relight_seconds = 0;  // one relight of every vertex toward the camera (median of 3)
+  double noise_floor = 0;      // the ground truth's standard error (per-vertex RMS)
   double transport_error = std::numeric_limits<double>::quiet_NaN();  // diffuse only
 };
 
@@ -139,7 +141,7 @@ struct Shared {
   const Mesh& mesh;
   const Environment& environment;
   const Camera& camera;
-  const Eigen::MatrixX3f& truth;
+  const Reference& truth;
 };
 
 // One entry baked over the shared rays (its basis alone: its own sparse
@@ -169,12 +171,15 @@ Row measure(Context& context, const Entry& entry, const Shared& shared) {
   row.relight_seconds = median_seconds(3, [&] {
     radiance = relighting.relight(data.compressed, light, shared.camera).vertex_radiance;
   });
-  const ErrorStats shading = vertex_error(radiance, shared.truth);
+  const ErrorStats shading = vertex_error(radiance, shared.truth.radiance);
   row.shading_rms = shading.rms;
   row.shading_relative = shading.relative_rms;
-  std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g\n", row.spec.c_str(),
-               row.coefficients, entry.exit_role ? "exit functions" : "coefficients",
-               transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(), row.shading_rms);
+  row.noise_floor = shared.truth.noise_floor();
+  std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g (%s)\n",
+               row.spec.c_str(), row.coefficients,
+               entry.exit_role ? "exit functions" : "coefficients",
+               transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(), row.shading_rms,
+               noise_note(row.shading_rms, row.noise_floor).c_str());
   return row;
 }
 
@@ -183,14 +188,16 @@ void write_tables(const std::vector<Row>& rows, const CompareArgs& args) {
   std::ostringstream csv;
   nlohmann::ordered_json json = nlohmann::ordered_json::array();
   csv << "basis,coefficients,bytes,transport_l2_relative,shading_rms,shading_relative_rms,"
-         "seconds,relight_seconds\n";
+         "noise_floor,resolved,seconds,relight_seconds\n";
   for (const Row& r : rows) {
     const bool has_transport = std::isfinite(r.transport_error);
     char line[512];
-    std::snprintf(line, sizeof line, "%s,%d,%.0f,%s,%.6g,%.6g,%.3f,%.5f\n",
+    const bool resolved = r.shading_rms > 2 * r.noise_floor;
+    std::snprintf(line, sizeof line, "%s,%d,%.0f,%s,%.6g,%.6g,%.6g,%s,%.3f,%.5f\n",
                   nlohmann::json(r.spec).dump().c_str(), r.coefficients, r.bytes,
                   transport_text(r.transport_error, "%.6g", "").c_str(), r.shading_rms,
-                  r.shading_relative, r.seconds, r.relight_seconds);
+                  r.shading_relative, r.noise_floor, resolved ? "true" : "false", r.seconds,
+                  r.relight_seconds);
     csv << line;
     json.push_back({{"basis", r.spec},
                     {"coefficients", r.coefficients},
@@ -199,23 +206,28 @@ void write_tables(const std::vector<Row>& rows, const CompareArgs& args) {
                      has_transport ? nlohmann::ordered_json(r.transport_error) : nullptr},
                     {"shading_rms", r.shading_rms},
                     {"shading_relative_rms", r.shading_relative},
+                    {"noise_floor", r.noise_floor},
+                    {"resolved", r.shading_rms > 2 * r.noise_floor},
                     {"seconds", r.seconds},
                     {"relight_seconds", r.relight_seconds}});
   }
   if (!args.csv.empty()) write_text_file(args.csv, csv.str());
   if (!args.json.empty()) write_text_file(args.json, json.dump(2) + "\n");
-  std::printf("%-28s %6s %12s %14s %12s %10s %8s %11s\n", "basis", "coeffs", "bytes",
-              "transport L2", "shading RMS", "relative", "bake s", "relight ms");
+  std::printf("%-28s %6s %12s %14s %12s %10s %11s %8s %11s\n", "basis", "coeffs", "bytes",
+              "transport L2", "shading RMS", "relative", "noise floor", "bake s", "relight ms");
   for (const auto& r : rows)
-    std::printf("%-28s %6d %12.0f %14s %12.5g %10.4f %8.2f %11.2f\n", r.spec.c_str(),
+    std::printf("%-28s %6d %12.0f %14s %12.5g %10.4f %11.4g %8.2f %11.2f%s\n", r.spec.c_str(),
                 r.coefficients, r.bytes, transport_text(r.transport_error, "%.4f", "-").c_str(),
-                r.shading_rms, r.shading_relative, r.seconds, 1e3 * r.relight_seconds);
+                r.shading_rms, r.shading_relative, r.noise_floor, r.seconds,
+                1e3 * r.relight_seconds,
+                r.shading_rms > 2 * r.noise_floor ? "" : "  (not resolved: raise --samples)");
 }
 
 }  // namespace
 
 int compare_bases(Context& context, const CompareArgs& args) {
-  const SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  apply_samples(args.reference, scene);
   if (!args.csv.empty())
     check_output({args.csv, report_kind(args.csv), "table"}, scene.input_files(), args.force);
   if (!args.json.empty())
@@ -231,8 +243,10 @@ int compare_bases(Context& context, const CompareArgs& args) {
   const Environment environment = scene.load_environment();
   const Camera camera = scene.make_camera(mesh);
   // The same truth and the same relighting as `prt render --compare`.
-  const Eigen::MatrixX3f truth =
-      ground_truth_vertices(scene, mesh, environment, camera, {context.quiet});
+  const std::optional<ReferenceCache> cache = reference_cache(args.reference);
+  const Reference truth = reference_radiance(scene, mesh, environment, camera, {context.quiet},
+                                             cache ? &*cache : nullptr);
+  std::fprintf(stderr, "%s\n", reference_summary(truth).c_str());
   const Shared shared{set, traced, mesh, environment, camera, truth};
   std::vector<Row> rows;
   for (const Entry& entry : entries) rows.push_back(measure(context, entry, shared));

@@ -32,6 +32,19 @@ Command bake_command(CLI::App& app) {
   return {command, [args](prt::cli::Context& context) { return prt::cli::bake(context, *args); }};
 }
 
+// The reference options of render --compare, bench and compare-bases.
+void add_reference_options(CLI::App* command, prt::cli::ReferenceArgs& args) {
+  command
+      ->add_option("--samples", args.samples,
+                   "Monte Carlo samples per vertex of the ground truth (default: the scene's "
+                   "[ground_truth] samples); the noise floor falls as 1/sqrt(samples)")
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(1048576)));
+  command->add_option("--cache", args.cache,
+                      "folder of reused ground truths (default: $PRT_CACHE_DIR, else "
+                      "$XDG_CACHE_HOME/prt, else ~/.cache/prt)");
+  command->add_flag("--no-cache", args.no_cache, "trace the ground truth anew and keep nothing");
+}
+
 // prt render
 Command render_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::RenderArgs>();
@@ -48,7 +61,10 @@ Command render_command(CLI::App& app) {
   command->add_option("--renderer-param", args->renderer_parameters,
                       "key=value parameter of that renderer (repeatable)");
   command->add_flag("--compare", args->compare,
-                    "also compute the ground truth and print per-vertex RMS error");
+                    "also compute the ground truth (cached): per-vertex RMS with its noise "
+                    "floor, PSNR and SSIM, the error budget, and NAME.error.png, "
+                    "NAME.error.exr and NAME.truth.EXT beside the image");
+  add_reference_options(command, args->reference);
   command
       ->add_option("--exposure", args->exposure, "exposure scale of the PNG (default: the scene's)")
       ->check(CLI::Validator(
@@ -98,6 +114,7 @@ Command bench_command(CLI::App& app) {
       ->check(CLI::Range(1, 64));
   command->add_flag("--gpu", args->gpu, "also time the OpenGL renderer (needs a display)");
   command->add_flag("--no-report", args->no_report, "skip the plots and the Markdown report");
+  add_reference_options(command, args->reference);
   command->add_flag("--force", args->force, kForceHelp);
   return {command, [args](prt::cli::Context& context) { return prt::cli::bench(context, *args); }};
 }
@@ -137,6 +154,7 @@ Command compare_command(CLI::App& app) {
   command->add_option("--csv", args->csv, "write the table as CSV");
   command->add_option("--json", args->json, "write the table as JSON");
   command->add_flag("--force", args->force, kForceHelp);
+  add_reference_options(command, args->reference);
   return {command,
           [args](prt::cli::Context& context) { return prt::cli::compare_bases(context, *args); }};
 }

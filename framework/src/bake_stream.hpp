@@ -148,7 +148,7 @@ class In {
   // together have at most a quarter of its bytes.
   double entries_left_;
   double idle_seconds_;
-  const ReadOptions& reading_;
+  const ReadOptions reading_;  // a copy: callers may pass a temporary
   const Mesh& mesh_;
 };
 

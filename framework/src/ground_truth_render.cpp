@@ -12,6 +12,7 @@
 #include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
 #include "prt/progress.hpp"
+#include "prt/point_lights.hpp"
 #include "prt/renderer.hpp"
 
 namespace prt {
@@ -19,11 +20,19 @@ namespace prt {
 namespace {
 
 // The ground truth (albedo 1) of one colour channel's material.
+// One batch's estimate: `samples` per vertex drawn with `seed`.
+struct Batch {
+  int samples = 0;
+  std::uint64_t seed = 0;
+  std::string label;  // after each progress bar's name: " (batch 2 of 4)"
+};
+
 Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
                                       const Environment& lighting, const Camera& camera,
-                                      const RunOptions& options, const ChannelMaterial& material) {
-  const int samples = static_cast<int>(keys::ground_truth::samples(scene.ground_truth));
-  const auto seed = static_cast<std::uint64_t>(keys::ground_truth::seed(scene.ground_truth));
+                                      const RunOptions& options, const ChannelMaterial& material,
+                                      const Batch& batch) {
+  const int samples = batch.samples;
+  const std::uint64_t seed = batch.seed;
   // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
   Reflectance reflectance;
   std::vector<Frame> frames;
@@ -38,25 +47,25 @@ Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
   }
   Eigen::MatrixX3f radiance;
   {
-    Progress progress("ground truth", double(mesh.vertex_count()), "rays", options.quiet);
+    Progress progress("ground truth" + batch.label, double(mesh.vertex_count()), "rays", options.quiet);
     radiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress, reflectance);
   }
   if (const int bounces = static_cast<int>(keys::transport::bounces(scene.transport));
       bounces > 0) {
     if (brdf.glossy()) {  // view-dependent: paths from each vertex
-      Progress progress("ground truth glossy bounces", double(mesh.vertex_count()), "rays",
+      Progress progress("ground truth glossy bounces" + batch.label, double(mesh.vertex_count()), "rays",
                         options.quiet);
       radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, views, bounces,
                                               material.bounce_albedo, samples, seed, &progress);
     } else {
-      Progress progress("ground truth bounces", double(mesh.vertex_count()) * bounces, "rays",
+      Progress progress("ground truth bounces" + batch.label, double(mesh.vertex_count()) * bounces, "rays",
                         options.quiet);
       radiance = ground_truth_bounces(mesh, radiance, bounces, material.bounce_albedo, samples,
                                       seed, &progress);
     }
   }
   if (!scene.point_lights.empty()) {  // direct light only, as traced up to each light
-    Progress progress("ground truth point lights", double(mesh.vertex_count()), "", options.quiet);
+    Progress progress("ground truth point lights" + batch.label, double(mesh.vertex_count()), "", options.quiet);
     radiance +=
         ground_truth_point_lights(mesh, scene.point_lights, samples, seed, reflectance, &progress);
   }
@@ -65,7 +74,7 @@ Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
     // (a glossy material's own radiance is not irradiance: trace it apart).
     Eigen::MatrixX3f irradiance = radiance;
     if (brdf.glossy()) {
-      Progress progress("ground truth irradiance", double(mesh.vertex_count()), "rays",
+      Progress progress("ground truth irradiance" + batch.label, double(mesh.vertex_count()), "rays",
                         options.quiet);
       irradiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress);
       if (!scene.point_lights.empty())
@@ -82,17 +91,16 @@ Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
   return radiance;
 }
 
-}  // namespace
-
-Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
-                                       const Environment& lighting, const Camera& camera,
-                                       const RunOptions& options) {
+// One estimate of the whole scene (every channel material, albedo included).
+Eigen::MatrixX3f scene_estimate(const SceneSpec& scene, const Mesh& mesh,
+                                const Environment& lighting, const Camera& camera,
+                                const RunOptions& options, const Batch& batch) {
   // One Monte Carlo run per distinct channel material; each channel takes its own.
   const MaterialChannels channels = scene.channels();
   Eigen::MatrixX3f radiance(static_cast<Eigen::Index>(mesh.vertex_count()), 3);
   for (std::size_t g = 0; g < channels.groups.size(); ++g) {
     const Eigen::MatrixX3f truth =
-        channel_ground_truth(scene, mesh, lighting, camera, options, channels.groups[g]);
+        channel_ground_truth(scene, mesh, lighting, camera, options, channels.groups[g], batch);
     for (int c = 0; c < 3; ++c)
       if (channels.group_of_channel[std::size_t(c)] == static_cast<int>(g))
         radiance.col(c) = truth.col(c);
@@ -102,28 +110,138 @@ Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
   return radiance;
 }
 
-Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
-                             const RunOptions& options, StageTimes& times,
-                             const Environment* lighting) {
+// Independent batches give the error bar of their mean whatever the sampling
+// inside each (stratified samples are not independent, so their own spread
+// would overstate it); four keep most of the stratification's gain.
+constexpr int kReferenceBatches = 4;
+
+// Batch b's seed: far from every other seed's batches (SplitMix64's mix).
+std::uint64_t batch_seed(std::uint64_t seed, int batch) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * std::uint64_t(batch + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// Everything the reference depends on: a change of any gives another key.
+std::string reference_key(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+                          const Camera& camera, int samples) {
+  ReferenceKey key;
+  key.add("prt reference v1: batches " + std::to_string(kReferenceBatches));
+  key.add(mesh.positions.data(), mesh.positions.size() * sizeof(mesh.positions[0]));
+  key.add(mesh.normals.data(), mesh.normals.size() * sizeof(mesh.normals[0]));
+  key.add(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
+  key.add(double(lighting.width())), key.add(double(lighting.height()));
+  key.add(lighting.pixels().data(), lighting.pixels().size() * sizeof(float));
+  key.add(lighting.rotation().data(), 9 * sizeof(double));
+  key.add(scene.material.describe());
+  key.add(double(keys::transport::bounces(scene.transport)));
+  key.add(double(samples));
+  key.add(double(keys::ground_truth::seed(scene.ground_truth)));
+  for (const PointLight& light : scene.point_lights) {
+    key.add(light.position.data(), 3 * sizeof(double));
+    key.add(light.colour.data(), 3 * sizeof(double));
+    key.add(light.intensity), key.add(light.radius);
+  }
+  bool glossy = false;  // only a glossy material's radiance depends on the view
+  for (const ChannelMaterial& material : scene.channels().groups)
+    glossy = glossy || material.brdf.glossy();
+  if (glossy) key.add(camera.position.data(), 3 * sizeof(float));
+  return key.hex();
+}
+
+Reference traced_reference(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+                           const Camera& camera, const RunOptions& options, int samples) {
+  const auto seed = static_cast<std::uint64_t>(keys::ground_truth::seed(scene.ground_truth));
+  Reference out;
+  out.samples = samples;
+  out.batches = std::min(kReferenceBatches, samples);
+  const auto rows = static_cast<Eigen::Index>(mesh.vertex_count());
+  Eigen::MatrixX3d sum = Eigen::MatrixX3d::Zero(rows, 3), squares = sum;
+  for (int b = 0; b < out.batches; ++b) {
+    const std::string label = out.batches == 1 ? std::string()
+                                               : " (batch " + std::to_string(b + 1) + " of " +
+                                                     std::to_string(out.batches) + ")";
+    const Eigen::MatrixX3d estimate =
+        scene_estimate(scene, mesh, lighting, camera, options,
+                       {samples / out.batches, batch_seed(seed, b), label})
+            .cast<double>();
+    sum += estimate;
+    squares += estimate.array().square().matrix();
+  }
+  const double n = out.batches;
+  out.radiance = (sum / n).cast<float>();
+  // The standard error of the mean of n batches: sqrt(s^2 / n), s^2 the batches' variance.
+  if (out.batches > 1)
+    out.standard_error = ((squares - sum.array().square().matrix() / n) / (n - 1) / n)
+                             .array()
+                             .max(0.0)
+                             .sqrt()
+                             .matrix()
+                             .cast<float>();
+  else
+    out.standard_error = Eigen::MatrixX3f::Zero(rows, 3);
+  return out;
+}
+
+}  // namespace
+
+Reference reference_radiance(const SceneSpec& scene, const Mesh& mesh,
+                             const Environment& lighting, const Camera& camera,
+                             const RunOptions& options, const ReferenceCache* cache) {
+  const int samples = static_cast<int>(keys::ground_truth::samples(scene.ground_truth));
+  const std::string key =
+      cache ? reference_key(scene, mesh, lighting, camera, samples) : std::string();
+  if (cache)
+    if (std::optional<Reference> kept = cache->load(key, mesh.vertex_count())) {
+      options.message("ground truth: reused " + kept->cached.string() + " (" +
+                      std::to_string(samples) + " samples per vertex; prt clears nothing: " +
+                      "remove the folder to recompute)");
+      return *kept;
+    }
+  Reference out = traced_reference(scene, mesh, lighting, camera, options, samples);
+  if (cache) {
+    if (const std::string why = cache->store(key, out); !why.empty())
+      options.warn("ground truth: not kept for reuse: " + why);
+    else
+      options.message("ground truth: kept for reuse in " + cache->file(key).string());
+  }
+  return out;
+}
+
+Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
+                                       const Environment& lighting, const Camera& camera,
+                                       const RunOptions& options) {
+  return reference_radiance(scene, mesh, lighting, camera, options).radiance;
+}
+
+Image render_reference(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
+                       const Eigen::MatrixX3f& radiance, const Environment& background) {
   PluginChoice renderer_choice = scene.renderer;
   auto renderer = registry.create<Renderer>(renderer_choice.name, renderer_choice.params,
                                             renderer_choice.where);
-  const Environment environment = scene.load_environment();
+  RenderInput input;
+  input.mesh = &mesh;
+  input.vertex_radiance = &radiance;  // albedo included
+  input.camera = scene.make_camera(mesh);
+  input.background = &background;
+  return renderer->render(input);
+}
+
+Rendered render_ground_truth(const SceneSpec& scene, const Mesh& mesh, PluginRegistry& registry,
+                             const RunOptions& options, StageTimes& times,
+                             const Environment* lighting, const ReferenceCache* cache) {
+  const Environment environment = scene.load_environment();  // the light, and the background
   Stopwatch clock;
   Rendered out;
-  const Camera camera = scene.make_camera(mesh);
-  out.vertex_radiance =
-      ground_truth_vertices(scene, mesh, lighting ? *lighting : environment, camera, options);
+  out.vertex_radiance = reference_radiance(scene, mesh, lighting ? *lighting : environment,
+                                           scene.make_camera(mesh), options, cache)
+                            .radiance;
   times.add(lighting ? "ground truth under the band-limited light" : "ground truth (Monte Carlo)",
             clock.seconds());
   clock = Stopwatch();
-  RenderInput input;
-  input.mesh = &mesh;
-  input.vertex_radiance = &out.vertex_radiance;  // albedo included
-  input.camera = camera;
-  input.background = &environment;
-  out.image = renderer->render(input);
-  times.add("rasterise (" + renderer_choice.name + ")", clock.seconds());
+  out.image = render_reference(scene, mesh, registry, out.vertex_radiance, environment);
+  times.add("rasterise (" + scene.renderer.name + ")", clock.seconds());
   return out;
 }
 
@@ -148,12 +266,12 @@ ErrorStats vertex_error(const Eigen::MatrixX3f& approximation, const Eigen::Matr
   return stats;
 }
 
-Eigen::MatrixX3f band_limited_truth(const SceneSpec& scene, const Mesh& mesh,
-                                    const Relighting& relighting, const Environment& environment,
-                                    const Eigen::MatrixX3d& light, const Camera& camera,
-                                    const RunOptions& options) {
-  return ground_truth_vertices(scene, mesh, environment.band_limited(relighting.basis(), light),
-                               camera, options);
+Reference band_limited_truth(const SceneSpec& scene, const Mesh& mesh,
+                             const Relighting& relighting, const Environment& environment,
+                             const Eigen::MatrixX3d& light, const Camera& camera,
+                             const RunOptions& options, const ReferenceCache* cache) {
+  return reference_radiance(scene, mesh, environment.band_limited(relighting.basis(), light),
+                            camera, options, cache);
 }
 
 ErrorBudget error_budget(const Eigen::MatrixX3f& truth, const Eigen::MatrixX3f& band_limited,

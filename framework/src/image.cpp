@@ -33,8 +33,21 @@ void write_png(const Image& image, const std::filesystem::path& file, float expo
   if (!std::isfinite(exposure) || exposure < 0)
     throw Error(file.string() + ": exposure " + std::to_string(exposure) +
                 " is not a finite non-negative number");
-  std::vector<std::uint8_t> bytes(image.rgb.size());
-  for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = encode_srgb(image.rgb[i] * exposure);
+  write_png(display_image(image, exposure), file);
+}
+
+Image8 display_image(const Image& image, float exposure) {
+  Image8 out{image.width, image.height, std::vector<std::uint8_t>(image.rgb.size())};
+  for (std::size_t i = 0; i < out.rgb.size(); ++i) out.rgb[i] = encode_srgb(image.rgb[i] * exposure);
+  return out;
+}
+
+void write_png(const Image8& image, const std::filesystem::path& file) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != 3 * std::size_t(image.width) * std::size_t(image.height))
+    throw Error(file.string() + ": cannot write a PNG of " + std::to_string(image.width) + " x " +
+                std::to_string(image.height) + " pixels from " + std::to_string(image.rgb.size()) +
+                " values");
   // Encoded in memory, then written with every write checked (stb's own
   // file writer ignores fwrite's failures: a full disk gave a cut PNG).
   std::vector<std::uint8_t> encoded;
@@ -43,7 +56,7 @@ void write_png(const Image& image, const std::filesystem::path& file, float expo
     const auto* from = static_cast<const std::uint8_t*>(data);
     out->insert(out->end(), from, from + size);
   };
-  if (!stbi_write_png_to_func(append, &encoded, image.width, image.height, 3, bytes.data(),
+  if (!stbi_write_png_to_func(append, &encoded, image.width, image.height, 3, image.rgb.data(),
                               image.width * 3) ||
       encoded.empty())
     throw Error(file.string() + ": cannot encode the PNG");

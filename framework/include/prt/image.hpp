@@ -38,6 +38,10 @@ struct Image8 {
   std::vector<std::uint8_t> rgb;
 };
 Image8 read_png(const std::filesystem::path& file);
+// The image as a PNG shows it: exposure-scaled, clamped, sRGB-encoded to 8 bits.
+Image8 display_image(const Image& image, float exposure = 1.0f);
+// Writes 8-bit RGB as PNG atomically (temp + rename), every write checked.
+void write_png(const Image8& image, const std::filesystem::path& file);
 
 // Mean absolute difference of two images of the same size (linear values).
 double mean_absolute_difference(const Image& a, const Image& b);

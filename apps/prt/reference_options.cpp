@@ -1,0 +1,50 @@
+#include "reference_options.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace prt::cli {
+
+void apply_samples(const ReferenceArgs& args, SceneSpec& scene) {
+  if (args.samples == 0) return;
+  // Its range is [ground_truth] samples' range, checked by the command line.
+  scene.ground_truth.set(keys::ground_truth::samples.name(), args.samples,
+                         SourceLocation{"--samples"});
+}
+
+std::optional<ReferenceCache> reference_cache(const ReferenceArgs& args) {
+  if (args.no_cache) return std::nullopt;
+  return ReferenceCache(args.cache.empty() ? ReferenceCache::default_folder()
+                                           : std::filesystem::path(args.cache));
+}
+
+std::string noise_note(double rms, double floor) {
+  char text[200];
+  if (floor > 0 && rms <= 2 * floor)
+    std::snprintf(text, sizeof text,
+                  "noise floor %.4g: NOT RESOLVED, within twice the reference's own noise "
+                  "(raise --samples)",
+                  floor);
+  else
+    std::snprintf(text, sizeof text, "noise floor %.4g", floor);
+  return text;
+}
+
+std::string reference_summary(const Reference& reference) {
+  const double floor = reference.noise_floor();
+  const double radiance_rms =
+      reference.radiance.rows() ? std::sqrt(reference.radiance.cast<double>().squaredNorm() / 3.0 /
+                                            double(reference.radiance.rows()))
+                                : 0.0;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "ground truth: %d samples per vertex in %d independent batches%s; Monte Carlo "
+                "standard error per vertex: RMS %.4g (%.3g%% of the radiance's RMS), the noise "
+                "floor of every RMS below; --samples %d would halve it",
+                reference.samples, reference.batches,
+                reference.cached.empty() ? "" : " (reused from the cache)", floor,
+                radiance_rms > 0 ? 100 * floor / radiance_rms : 0.0, 4 * reference.samples);
+  return text;
+}
+
+}  // namespace prt::cli

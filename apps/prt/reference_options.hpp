@@ -1,0 +1,28 @@
+// The reference options of `prt render --compare`, `prt bench` and
+// `prt compare-bases`, and how their noise floor is printed.
+#pragma once
+#include <optional>
+#include <string>
+
+#include "commands.hpp"
+#include "prt/reference_cache.hpp"
+#include "prt/scene.hpp"
+
+namespace prt::cli {
+
+// --samples N replaces the scene's [ground_truth] samples (checked as the scene's key is).
+void apply_samples(const ReferenceArgs& args, SceneSpec& scene);
+
+// The cache folder --cache names (default: ReferenceCache::default_folder()),
+// or none with --no-cache.
+std::optional<ReferenceCache> reference_cache(const ReferenceArgs& args);
+
+// "noise floor 0.0021" and, when `rms` is within twice it, that the
+// reference cannot tell this error from its own noise.
+std::string noise_note(double rms, double floor);
+
+// The line that says what the reference is and how sure: its samples,
+// batches, per-vertex standard error, and what more samples would give.
+std::string reference_summary(const Reference& reference);
+
+}  // namespace prt::cli
