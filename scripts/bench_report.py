@@ -55,15 +55,22 @@ def plot(results, cost_key, cost_label, path, scale=1.0):
     for r, x, y in zip(results, costs, errors):
         ax.annotate(r["label"], (x, y), fontsize=5.5, xytext=(3, 2), textcoords="offset points",
                     alpha=0.8)
+    floors = [r.get("noise_floor", 0.0) for r in results]
+    if max(floors) > 0:  # below it the ground truth cannot rank configurations
+        ax.axhline(2 * max(floors), color="grey", linestyle="--", zorder=1,
+                   label="2 x noise floor of the ground truth")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(cost_label)
-    ax.set_ylabel("RMS error per vertex vs ground truth")
+    ax.set_ylabel("RMS error per vertex vs ground truth (linear radiance)")
     ax.grid(True, which="both", alpha=0.3)
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
+    # Colours follow the basis part of each label; when every configuration
+    # has its own, say so.
+    by = "configuration" if len(colours) == len(results) else "basis setting"
     ax.legend(unique.values(), unique.keys(), fontsize=8,
-              title="colour: basis; marker: none s, vq D, pca o, cpca ^", title_fontsize=7)
+              title=f"colour: {by}; marker: none s, vq D, pca o, cpca ^", title_fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -113,7 +120,7 @@ def main(folder, title):
     with open(os.path.join(folder, "results.json")) as f:
         results = json.load(f)
     fronts = {
-        "bytes": plot(results, "bytes", "bytes of the compressed form (4 x stored floats)",
+        "bytes": plot(results, "bytes", "bytes of the compressed form (4 x stored floats, bytes)",
                       os.path.join(folder, "error_vs_bytes.png")),
         "relight": plot(results, "relight_seconds", "CPU relight time per frame (ms)",
                         os.path.join(folder, "error_vs_relight.png"), 1000.0),
@@ -130,16 +137,25 @@ def main(folder, title):
         lines += [f"## Error vs {label}", "", f"![error vs {label}]({name})", "",
                   "Pareto front: " + ", ".join(f"`{x}`" for x in fronts[key]), ""]
     lines += ["## Table", "",
-              "| configuration | bake s | encode s | MB (compressed) | file MB | bytes/vertex | relight ms "
-              "| GPU frame ms "
-              "| transfer SE | RMS | p99 | max | image error |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "RMS is per vertex against the Monte Carlo ground truth; its **noise floor** is "
+              "the ground truth's own standard error (per-vertex RMS): an RMS within twice it "
+              "is not resolved (marked *), and configurations whose RMS differ by less than it "
+              "are tied. The budget splits the RMS into light truncation, transfer projection "
+              "and compression (`prt render --compare` prints the same terms).", "",
+              "| configuration | bake s | encode s | MB (compressed) | file MB | bytes/vertex "
+              "| relight ms | GPU frame ms | transfer SE | RMS | noise floor | truncation "
+              "| projection | compression | p99 | max | image error |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
+        floor = r.get("noise_floor", 0.0)
+        mark = "" if r.get("resolved", True) else " *"
         lines.append(
             f"| {r['label']} | {r['bake_seconds']:.2f} | {r['encode_seconds']:.2f} | "
             f"{r['bytes'] / 1e6:.3f} | {r['file_bytes'] / 1e6:.2f} | {r['bytes_per_vertex']:.1f} | "
             f"{1000 * r['relight_seconds']:.2f} | "
-            f"{gpu_text(r)} | {r['transfer_se']:.4g} | {r['rms']:.4g} | "
+            f"{gpu_text(r)} | {r['transfer_se']:.4g} | {r['rms']:.4g}{mark} | {floor:.3g} | "
+            f"{r['light_truncation_rms']:.3g} | {r['projection_rms']:.3g} | "
+            f"{r['compression_rms']:.3g} | "
             f"{r['p99']:.4g} | {r['max']:.4g} | {r['image_error']:.4g} |")
     lines += ["", "## Images", "",
               "Ground truth | configuration | error heat-map (4 x absolute difference, inferno), "

@@ -11,6 +11,7 @@
 #include "prt/bake_file.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
+#include "prt/image_metrics.hpp"
 #include "prt/memory.hpp"
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
@@ -358,6 +359,9 @@ int image_diff(const std::string& a_file, const std::string& b_file) {
   const double pixels = double(a.rgb.size() / 3);
   std::printf("mean absolute difference %.4f (of 255), pixels differing by > 8: %.4f%%\n",
               sum / a.rgb.size(), 100.0 * differing / pixels);
+  // scikit-image's definitions (prt/image_metrics.hpp); SSIM needs an 11 x 11 window.
+  std::printf("PSNR %.6f dB\n", psnr(a, b));
+  if (a.width >= 11 && a.height >= 11) std::printf("SSIM %.8f\n", ssim(a, b));
   return 0;
 }
 

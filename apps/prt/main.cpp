@@ -210,7 +210,7 @@ Command analyze_command(CLI::App& app) {
 Command image_diff_command(CLI::App& app) {
   auto images = std::make_shared<std::vector<std::string>>();
   auto* command = app.add_subcommand(
-      "image-diff", "mean absolute difference of two PNG images (0..255 per channel)");
+      "image-diff", "mean absolute difference, PSNR and SSIM of two PNG images (0..255 per channel)");
   command->add_option("images", *images, "two PNG files")->required()->expected(2);
   return {command, [images](prt::cli::Context&) {
             return prt::cli::image_diff((*images)[0], (*images)[1]);

@@ -191,6 +191,15 @@ void bind_types(py::module_& m) {
           py::arg("radiance"))
       .def_property_readonly("width", &Environment::width)
       .def_property_readonly("height", &Environment::height)
+      .def_property_readonly(
+          "pixels",
+          [](const Environment& e) {
+            // A copy, rows top first: (height, width, 3) linear RGB.
+            py::array_t<float> out({e.height(), e.width(), 3});
+            std::copy(e.pixels().begin(), e.pixels().end(), out.mutable_data());
+            return out;
+          },
+          "The map's linear RGB radiance as a (height, width, 3) float32 array (a copy).")
       .def_property(
           "rotation", [](const Environment& e) { return Eigen::Matrix3d(e.rotation()); },
           [](Environment& e, const Eigen::Matrix3d& r) {
