@@ -48,8 +48,12 @@ Kit::Note::~Note() {
 const std::vector<Check>& checks(PluginKind kind) {
   static const std::vector<Check> basis = basis_checks();
   static const std::vector<Check> compressor = compressor_checks();
+  static const std::vector<Check> renderer = renderer_checks();
   static const std::vector<Check> none;
-  return kind == PluginKind::basis ? basis : kind == PluginKind::compressor ? compressor : none;
+  return kind == PluginKind::basis        ? basis
+         : kind == PluginKind::compressor ? compressor
+         : kind == PluginKind::renderer   ? renderer
+                                          : none;
 }
 
 std::vector<std::string> run_check(const Check& check, PluginRegistry& registry,

@@ -61,10 +61,11 @@ struct Check {
   std::function<void(Kit&)> run;
 };
 
-// The checks of a kind (basis or compressor); empty for other kinds.
+// The checks of a kind (basis, compressor or renderer).
 const std::vector<Check>& checks(PluginKind kind);
 std::vector<Check> basis_checks();
 std::vector<Check> compressor_checks();
+std::vector<Check> renderer_checks();
 
 // Runs one check on `plugin` from `registry`: its failures, empty when it
 // passes. An exception escaping the check is a failure too.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plots and a Markdown report for `prt bench` results.
 
-  scripts/bench_report.py <bench folder> [title]
+  scripts/bench_report.py <bench folder> [title] [--budget BYTES]
 
 Reads <folder>/results.json and <folder>/images/, writes error_vs_bytes.png,
 error_vs_relight.png, error_vs_bake.png (Pareto front marked, each point
@@ -111,12 +111,70 @@ def strip(folder, results, path, width=160):
 
 def gpu_text(record):
     """The GPU frame time, or why there is none."""
-    if "gpu_frame_seconds" not in record:
+    if record.get("gpu_frame_seconds") is None:
         return "not asked (--gpu)"
     return f"{1000 * record['gpu_frame_seconds']:.1f}"
 
 
-def main(folder, title):
+def ranking(results, fronts, budget):
+    """The Pareto ranking and a one-paragraph recommendation for the budget."""
+    lines = ["## Ranking", "",
+             "Configurations on the front of error against bytes, from the smallest; "
+             "`=` marks one tied with the row above (their RMS differ by less than the "
+             "ground truth's noise floor, so this reference cannot order them).", "",
+             "| rank | configuration | MB | RMS | noise floor | largest error term |",
+             "|---|---|---|---|---|---|"]
+    by_label = {r["label"]: r for r in results}
+    previous = None
+    for rank, label in enumerate(fronts["bytes"], 1):
+        r = by_label[label]
+        floor = r.get("noise_floor", 0.0)
+        tied = previous is not None and abs(previous["rms"] - r["rms"]) < max(floor, 1e-300)
+        lines.append(f"| {rank}{' =' if tied else ''} | {label} | {r['bytes'] / 1e6:.3f} | "
+                     f"{r['rms']:.4g} | {floor:.3g} | {dominant_term(r)} |")
+        previous = r
+    fitting = [r for r in results if budget is None or r["bytes"] <= budget]
+    lines += ["", "## Recommendation", ""]
+    if not fitting:
+        smallest = min(results, key=lambda r: r["bytes"])
+        lines.append(f"No configuration fits in {budget / 1e6:.3f} MB; the smallest swept is "
+                     f"`{smallest['label']}` at {smallest['bytes'] / 1e6:.3f} MB.")
+        return lines
+    best = min(fitting, key=lambda r: r["rms"])
+    floor = best.get("noise_floor", 0.0)
+    ties = [r["label"] for r in fitting if r is not best and abs(r["rms"] - best["rms"]) < floor]
+    cheapest_tie = min([best] + [by_label[t] for t in ties], key=lambda r: r["bytes"])
+    within = "any size" if budget is None else f"{budget / 1e6:.3f} MB"
+    text = (f"Within {within}, `{best['label']}` has the smallest error (RMS {best['rms']:.4g} "
+            f"per vertex, {best['bytes'] / 1e6:.3f} MB, relight {1000 * best['relight_seconds']:.2f}"
+            f" ms). ")
+    if ties:
+        text += (f"{len(ties)} other configuration(s) lie within the ground truth's noise floor "
+                 f"({floor:.3g}) of it, so this reference cannot rank them; of those "
+                 f"`{cheapest_tie['label']}` is the smallest ({cheapest_tie['bytes'] / 1e6:.3f} MB). "
+                 "Raise `--samples` to separate them. ")
+    if not best.get("resolved", True):
+        text += ("Its RMS is within twice the noise floor: the ranking is the reference's noise "
+                 "as much as the configurations'. ")
+    text += (f"Its largest error term is {dominant_term(best)}: "
+             + {"light truncation": "a larger light basis (order) would help more than a "
+                                    "larger compressed form.",
+                "transfer projection": "a richer transfer basis or more rays would help more "
+                                       "than a larger compressed form.",
+                "compression": "a larger compression budget (clusters, components) is where "
+                               "accuracy is bought."}[dominant_term(best)])
+    lines.append(text)
+    return lines
+
+
+def dominant_term(record):
+    terms = {"light truncation": record.get("light_truncation_rms", 0.0),
+             "transfer projection": record.get("projection_rms", 0.0),
+             "compression": record.get("compression_rms", 0.0)}
+    return max(terms, key=terms.get)
+
+
+def main(folder, title, budget=None):
     with open(os.path.join(folder, "results.json")) as f:
         results = json.load(f)
     fronts = {
@@ -157,6 +215,7 @@ def main(folder, title):
             f"{r['light_truncation_rms']:.3g} | {r['projection_rms']:.3g} | "
             f"{r['compression_rms']:.3g} | "
             f"{r['p99']:.4g} | {r['max']:.4g} | {r['image_error']:.4g} |")
+    lines += [""] + ranking(results, fronts, budget)
     lines += ["", "## Images", "",
               "Ground truth | configuration | error heat-map (4 x absolute difference, inferno), "
               "one row per configuration:", "",
@@ -166,4 +225,10 @@ def main(folder, title):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else sys.argv[1])
+    args = sys.argv[1:]
+    budget = None
+    if "--budget" in args:
+        at = args.index("--budget")
+        budget = float(args[at + 1])
+        del args[at:at + 2]
+    main(args[0], args[1] if len(args) > 1 else args[0], budget)

@@ -22,7 +22,6 @@
 #include <variant>
 
 #include "commands.hpp"
-#include "reference_options.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/basis.hpp"
 #include "prt/compressor.hpp"
@@ -35,6 +34,7 @@
 #include "prt/scene.hpp"
 #include "prt/transport.hpp"
 #include "prt/turning_light.hpp"
+#include "reference_options.hpp"
 
 namespace prt::cli {
 
@@ -344,8 +344,8 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
       limited_list.push_back(band_limited_truth(scene, data.mesh, relighting, turning.environment(),
                                                 l, camera, quiet, reused.kept()));
     const Eigen::MatrixX3f exact = relighting.relight(exact_kernel, l, camera).vertex_radiance;
-    const ErrorBudget budget = error_budget(truth.radiance, limited_list[light].radiance, exact,
-                                            relit.vertex_radiance);
+    const ErrorBudget budget =
+        error_budget(truth.radiance, limited_list[light].radiance, exact, relit.vertex_radiance);
     m.truncation_rms += budget.truncation / args.lights;
     m.projection_rms += budget.projection / args.lights;
     m.compression_rms += budget.compression / args.lights;
@@ -377,7 +377,9 @@ nlohmann::ordered_json result_line(const std::string& label, std::size_t index, 
   record["file_bytes"] = b.file_bytes;
   record["bytes_per_vertex"] = b.bytes / double(b.data.mesh.vertex_count());
   record["relight_seconds"] = m.relight_seconds;
-  if (m.gpu_seconds > 0) record["gpu_frame_seconds"] = m.gpu_seconds;  // only when --gpu
+  // null unless --gpu timed it (a 0 would read as a measured frame time)
+  record["gpu_frame_seconds"] =
+      m.gpu_seconds > 0 ? nlohmann::ordered_json(m.gpu_seconds) : nlohmann::ordered_json();
   record["transfer_se"] = b.se;
   record["rms"] = m.rms;
   record["light_truncation_rms"] = m.truncation_rms;
@@ -396,7 +398,7 @@ nlohmann::ordered_json result_line(const std::string& label, std::size_t index, 
 
 // CSV and JSON of every configuration, in sweep order; then the report.
 void write_summaries(const fs::path& out, const fs::path& results, const SceneSpec& base,
-                     bool report) {
+                     bool report, std::uint64_t budget) {
   std::vector<nlohmann::ordered_json> records;
   if (std::ifstream in(results); in)
     for (std::string line; std::getline(in, line);) {
@@ -410,7 +412,8 @@ void write_summaries(const fs::path& out, const fs::path& results, const SceneSp
   if (!report) return;
   const std::string command = "/usr/bin/python3 " +
                               (fs::path(PRT_SOURCE_DIR) / "scripts" / "bench_report.py").string() +
-                              " " + out.string() + " \"" + base.file.filename().string() + "\"";
+                              " " + out.string() + " \"" + base.file.filename().string() + "\"" +
+                              (budget ? " --budget " + std::to_string(budget) : std::string());
   if (std::system(command.c_str()) != 0) throw Error("the report script failed: " + command);
   std::cout << "report: " << (out / "report.md").string() << "\n";
 }
@@ -471,7 +474,7 @@ int bench(Context& context, const BenchArgs& args) {
     progress.add(1);
   }
   log.close();
-  write_summaries(out, results, base, !args.no_report);
+  write_summaries(out, results, base, !args.no_report, args.budget);
   return 0;
 }
 

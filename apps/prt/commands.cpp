@@ -1,13 +1,13 @@
 #include "commands.hpp"
 
 #include <cmath>
-#include <optional>
-#include <tuple>
-
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <optional>
+#include <tuple>
 
+#include "image_outputs.hpp"
 #include "prt/bake_file.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
@@ -17,7 +17,6 @@
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_file.hpp"
-#include "image_outputs.hpp"
 #include "reference_options.hpp"
 
 #ifndef PRT_SOURCE_DIR
@@ -113,7 +112,7 @@ void compare_with_truth(Context& context, const RenderArgs& args, const SceneSpe
   std::printf("%s\n", reference_summary(truth).c_str());
   const ErrorStats e = vertex_error(result.vertex_radiance, truth.radiance);
   std::printf(
-      "error against ground truth (%d samples/vertex): RMS per vertex %.6g (relative %.4f; %s),"
+      "error against ground truth (%d samples/vertex): RMS per vertex %.6g (relative %.4f), %s,"
       " 99th percentile %.6g, max %.6g\n",
       truth.samples, e.rms, e.relative_rms, noise_note(e.rms, floor).c_str(), e.p99, e.max);
   const float exposure = static_cast<float>(keys::camera::exposure(scene.camera));
@@ -133,7 +132,7 @@ void compare_with_truth(Context& context, const RenderArgs& args, const SceneSpe
     const ErrorStats b = vertex_error(reprojected.vertex_radiance, truth.radiance);
     std::printf(
         "error of brute-force re-projection of the point lights (%s) against the same "
-        "ground truth: RMS per vertex %.6g (relative %.4f; %s)\n",
+        "ground truth: RMS per vertex %.6g (relative %.4f), %s\n",
         brute.point_light_rule().c_str(), b.rms, b.relative_rms, noise_note(b.rms, floor).c_str());
   }
   if (data.direct.coefficients.size()) {  // what the bounces bring
@@ -141,7 +140,7 @@ void compare_with_truth(Context& context, const RenderArgs& args, const SceneSpe
     const ErrorStats d = vertex_error(direct.vertex_radiance, truth.radiance);
     std::printf(
         "error of the same transfer without its %d bounces (exact, no compression) against "
-        "the same ground truth: RMS per vertex %.6g (relative %.4f; %s)\n",
+        "the same ground truth: RMS per vertex %.6g (relative %.4f), %s\n",
         data.bounces, d.rms, d.relative_rms, noise_note(d.rms, floor).c_str());
   }
   print_error_budget({scene, data, relighting, environment, light, camera}, truth,

@@ -41,8 +41,12 @@ struct CompressArgs {
   std::vector<std::string> parameters;   // key=value
   bool json = false, force = false;
   std::uint64_t memory = 0;  // memory budget in bytes (0: the default share of RAM)
+  // "plugin k=v|plugin k=v" (repeatable): many encodings ranked, none written.
+  std::vector<std::string> sweeps;
+  std::vector<std::uint64_t> budgets;  // bytes: the best configuration within each
 };
 int compress(Context& context, const CompressArgs& args);
+int compress_sweep(Context& context, const CompressArgs& args);
 
 struct SubdivideArgs {
   std::string input, output, scheme = "loop";
@@ -64,6 +68,7 @@ struct BenchArgs {
   std::vector<std::string> sweeps;  // section.key=v1,v2,...
   int lights = 2;                   // the scene's light plus rotated copies
   bool gpu = false, no_report = false, force = false;
+  std::uint64_t budget = 0;  // bytes of the compressed form the report recommends within (0: any)
   ReferenceArgs reference;
 };
 int bench(Context& context, const BenchArgs& args);

@@ -16,33 +16,18 @@
 #include <sstream>
 
 #include "commands.hpp"
-#include "reference_options.hpp"
+#include "plugin_spec.hpp"
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
 #include "prt/transport.hpp"
+#include "reference_options.hpp"
 
 namespace prt::cli {
 
 namespace {
-
-struct BasisSpec {
-  std::string text, name;
-  Params params;
-};
-
-// "haar:k=96:resolution=16" -> name and typed parameters.
-BasisSpec parse_spec(const std::string& text) {
-  BasisSpec spec{text, "", Params(SourceLocation{"--bases \"" + text + "\""})};
-  std::stringstream parts(text);
-  std::getline(parts, spec.name, ':');
-  std::size_t index = 0;
-  for (std::string item; std::getline(parts, item, ':');)
-    parse_parameter(item, index++, spec.params);
-  return spec;
-}
 
 struct Row {
   std::string spec;
@@ -91,13 +76,13 @@ std::string transport_text(double error, const char* format, const char* absent)
 // (the exit basis of glossy transfer). Everything is validated here, before
 // any ray: the entry's parameters, its domain, and the bake plan it makes.
 struct Entry {
-  BasisSpec spec;
+  PluginSpec spec;
   SceneSpec scene;
   BakePlan plan;
   bool exit_role = false;
 };
 
-Entry entry_for(const SceneSpec& scene, BasisSpec spec, const DirectionSet& set,
+Entry entry_for(const SceneSpec& scene, PluginSpec spec, const DirectionSet& set,
                 PluginRegistry& registry) {
   bool exit_role = false;
   const SourceLocation where = spec.params.location();
@@ -175,9 +160,8 @@ Row measure(Context& context, const Entry& entry, const Shared& shared) {
   row.shading_rms = shading.rms;
   row.shading_relative = shading.relative_rms;
   row.noise_floor = shared.truth.noise_floor();
-  std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g (%s)\n",
-               row.spec.c_str(), row.coefficients,
-               entry.exit_role ? "exit functions" : "coefficients",
+  std::fprintf(stderr, "%s: %d %s, transport error %s, shading RMS %.5g (%s)\n", row.spec.c_str(),
+               row.coefficients, entry.exit_role ? "exit functions" : "coefficients",
                transport_text(row.transport_error, "%.4f", "- (glossy)").c_str(), row.shading_rms,
                noise_note(row.shading_rms, row.noise_floor).c_str());
   return row;
@@ -236,7 +220,8 @@ int compare_bases(Context& context, const CompareArgs& args) {
   std::vector<Entry> entries;  // every entry planned before any ray
   std::stringstream list(args.bases);
   for (std::string item; std::getline(list, item, ',');)
-    entries.push_back(entry_for(scene, parse_spec(item), set, context.registry));
+    entries.push_back(
+        entry_for(scene, parse_plugin_spec(item, ':', "--bases"), set, context.registry));
 
   const TransportResult traced = trace_scene(scene, {context.quiet});
   const Mesh mesh = scene.load_mesh();

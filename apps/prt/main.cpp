@@ -37,7 +37,7 @@ void add_reference_options(CLI::App* command, prt::cli::ReferenceArgs& args) {
   command
       ->add_option("--samples", args.samples,
                    "Monte Carlo samples per vertex of the ground truth (default: the scene's "
-                   "[ground_truth] samples); the noise floor falls as 1/sqrt(samples)")
+                   "[ground_truth] samples); the noise floor falls at least as 1/sqrt(samples)")
       ->check(CLI::Range(std::int64_t(1), std::int64_t(1048576)));
   command->add_option("--cache", args.cache,
                       "folder of reused ground truths (default: $PRT_CACHE_DIR, else "
@@ -86,7 +86,16 @@ Command compress_command(CLI::App& app) {
   auto* command =
       app.add_subcommand("compress", "re-compress the transfer of a bake file with a compressor");
   command->add_option("bake", args->bake, "bake file (.h5)")->required();
-  command->add_option("-c,--compressor", args->compressor, "compressor plug-in")->required();
+  command->add_option("-c,--compressor", args->compressor, "compressor plug-in (or --sweep)");
+  command->add_option("--sweep", args->sweeps,
+                      "rank several encodings instead of writing one: 'vq clusters=256|pca "
+                      "components=8|cpca clusters=64 components=4' (repeatable); nothing is "
+                      "written");
+  command
+      ->add_option("--budget", args->budgets,
+                   "with --sweep: the most accurate encoding within this many bytes, e.g. 2M "
+                   "(repeatable)")
+      ->transform(CLI::AsSizeValue(false));
   command->add_option("-p,--param", args->parameters,
                       "compressor parameter key=value (repeatable)");
   command->add_option("-o,--output", args->output, "output bake file (default: in place)");
@@ -98,8 +107,14 @@ Command compress_command(CLI::App& app) {
                    "into a file beside the output and compressed in passes")
       ->transform(CLI::AsSizeValue(false))
       ->check(CLI::Range(std::uint64_t(1) << 20, std::uint64_t(1) << 50));
-  return {command,
-          [args](prt::cli::Context& context) { return prt::cli::compress(context, *args); }};
+  return {command, [args](prt::cli::Context& context) {
+            if (!args->sweeps.empty()) return prt::cli::compress_sweep(context, *args);
+            if (args->compressor.empty())
+              throw prt::Error(
+                  "prt compress: name a compressor (-c NAME) or sweep several "
+                  "(--sweep 'NAME k=v|NAME k=v')");
+            return prt::cli::compress(context, *args);
+          }};
 }
 
 // prt bench
@@ -114,6 +129,10 @@ Command bench_command(CLI::App& app) {
       ->check(CLI::Range(1, 64));
   command->add_flag("--gpu", args->gpu, "also time the OpenGL renderer (needs a display)");
   command->add_flag("--no-report", args->no_report, "skip the plots and the Markdown report");
+  command
+      ->add_option("--budget", args->budget,
+                   "bytes of the compressed form the report's recommendation must fit, e.g. 4M")
+      ->transform(CLI::AsSizeValue(false));
   add_reference_options(command, args->reference);
   command->add_flag("--force", args->force, kForceHelp);
   return {command, [args](prt::cli::Context& context) { return prt::cli::bench(context, *args); }};
@@ -210,7 +229,8 @@ Command analyze_command(CLI::App& app) {
 Command image_diff_command(CLI::App& app) {
   auto images = std::make_shared<std::vector<std::string>>();
   auto* command = app.add_subcommand(
-      "image-diff", "mean absolute difference, PSNR and SSIM of two PNG images (0..255 per channel)");
+      "image-diff",
+      "mean absolute difference, PSNR and SSIM of two PNG images (0..255 per channel)");
   command->add_option("images", *images, "two PNG files")->required()->expected(2);
   return {command, [images](prt::cli::Context&) {
             return prt::cli::image_diff((*images)[0], (*images)[1]);

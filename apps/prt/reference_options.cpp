@@ -32,15 +32,15 @@ std::string noise_note(double rms, double floor) {
 
 std::string reference_summary(const Reference& reference) {
   const double floor = reference.noise_floor();
-  const double radiance_rms =
-      reference.radiance.rows() ? std::sqrt(reference.radiance.cast<double>().squaredNorm() / 3.0 /
-                                            double(reference.radiance.rows()))
-                                : 0.0;
+  const double radiance_rms = reference.radiance.rows()
+                                  ? std::sqrt(reference.radiance.cast<double>().squaredNorm() /
+                                              3.0 / double(reference.radiance.rows()))
+                                  : 0.0;
   char text[400];
   std::snprintf(text, sizeof text,
                 "ground truth: %d samples per vertex in %d independent batches%s; Monte Carlo "
                 "standard error per vertex: RMS %.4g (%.3g%% of the radiance's RMS), the noise "
-                "floor of every RMS below; --samples %d would halve it",
+                "floor of every RMS below; --samples %d would at least halve it",
                 reference.samples, reference.batches,
                 reference.cached.empty() ? "" : " (reused from the cache)", floor,
                 radiance_rms > 0 ? 100 * floor / radiance_rms : 0.0, 4 * reference.samples);

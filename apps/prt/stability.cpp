@@ -3,6 +3,7 @@
 // PCA/CPCA on degenerate inputs, float storage of the compressed form, and SH
 // ringing (negative radiance) of a sun 10^5 times the sky, with windows.
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -261,6 +262,8 @@ void hemisphere_gram(Report& report, const StabilityArgs& args) {
       "Hemispherical SH: Gram matrix A and least squares (cut-off 1e-10)",
       "| order | condition number of A | discarded | LS worst | LS average | "
       "zero-hemisphere worst | zero-hemisphere average |\n|---|---|---|---|---|---|---|");
+  int first_discarding = 0, first_ill = 0, first_zero_fails = 0;
+  double worst_ls = 0;
   for (int order = 1; order <= args.hemisphere_order; ++order) {
     const auto ls = hemisphere::least_squares(order, 1e-10);
     const double condition = ls.singular_values[0] / ls.singular_values.tail(1)[0];
@@ -269,18 +272,33 @@ void hemisphere_gram(Report& report, const StabilityArgs& args) {
     report.row(format("| %d | %.3g | %d | %.3g | %.3g | %.3g | %.3g |", order, condition,
                       ls.discarded, ls_error.worst, ls_error.average, zero.worst, zero.average));
     report.value("hemisphere_condition_order" + std::to_string(order), condition);
+    if (!first_discarding && ls.discarded > 0) first_discarding = order;
+    if (!first_ill && condition > 1e6) first_ill = order;
+    if (!first_zero_fails && zero.worst > 1e-3) first_zero_fails = order;
+    worst_ls = std::max(worst_ls, ls_error.worst);
   }
+  const auto order_text = [](int order) {
+    return order ? "order " + std::to_string(order) : std::string("no order measured");
+  };
+  report.row(format(
+      "\n**Verdict:** the Gram matrix A is ill-conditioned (condition > 1e6) from %s, and the "
+      "cut-off 1e-10 starts discarding directions at %s; least squares with the cut-off stays "
+      "within %.3g everywhere measured, so use it (not A^-1) past that order. Zeroing the "
+      "lower hemisphere exceeds 1e-3 error from %s.",
+      order_text(first_ill).c_str(), order_text(first_discarding).c_str(), worst_ls,
+      order_text(first_zero_fails).c_str()));
+  report.value("hemisphere_first_discarding_order", first_discarding);
 }
 
-// 4. Compressors on degenerate inputs.
-void degenerate_compression(Report& report, PluginRegistry& registry) {
-  report.section("Compressors on degenerate inputs",
-                 "| compressor | input | SE | relative SE | finite |\n|---|---|---|---|---|");
-  struct Case {
-    const char* name;
-    MatrixXfRow data;
-  };
-  std::vector<Case> cases;
+// Inputs where compressors break, then the same shape at a normal scale
+// (last): what every degenerate row is judged against.
+struct DegenerateCase {
+  const char* name;
+  MatrixXfRow data;
+};
+
+std::vector<DegenerateCase> degenerate_cases() {
+  std::vector<DegenerateCase> cases;
   cases.push_back({"2000 identical rows", MatrixXfRow::Constant(2000, 25, 0.3f)});
   {
     MatrixXfRow rank1(2000, 25);
@@ -292,6 +310,16 @@ void degenerate_compression(Report& report, PluginRegistry& registry) {
   cases.push_back({"all zero", MatrixXfRow::Zero(500, 25)});
   cases.push_back({"values 1e-30", MatrixXfRow::Random(500, 25) * 1e-30f});
   cases.push_back({"values 1e+30", MatrixXfRow::Random(500, 25) * 1e30f});
+  // The same shape at a normal scale: what every degenerate row is judged against.
+  cases.push_back({"normal scale (uniform in [-1, 1])", MatrixXfRow::Random(500, 25)});
+  return cases;
+}
+
+// 4. Compressors on degenerate inputs.
+void degenerate_compression(Report& report, PluginRegistry& registry) {
+  report.section("Compressors on degenerate inputs",
+                 "| compressor | input | SE | relative SE | finite |\n|---|---|---|---|---|");
+  const std::vector<DegenerateCase> cases = degenerate_cases();
   // Every compressor found that approximates (an exact one has nothing to lose).
   for (const std::string& name : registry.names(PluginKind::compressor)) {
     // The conventional budget parameters, where the compressor has them.
@@ -302,7 +330,19 @@ void degenerate_compression(Report& report, PluginRegistry& registry) {
     }
     auto compressor = registry.create<Compressor>(name, params);
     if (compressor->exact()) continue;
-    for (const Case& c : cases) {
+    const auto relative_error = [&](const MatrixXfRow& data, bool& finite) {
+      TransferSignal signal;
+      signal.coefficients = data;
+      const MatrixXfRow decoded = compressor->encode(signal, nullptr).decode();
+      finite = decoded.allFinite();
+      const double energy = data.cast<double>().squaredNorm();
+      return energy > 0 ? squared_error(data, decoded) / energy : 0.0;
+    };
+    bool normal_finite = true, all_finite = true;
+    const double normal = relative_error(cases.back().data, normal_finite);
+    double worst = 0;
+    std::string worst_case = "none";
+    for (const DegenerateCase& c : cases) {
       TransferSignal signal;
       signal.coefficients = c.data;
       const CompressedTransfer out = compressor->encode(signal, nullptr);
@@ -311,7 +351,16 @@ void degenerate_compression(Report& report, PluginRegistry& registry) {
       const double energy = signal.coefficients.cast<double>().squaredNorm();
       report.row(format("| %s | %s | %.3g | %.3g | %s |", name.c_str(), c.name, se,
                         energy > 0 ? se / energy : 0.0, decoded.allFinite() ? "yes" : "NO"));
+      all_finite = all_finite && decoded.allFinite();
+      if (energy > 0 && se / energy > worst) worst = se / energy, worst_case = c.name;
     }
+    report.row(format(
+        "| **%s verdict** | %s | worst relative SE %.3g (%s) against %.3g at normal scale | "
+        "%s |",
+        name.c_str(),
+        all_finite && worst <= std::max(10 * normal, 1e-6) ? "degenerate inputs are safe"
+                                                           : "DEGENERATE INPUTS COST ACCURACY",
+        worst, worst_case.c_str(), normal, all_finite ? "all finite" : "NOT FINITE"));
   }
 }
 
@@ -325,6 +374,7 @@ void float_storage(Report& report) {
     // bright directional light, and glossy chains with and without A^-1.
     const DirectionSet grid = DirectionSet::fibonacci(2000);
     Eigen::VectorXd light = sh::clamped_cosine(10, Eigen::Vector3d(0.3, 0.9, 0.1).normalized());
+    const Eigen::Vector3d towards = Eigen::Vector3d(0.3, 0.9, 0.1).normalized();
     std::vector<double> bound(static_cast<std::size_t>(grid.size()));
     for (Eigen::Index k = 0; k < grid.size(); ++k) {
       const Eigen::VectorXd t =
@@ -333,10 +383,22 @@ void float_storage(Report& report) {
       bound[k] = std::ldexp(1.0, -24) * t.cwiseProduct(light).cwiseAbs().sum() /
                  std::max(1e-300, std::abs(t.dot(light)));
     }
+    // Where it peaks: the angle between that normal and the light.
+    const auto peak = std::max_element(bound.begin(), bound.end()) - bound.begin();
+    const double angle =
+        std::acos(std::clamp(grid.directions.row(peak).dot(towards.transpose()), -1.0, 1.0)) * 180 /
+        M_PI;
     std::sort(bound.begin(), bound.end());
     report.row(format("| diffuse order 10, directional light | %.3g | %.3g |", bound.back(),
                       bound[bound.size() / 2]));
     report.value("float_bound_diffuse", bound.back());
+    report.row(format(
+        "\n**Verdict:** float32 storage costs at most %.3g of the radiance at the median normal; "
+        "the bound peaks at %.3g for a normal %.0f degrees from the light, at the shadow "
+        "terminator, where the radiance itself tends to zero (cancellation in the sum): the "
+        "absolute error, 2^-24 sum |t_j l_j|, does not grow there; only its ratio to a "
+        "vanishing radiance does.",
+        bound[bound.size() / 2], bound.back(), angle));
   }
 }
 

@@ -37,6 +37,22 @@ std::vector<double> vertex_errors(const TransferSignal& signal,
   return errors;
 }
 
+namespace {
+
+// The all-zero encoding of `compressed`'s shape: its error is the signal's energy.
+CompressedTransfer zero_form(const CompressedTransfer& compressed) {
+  CompressedTransfer zero;
+  zero.compressor = "zero";
+  zero.dimension = compressed.dimension;
+  zero.cluster_of_vertex.assign(compressed.cluster_of_vertex.size(), 0);
+  zero.weights = MatrixXfRow::Zero(compressed.vertices(), 0);
+  zero.means = MatrixXfRow::Zero(1, compressed.dimension);
+  zero.representatives = {MatrixXfRow::Zero(0, compressed.dimension)};
+  return zero;
+}
+
+}  // namespace
+
 CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
                           const Mesh* mesh, double encode_seconds, const Distribution& where,
                           const RenderedMetric* metric) {
@@ -46,6 +62,7 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
   std::vector<double> errors = vertex_errors(signal, compressed, metric);
   const auto parts = where.row_parts(signal.vertices());
   r.squared_error = parts->sum_rows(errors);
+  r.signal_energy = parts->sum_rows(vertex_errors(signal, zero_form(compressed), metric));
   if (parts->distributed()) {  // every vertex's error on the first part
     const auto all = parts->gather(to_bytes(errors), 0);
     errors.clear();
@@ -66,6 +83,8 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
   r.vertex_error_max = errors.empty() ? 0.0 : errors.back();
   r.stored_floats = compressed.stored_floats();
   r.stored_bytes = 4 * r.stored_floats;
+  if (compressed.clusters() > 1) r.index_bytes = 4.0 * double(compressed.vertices());
+  r.index_bytes += 4.0 * double(compressed.supercluster_of_cluster.size());
   r.encode_seconds = encode_seconds;
   r.clusters = static_cast<std::size_t>(compressed.clusters());
   r.statistics = compressed.statistics;
@@ -79,6 +98,8 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
 std::string CompressionReport::json() const {
   nlohmann::ordered_json j;
   j["squared_error"] = squared_error;
+  j["signal_energy"] = signal_energy;
+  j["relative_squared_error"] = relative_squared_error();
   j["error_metric"] = rendered_metric ? "rendered" : "coefficients";
   j["vertex_squared_error"] = {{"p50", vertex_error_p50},
                                {"p90", vertex_error_p90},
@@ -86,6 +107,8 @@ std::string CompressionReport::json() const {
                                {"max", vertex_error_max}};
   j["stored_floats"] = stored_floats;
   j["stored_bytes"] = stored_bytes;
+  j["index_bytes"] = index_bytes;
+  j["total_bytes"] = total_bytes();
   j["encode_seconds"] = encode_seconds;
   j["clusters"] = clusters;
   j["overdraw"] = overdraw;
@@ -98,13 +121,14 @@ std::string CompressionReport::json() const {
 std::string CompressionReport::text() const {
   char buffer[768];
   std::snprintf(buffer, sizeof buffer,
-                "SE %.6g%s  (per-vertex squared error p50 %.3g, p90 %.3g, p99 %.3g, max %.3g)\n"
-                "storage %.0f floats = %.2f MB, %zu clusters, encode %.3f s, overdraw %.4f "
-                "(superclusters %.4f)\n",
+                "SE %.6g%s, %.4g of the signal's energy  (per-vertex squared error p50 %.3g, "
+                "p90 %.3g, p99 %.3g, max %.3g)\n"
+                "storage %.0f floats = %.2f MB + %.2f MB of cluster indices = %.2f MB, %zu "
+                "clusters, encode %.3f s, overdraw %.4f (superclusters %.4f)\n",
                 squared_error, rendered_metric ? " in the rendered metric (function space)" : "",
-                vertex_error_p50, vertex_error_p90, vertex_error_p99, vertex_error_max,
-                stored_floats, stored_bytes / 1e6, clusters, encode_seconds, overdraw,
-                supercluster_overdraw);
+                relative_squared_error(), vertex_error_p50, vertex_error_p90, vertex_error_p99,
+                vertex_error_max, stored_floats, stored_bytes / 1e6, index_bytes / 1e6,
+                total_bytes() / 1e6, clusters, encode_seconds, overdraw, supercluster_overdraw);
   std::string out = buffer;
   for (const auto& [name, value] : statistics) {
     std::snprintf(buffer, sizeof buffer, "  %s = %.6g\n", name.c_str(), value);

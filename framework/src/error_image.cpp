@@ -34,8 +34,8 @@ std::array<std::uint8_t, 3> ramp(double t) {
   const double f = t - double(i);
   std::array<std::uint8_t, 3> rgb{};
   for (int c = 0; c < 3; ++c)
-    rgb[std::size_t(c)] =
-        std::uint8_t(std::lround((1 - f) * stops[i][std::size_t(c)] + f * stops[i + 1][std::size_t(c)]));
+    rgb[std::size_t(c)] = std::uint8_t(
+        std::lround((1 - f) * stops[i][std::size_t(c)] + f * stops[i + 1][std::size_t(c)]));
   return rgb;
 }
 
@@ -85,8 +85,8 @@ ErrorHeatMap error_heat_map(const Image& render, const Image& truth, float expos
   std::vector<double> differing;
   for (std::size_t p = 0; p < error.size(); ++p) {
     const float* d = &difference.rgb[3 * p];
-    error[p] = exposure * (0.2126 * std::abs(d[0]) + 0.7152 * std::abs(d[1]) +
-                           0.0722 * std::abs(d[2]));
+    error[p] =
+        exposure * (0.2126 * std::abs(d[0]) + 0.7152 * std::abs(d[1]) + 0.0722 * std::abs(d[2]));
     if (!std::isfinite(error[p])) error[p] = 0;
     if (error[p] > 0) differing.push_back(error[p]);
   }
@@ -94,7 +94,8 @@ ErrorHeatMap error_heat_map(const Image& render, const Image& truth, float expos
   if (!differing.empty()) {
     std::sort(differing.begin(), differing.end());
     out.peak = differing.back();
-    out.top = differing[std::min(differing.size() - 1, std::size_t(0.99 * double(differing.size())))];
+    out.top =
+        differing[std::min(differing.size() - 1, std::size_t(0.99 * double(differing.size())))];
   }
   const double top = out.top > 0 ? out.top : 1.0;
   out.image = Image8{width + kPanel, height,

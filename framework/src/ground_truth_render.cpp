@@ -11,8 +11,8 @@
 #include "prt/glossy_interreflection.hpp"
 #include "prt/ground_truth.hpp"
 #include "prt/interreflection.hpp"
-#include "prt/progress.hpp"
 #include "prt/point_lights.hpp"
+#include "prt/progress.hpp"
 #include "prt/renderer.hpp"
 
 namespace prt {
@@ -26,6 +26,29 @@ struct Batch {
   std::uint64_t seed = 0;
   std::string label;  // after each progress bar's name: " (batch 2 of 4)"
 };
+
+// The dipole over every pair of vertices, from Monte Carlo irradiance (a
+// glossy material's own radiance is not irradiance: traced apart).
+Eigen::MatrixX3f dipole_term(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+                             const RunOptions& options, const ChannelMaterial& material,
+                             const Batch& batch, const Eigen::MatrixX3f& radiance) {
+  Eigen::MatrixX3f irradiance = radiance;
+  if (material.brdf.glossy()) {
+    Progress progress("ground truth irradiance" + batch.label, double(mesh.vertex_count()), "rays",
+                      options.quiet);
+    irradiance = ground_truth_radiance(mesh, lighting, batch.samples, batch.seed, &progress);
+    if (!scene.point_lights.empty())
+      irradiance += ground_truth_point_lights(mesh, scene.point_lights, batch.samples, batch.seed);
+  }
+  Stopwatch clock;
+  const Eigen::MatrixX3f term = subsurface_direct(mesh, irradiance, material.subsurface);
+  char line[160];
+  std::snprintf(line, sizeof line,
+                "ground truth: the dipole summed over all %zu^2 vertex pairs in %.1f s",
+                mesh.vertex_count(), clock.seconds());
+  options.message(line);
+  return term;
+}
 
 Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
                                       const Environment& lighting, const Camera& camera,
@@ -47,47 +70,32 @@ Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
   }
   Eigen::MatrixX3f radiance;
   {
-    Progress progress("ground truth" + batch.label, double(mesh.vertex_count()), "rays", options.quiet);
+    Progress progress("ground truth" + batch.label, double(mesh.vertex_count()), "rays",
+                      options.quiet);
     radiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress, reflectance);
   }
   if (const int bounces = static_cast<int>(keys::transport::bounces(scene.transport));
       bounces > 0) {
     if (brdf.glossy()) {  // view-dependent: paths from each vertex
-      Progress progress("ground truth glossy bounces" + batch.label, double(mesh.vertex_count()), "rays",
-                        options.quiet);
+      Progress progress("ground truth glossy bounces" + batch.label, double(mesh.vertex_count()),
+                        "rays", options.quiet);
       radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, views, bounces,
                                               material.bounce_albedo, samples, seed, &progress);
     } else {
-      Progress progress("ground truth bounces" + batch.label, double(mesh.vertex_count()) * bounces, "rays",
-                        options.quiet);
+      Progress progress("ground truth bounces" + batch.label, double(mesh.vertex_count()) * bounces,
+                        "rays", options.quiet);
       radiance = ground_truth_bounces(mesh, radiance, bounces, material.bounce_albedo, samples,
                                       seed, &progress);
     }
   }
   if (!scene.point_lights.empty()) {  // direct light only, as traced up to each light
-    Progress progress("ground truth point lights" + batch.label, double(mesh.vertex_count()), "", options.quiet);
+    Progress progress("ground truth point lights" + batch.label, double(mesh.vertex_count()), "",
+                      options.quiet);
     radiance +=
         ground_truth_point_lights(mesh, scene.point_lights, samples, seed, reflectance, &progress);
   }
-  if (keys::material::subsurface(scene.material)) {
-    // The dipole over every pair of vertices, from Monte Carlo irradiance
-    // (a glossy material's own radiance is not irradiance: trace it apart).
-    Eigen::MatrixX3f irradiance = radiance;
-    if (brdf.glossy()) {
-      Progress progress("ground truth irradiance" + batch.label, double(mesh.vertex_count()), "rays",
-                        options.quiet);
-      irradiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress);
-      if (!scene.point_lights.empty())
-        irradiance += ground_truth_point_lights(mesh, scene.point_lights, samples, seed);
-    }
-    Stopwatch clock;
-    radiance += subsurface_direct(mesh, irradiance, material.subsurface);
-    char line[160];
-    std::snprintf(line, sizeof line,
-                  "ground truth: the dipole summed over all %zu^2 vertex pairs in %.1f s",
-                  mesh.vertex_count(), clock.seconds());
-    options.message(line);
-  }
+  if (keys::material::subsurface(scene.material))
+    radiance += dipole_term(scene, mesh, lighting, options, material, batch, radiance);
   return radiance;
 }
 
@@ -186,17 +194,17 @@ Reference traced_reference(const SceneSpec& scene, const Mesh& mesh, const Envir
 
 }  // namespace
 
-Reference reference_radiance(const SceneSpec& scene, const Mesh& mesh,
-                             const Environment& lighting, const Camera& camera,
-                             const RunOptions& options, const ReferenceCache* cache) {
+Reference reference_radiance(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+                             const Camera& camera, const RunOptions& options,
+                             const ReferenceCache* cache) {
   const int samples = static_cast<int>(keys::ground_truth::samples(scene.ground_truth));
   const std::string key =
       cache ? reference_key(scene, mesh, lighting, camera, samples) : std::string();
   if (cache)
     if (std::optional<Reference> kept = cache->load(key, mesh.vertex_count())) {
-      options.message("ground truth: reused " + kept->cached.string() + " (" +
-                      std::to_string(samples) + " samples per vertex; prt clears nothing: " +
-                      "remove the folder to recompute)");
+      options.message(
+          "ground truth: reused " + kept->cached.string() + " (" + std::to_string(samples) +
+          " samples per vertex; prt clears nothing: " + "remove the folder to recompute)");
       return *kept;
     }
   Reference out = traced_reference(scene, mesh, lighting, camera, options, samples);
@@ -266,10 +274,10 @@ ErrorStats vertex_error(const Eigen::MatrixX3f& approximation, const Eigen::Matr
   return stats;
 }
 
-Reference band_limited_truth(const SceneSpec& scene, const Mesh& mesh,
-                             const Relighting& relighting, const Environment& environment,
-                             const Eigen::MatrixX3d& light, const Camera& camera,
-                             const RunOptions& options, const ReferenceCache* cache) {
+Reference band_limited_truth(const SceneSpec& scene, const Mesh& mesh, const Relighting& relighting,
+                             const Environment& environment, const Eigen::MatrixX3d& light,
+                             const Camera& camera, const RunOptions& options,
+                             const ReferenceCache* cache) {
   return reference_radiance(scene, mesh, environment.band_limited(relighting.basis(), light),
                             camera, options, cache);
 }

@@ -38,7 +38,8 @@ void write_png(const Image& image, const std::filesystem::path& file, float expo
 
 Image8 display_image(const Image& image, float exposure) {
   Image8 out{image.width, image.height, std::vector<std::uint8_t>(image.rgb.size())};
-  for (std::size_t i = 0; i < out.rgb.size(); ++i) out.rgb[i] = encode_srgb(image.rgb[i] * exposure);
+  for (std::size_t i = 0; i < out.rgb.size(); ++i)
+    out.rgb[i] = encode_srgb(image.rgb[i] * exposure);
   return out;
 }
 

@@ -73,8 +73,8 @@ double ssim(const Image8& a, const Image8& b) {
   check_sizes(a, b, "SSIM");
   const int width = a.width, height = a.height;
   if (width < 2 * kRadius + 1 || height < 2 * kRadius + 1)
-    throw Error("SSIM: the images are " + std::to_string(width) + " x " +
-                std::to_string(height) + " pixels; its 11 x 11 window needs at least that");
+    throw Error("SSIM: the images are " + std::to_string(width) + " x " + std::to_string(height) +
+                " pixels; its 11 x 11 window needs at least that");
   const std::vector<double> kernel = gaussian_kernel();
   const double c1 = std::pow(0.01 * 255, 2), c2 = std::pow(0.03 * 255, 2);
   const std::size_t n = std::size_t(width) * std::size_t(height);

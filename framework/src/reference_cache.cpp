@@ -47,7 +47,9 @@ ReferenceKey::ReferenceKey() : state_(std::make_unique<State>()) {
   XXH3_128bits_reset(state_->xxh);
 }
 
-ReferenceKey::~ReferenceKey() { XXH3_freeState(state_->xxh); }
+ReferenceKey::~ReferenceKey() {
+  XXH3_freeState(state_->xxh);
+}
 
 void ReferenceKey::add(const void* bytes, std::size_t size) {
   XXH3_128bits_update(state_->xxh, bytes, size);
@@ -79,8 +81,7 @@ std::filesystem::path ReferenceCache::file(const std::string& key) const {
   return folder_ / (key + ".ref");
 }
 
-std::optional<Reference> ReferenceCache::load(const std::string& key,
-                                              std::size_t vertices) const {
+std::optional<Reference> ReferenceCache::load(const std::string& key, std::size_t vertices) const {
   if (folder_.empty()) return std::nullopt;
   std::ifstream in(file(key), std::ios::binary);
   if (!in) return std::nullopt;

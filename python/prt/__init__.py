@@ -27,6 +27,7 @@ __all__ = [
     "DirectionSet", "Environment", "Error", "Mesh", "PluginRecord", "Relighting", "Renderer",
     "Scene", "Traced", "TransferSignal", "bake", "compress", "create_basis", "create_compressor",
     "create_renderer", "exact_form", "ground_truth_vertices", "measure", "plugins",
+    "reference_radiance",
     "plugin_problems", "read_bake", "render", "render_ground_truth", "trace", "write_png",
     "register_basis", "register_compressor", "unregister", "boolean", "choice", "integer", "real",
     "reals", "text", "tqdm_progress", "ProgressPrinter", "progress_to",
@@ -114,3 +115,15 @@ def ground_truth_vertices(scene, mesh, lighting, camera, *, progress=None):
     """Monte Carlo radiance per vertex toward the camera (v x 3)."""
     with progress_to(progress) as quiet:
         return _prt.ground_truth_vertices(scene, mesh, lighting, camera, quiet=quiet)
+
+
+def reference_radiance(scene, mesh, lighting, camera, *, progress=None, cache=None):
+    """The Monte Carlo reference with its error bar, as `prt render --compare`
+    measures against: a dict with radiance and standard_error (v x 3),
+    noise_floor (the standard error's per-vertex RMS: an RMS against this
+    reference below about twice it is not resolved), samples, batches and
+    cached (the file it was read from, or None). cache: a folder of
+    references to reuse and keep, as `--cache` (None: trace, keep nothing)."""
+    with progress_to(progress) as quiet:
+        return _prt.reference_radiance(scene, mesh, lighting, camera, quiet=quiet,
+                                       cache=None if cache is None else str(cache))

@@ -1,5 +1,7 @@
 // The scene and the stages of the bake and viewing pipelines (prt/pipeline.hpp):
 // the same functions the CLI composes, each callable alone.
+#include <optional>
+
 #include "bindings.hpp"
 #include "long_call.hpp"
 #include "prt/environment.hpp"
@@ -273,6 +275,35 @@ void bind_pipeline(py::module_& m) {
       },
       py::arg("scene"), py::arg("mesh"), py::arg("lighting"), py::arg("camera"), py::kw_only(),
       py::arg("quiet") = false, "Monte Carlo radiance per vertex toward the camera (v x 3).");
+
+  m.def(
+      "reference_radiance",
+      [](const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+         const Camera& camera, bool quiet, const std::optional<std::filesystem::path>& cache) {
+        check_camera(camera);
+        if (mesh.vertex_count() == 0) throw Error("reference_radiance: the mesh has no vertices");
+        const RunOptions options = run_options(quiet, py::none());
+        const std::optional<ReferenceCache> kept =
+            cache ? std::optional<ReferenceCache>(ReferenceCache(*cache)) : std::nullopt;
+        const Reference r = long_call([&] {
+          return reference_radiance(scene, mesh, lighting, camera, options,
+                                    kept ? &*kept : nullptr);
+        });
+        py::dict out;
+        out["radiance"] = Eigen::MatrixX3f(r.radiance);
+        out["standard_error"] = Eigen::MatrixX3f(r.standard_error);
+        out["noise_floor"] = r.noise_floor();
+        out["samples"] = r.samples;
+        out["batches"] = r.batches;
+        out["cached"] = r.cached.empty() ? py::object(py::none()) : py::cast(r.cached.string());
+        return out;
+      },
+      py::arg("scene"), py::arg("mesh"), py::arg("lighting"), py::arg("camera"), py::kw_only(),
+      py::arg("quiet") = false, py::arg("cache") = py::none(),
+      "The Monte Carlo reference with its error bar, as `prt render --compare` measures "
+      "against: dict with radiance and standard_error (v x 3), noise_floor (the standard "
+      "error's per-vertex RMS), samples, batches, and cached (the file it was read from, or "
+      "None). cache: a folder of references to reuse and keep (as --cache).");
 
   m.def(
       "write_png",

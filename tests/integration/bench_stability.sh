@@ -40,8 +40,28 @@ for f in results.csv results.json report.md error_vs_bytes.png error_vs_relight.
 done
 rows=$(($(wc -l <sweep/results.csv) - 1))
 [ "$rows" = 6 ] || { echo "FAIL: $rows rows, expected 6"; exit 1; }
-# Transfer SE and RMS error are numbers (no NaN, no empty fields).
-awk -F, 'NR > 1 && ($12 != $12 + 0 || $13 != $13 + 0) { print "FAIL: non-numeric error"; exit 1 }' sweep/results.csv
+# Transfer SE, RMS error and its noise floor are numbers (no NaN, no empty
+# fields); the GPU column is null when --gpu was not asked.
+/usr/bin/python3 - sweep <<'PY'
+import csv, math, sys
+rows = list(csv.DictReader(open(f"{sys.argv[1]}/results.csv")))
+report = open(f"{sys.argv[1]}/report.md").read()
+numeric = lambda v: math.isfinite(float(v))
+checks = {
+    "transfer SE, RMS, noise floor are numbers": all(
+        numeric(r["transfer_se"]) and numeric(r["rms"]) and float(r["noise_floor"]) > 0
+        for r in rows),
+    "resolved is a verdict": all(r["resolved"] in ("true", "false") for r in rows),
+    "no GPU time without --gpu": all(r["gpu_frame_seconds"] == "null" for r in rows),
+    "the report has the noise floor and the error budget": "noise floor" in report
+        and "truncation" in report and "compression" in report,
+    "the report ranks and recommends": "## Ranking" in report and "## Recommendation" in report
+        and "has the smallest error" in report,
+}
+for name, ok in checks.items():
+    print(f"{'ok  ' if ok else 'FAIL'} {name}")
+sys.exit(0 if all(checks.values()) else 1)
+PY
 stamp=$(stat -c %Y sweep/images/sh_order_3_none.png)
 sleep 1
 "$prt" -q bench box.toml --out sweep --sweep 'basis=sh order=3|sh order=5|sh order=6' \

@@ -62,6 +62,35 @@ for name, ok in checks.items():
     print(f"{'ok  ' if ok else 'FAIL'} {name}")
 sys.exit(0 if all(checks.values()) else 1)
 PY
+# Several encodings of one bake ranked, nothing written (the bake keeps its bytes).
+before=$(md5sum <"$work/bunny10.h5")
+sweep=$("$prt" -q compress "$work/bunny10.h5" --json \
+  --sweep 'vq clusters=64|pca components=4|cpca clusters=16 components=4' --sweep 'pca components=16')
+[ "$(md5sum <"$work/bunny10.h5")" = "$before" ] || { echo "FAIL: --sweep rewrote the bake"; exit 1; }
+python3 - "$sweep" <<'PY'
+import json, sys
+rows = {r["configuration"]: r for r in json.loads(sys.argv[1])}
+v = 37706
+checks = {
+    "four configurations": len(rows) == 4,
+    "VQ and CPCA count a 32-bit cluster id per vertex": all(
+        rows[c]["index_bytes"] == 4 * v for c in ("vq clusters=64", "cpca clusters=16 components=4")),
+    "global PCA needs no index": rows["pca components=4"]["index_bytes"] == 0,
+    "total = floats + indices": all(
+        r["total_bytes"] == r["stored_bytes"] + r["index_bytes"] for r in rows.values()),
+    "SE relative to the energy, in (0, 1)": all(
+        0 < r["relative_squared_error"] < 1 for r in rows.values()),
+    "more PCA components, less error": rows["pca components=16"]["relative_squared_error"]
+        < rows["pca components=4"]["relative_squared_error"],
+    "the front is sorted by bytes with falling error": [
+        r["relative_squared_error"] for r in sorted(rows.values(), key=lambda r: r["total_bytes"])
+        if r["pareto_front"]] == sorted([r["relative_squared_error"] for r in rows.values()
+                                         if r["pareto_front"]], reverse=True),
+}
+for name, ok in checks.items():
+    print(f"{'ok  ' if ok else 'FAIL'} compress --sweep: {name}")
+sys.exit(0 if all(checks.values()) else 1)
+PY
 python3 - "${rms[3]}" "${rms[5]}" "${rms[10]}" <<'PY'
 import sys
 r3, r5, r10 = map(float, sys.argv[1:])

@@ -77,6 +77,16 @@ struct CompressionReport {
   double vertex_error_p50 = 0, vertex_error_p90 = 0, vertex_error_p99 = 0, vertex_error_max = 0;
   double stored_floats = 0;  // sum_p n'_k(p) + sum_k (n'_k + 1) n
   double stored_bytes = 0;   // as float32
+  // What a renderer needs besides the floats: a 32-bit cluster id per vertex
+  // when there is more than one cluster, and the supercluster map.
+  double index_bytes = 0;
+  double total_bytes() const { return stored_bytes + index_bytes; }
+  // sum_p |t_p|^2 in the same metric as SE: SE relative to it is comparable
+  // across scenes, bases and lights.
+  double signal_energy = 0;
+  double relative_squared_error() const {
+    return signal_energy > 0 ? squared_error / signal_energy : 0.0;
+  }
   double encode_seconds = 0;
   double overdraw = 0;               // average distinct clusters per triangle (0 without a mesh)
   double supercluster_overdraw = 0;  // the same over superclusters (= overdraw without them)

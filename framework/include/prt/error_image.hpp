@@ -7,9 +7,9 @@
 namespace prt {
 
 struct ErrorHeatMap {
-  Image8 image;      // the heat map, with the colour bar to its right
-  double top = 0;    // the error at the bar's top (larger errors show its colour)
-  double peak = 0;   // the largest error in the image
+  Image8 image;     // the heat map, with the colour bar to its right
+  double top = 0;   // the error at the bar's top (larger errors show its colour)
+  double peak = 0;  // the largest error in the image
 };
 
 // Per pixel the Rec. 709 luminance of |render - truth| times `exposure` (1 is

@@ -12,9 +12,9 @@ namespace prt {
 // the camera for glossy materials, with its standard error: [ground_truth]
 // samples per vertex in four independent batches, reused from `cache` when
 // it holds the same reference and kept there when not.
-Reference reference_radiance(const SceneSpec& scene, const Mesh& mesh,
-                             const Environment& lighting, const Camera& camera,
-                             const RunOptions& options, const ReferenceCache* cache = nullptr);
+Reference reference_radiance(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+                             const Camera& camera, const RunOptions& options,
+                             const ReferenceCache* cache = nullptr);
 // reference_radiance's radiance alone, never cached.
 Eigen::MatrixX3f ground_truth_vertices(const SceneSpec& scene, const Mesh& mesh,
                                        const Environment& lighting, const Camera& camera,
@@ -38,10 +38,10 @@ ErrorStats vertex_error(const Eigen::MatrixX3f& approximation, const Eigen::Matr
 
 // The ground truth under the light basis's reconstruction of `light` (the
 // environment band-limited by the basis): what the basis can carry at all.
-Reference band_limited_truth(const SceneSpec& scene, const Mesh& mesh,
-                             const Relighting& relighting, const Environment& environment,
-                             const Eigen::MatrixX3d& light, const Camera& camera,
-                             const RunOptions& options, const ReferenceCache* cache = nullptr);
+Reference band_limited_truth(const SceneSpec& scene, const Mesh& mesh, const Relighting& relighting,
+                             const Environment& environment, const Eigen::MatrixX3d& light,
+                             const Camera& camera, const RunOptions& options,
+                             const ReferenceCache* cache = nullptr);
 
 // A relit bake's error against the ground truth in three parts (per-vertex
 // RMS): light truncation (band-limited truth against the full truth),
