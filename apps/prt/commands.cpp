@@ -143,8 +143,9 @@ void compare_with_truth(Context& context, const RenderArgs& args, const SceneSpe
         "the same ground truth: RMS per vertex %.6g (relative %.4f), %s\n",
         data.bounces, d.rms, d.relative_rms, noise_note(d.rms, floor).c_str());
   }
-  print_error_budget({scene, data, relighting, environment, light, camera}, truth,
-                     result.vertex_radiance, context, kept, times);
+  if (!args.no_budget)
+    print_error_budget({scene, data, relighting, environment, light, camera}, truth,
+                       result.vertex_radiance, context, kept, times);
 }
 
 int render(Context& context, const RenderArgs& args) {

@@ -29,8 +29,9 @@ struct ReferenceArgs {
 struct RenderArgs {
   std::string scene, bake, output;
   bool ground_truth = false, compare = false, force = false;
-  float exposure = 0.0f;                         // 0: the scene's [camera] exposure
-  std::string renderer;                          // overrides the scene's [renderer] plugin
+  bool no_budget = false;  // --compare without the error budget (its second ground truth)
+  float exposure = 0.0f;   // 0: the scene's [camera] exposure
+  std::string renderer;    // overrides the scene's [renderer] plugin
   std::vector<std::string> renderer_parameters;  // key=value for it
   ReferenceArgs reference;
 };

@@ -64,6 +64,9 @@ Command render_command(CLI::App& app) {
                     "also compute the ground truth (cached): per-vertex RMS with its noise "
                     "floor, PSNR and SSIM, the error budget, and NAME.error.png, "
                     "NAME.error.exr and NAME.truth.EXT beside the image");
+  command->add_flag("--no-budget", args->no_budget,
+                    "with --compare: skip the error budget, which traces a second ground truth "
+                    "under the band-limited light");
   add_reference_options(command, args->reference);
   command
       ->add_option("--exposure", args->exposure, "exposure scale of the PNG (default: the scene's)")

@@ -282,7 +282,8 @@ void hemisphere_gram(Report& report, const StabilityArgs& args) {
   };
   report.row(format(
       "\n**Verdict:** the Gram matrix A is ill-conditioned (condition > 1e6) from %s, and the "
-      "cut-off 1e-10 starts discarding directions at %s; least squares with the cut-off stays "
+      "cut-off 1e-10 starts discarding singular directions of A at %s; least squares with the "
+      "cut-off stays "
       "within %.3g everywhere measured, so use it (not A^-1) past that order. Zeroing the "
       "lower hemisphere exceeds 1e-3 error from %s.",
       order_text(first_ill).c_str(), order_text(first_discarding).c_str(), worst_ls,
@@ -394,10 +395,10 @@ void float_storage(Report& report) {
     report.value("float_bound_diffuse", bound.back());
     report.row(format(
         "\n**Verdict:** float32 storage costs at most %.3g of the radiance at the median normal; "
-        "the bound peaks at %.3g for a normal %.0f degrees from the light, at the shadow "
-        "terminator, where the radiance itself tends to zero (cancellation in the sum): the "
-        "absolute error, 2^-24 sum |t_j l_j|, does not grow there; only its ratio to a "
-        "vanishing radiance does.",
+        "the bound peaks at %.3g for a normal %.0f degrees from the light, where the "
+        "band-limited radiance t . l passes through zero (past the terminator, where "
+        "truncation rings): the absolute error, 2^-24 sum |t_j l_j|, does not grow there; "
+        "only its ratio to a vanishing radiance does.",
         bound[bound.size() / 2], bound.back(), angle));
   }
 }

@@ -14,6 +14,7 @@
 #include "prt/point_lights.hpp"
 #include "prt/progress.hpp"
 #include "prt/renderer.hpp"
+#include "prt/subsurface.hpp"
 
 namespace prt {
 
@@ -27,33 +28,34 @@ struct Batch {
   std::string label;  // after each progress bar's name: " (batch 2 of 4)"
 };
 
-// The dipole over every pair of vertices, from Monte Carlo irradiance (a
-// glossy material's own radiance is not irradiance: traced apart).
-Eigen::MatrixX3f dipole_term(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
-                             const RunOptions& options, const ChannelMaterial& material,
-                             const Batch& batch, const Eigen::MatrixX3f& radiance) {
-  Eigen::MatrixX3f irradiance = radiance;
-  if (material.brdf.glossy()) {
-    Progress progress("ground truth irradiance" + batch.label, double(mesh.vertex_count()), "rays",
-                      options.quiet);
-    irradiance = ground_truth_radiance(mesh, lighting, batch.samples, batch.seed, &progress);
-    if (!scene.point_lights.empty())
-      irradiance += ground_truth_point_lights(mesh, scene.point_lights, batch.samples, batch.seed);
-  }
-  Stopwatch clock;
-  const Eigen::MatrixX3f term = subsurface_direct(mesh, irradiance, material.subsurface);
-  char line[160];
-  std::snprintf(line, sizeof line,
-                "ground truth: the dipole summed over all %zu^2 vertex pairs in %.1f s",
-                mesh.vertex_count(), clock.seconds());
-  options.message(line);
-  return term;
+// The irradiance the dipole scatters (E / pi): the channel's own Monte Carlo
+// radiance, or for a glossy material (whose radiance is not irradiance) a
+// trace of its own.
+Eigen::MatrixX3f dipole_irradiance(const SceneSpec& scene, const Mesh& mesh,
+                                   const Environment& lighting, const RunOptions& options,
+                                   const ChannelMaterial& material, const Batch& batch,
+                                   const Eigen::MatrixX3f& radiance) {
+  if (!material.brdf.glossy()) return radiance;
+  Progress progress("ground truth irradiance" + batch.label, double(mesh.vertex_count()), "rays",
+                    options.quiet);
+  Eigen::MatrixX3f irradiance =
+      ground_truth_radiance(mesh, lighting, batch.samples, batch.seed, &progress);
+  if (!scene.point_lights.empty())
+    irradiance += ground_truth_point_lights(mesh, scene.point_lights, batch.samples, batch.seed);
+  return irradiance;
 }
 
-Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
-                                      const Environment& lighting, const Camera& camera,
-                                      const RunOptions& options, const ChannelMaterial& material,
-                                      const Batch& batch) {
+// One channel material's estimate: the surface's radiance, and (subsurface
+// materials) the irradiance its dipole scatters, applied to every batch at
+// once by add_dipole_terms.
+struct ChannelEstimate {
+  Eigen::MatrixX3f radiance, irradiance;
+};
+
+ChannelEstimate channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
+                                     const Environment& lighting, const Camera& camera,
+                                     const RunOptions& options, const ChannelMaterial& material,
+                                     const Batch& batch) {
   const int samples = batch.samples;
   const std::uint64_t seed = batch.seed;
   // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
@@ -94,28 +96,65 @@ Eigen::MatrixX3f channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
     radiance +=
         ground_truth_point_lights(mesh, scene.point_lights, samples, seed, reflectance, &progress);
   }
-  if (keys::material::subsurface(scene.material))
-    radiance += dipole_term(scene, mesh, lighting, options, material, batch, radiance);
-  return radiance;
+  if (!keys::material::subsurface(scene.material)) return {radiance, {}};
+  Eigen::MatrixX3f irradiance =
+      dipole_irradiance(scene, mesh, lighting, options, material, batch, radiance);
+  return {std::move(radiance), std::move(irradiance)};
 }
 
-// One estimate of the whole scene (every channel material, albedo included).
-Eigen::MatrixX3f scene_estimate(const SceneSpec& scene, const Mesh& mesh,
-                                const Environment& lighting, const Camera& camera,
-                                const RunOptions& options, const Batch& batch) {
+// One estimate of the whole scene: its surface radiance (every channel
+// material, albedo included) and each material's irradiance for the dipole.
+struct SceneEstimate {
+  Eigen::MatrixX3f radiance;
+  std::vector<Eigen::MatrixX3f> irradiance;  // per channel material; empty without subsurface
+};
+
+SceneEstimate scene_estimate(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
+                             const Camera& camera, const RunOptions& options, const Batch& batch) {
   // One Monte Carlo run per distinct channel material; each channel takes its own.
   const MaterialChannels channels = scene.channels();
-  Eigen::MatrixX3f radiance(static_cast<Eigen::Index>(mesh.vertex_count()), 3);
+  SceneEstimate out;
+  out.radiance.resize(static_cast<Eigen::Index>(mesh.vertex_count()), 3);
   for (std::size_t g = 0; g < channels.groups.size(); ++g) {
-    const Eigen::MatrixX3f truth =
+    ChannelEstimate truth =
         channel_ground_truth(scene, mesh, lighting, camera, options, channels.groups[g], batch);
     for (int c = 0; c < 3; ++c)
       if (channels.group_of_channel[std::size_t(c)] == static_cast<int>(g))
-        radiance.col(c) = truth.col(c);
+        out.radiance.col(c) = truth.radiance.col(c);
+    out.irradiance.push_back(std::move(truth.irradiance));
   }
   const Eigen::Vector3f albedo = scene.albedo();
-  for (int c = 0; c < 3; ++c) radiance.col(c) *= albedo[c];
-  return radiance;
+  for (int c = 0; c < 3; ++c) out.radiance.col(c) *= albedo[c];
+  return out;
+}
+
+// Each subsurface material's dipole over every pair of vertices, for every
+// batch in one pass (the pair kernel is the cost), added to each estimate.
+void add_dipole_terms(const SceneSpec& scene, const Mesh& mesh, const RunOptions& options,
+                      std::vector<SceneEstimate>& estimates) {
+  const MaterialChannels channels = scene.channels();
+  const Eigen::Vector3f albedo = scene.albedo();
+  const auto rows = static_cast<Eigen::Index>(mesh.vertex_count());
+  const auto batches = Eigen::Index(estimates.size());
+  for (std::size_t g = 0; g < channels.groups.size(); ++g) {
+    if (estimates.empty() || estimates[0].irradiance[g].size() == 0) continue;
+    Eigen::MatrixXf stacked(rows, 3 * batches);
+    for (Eigen::Index b = 0; b < batches; ++b)
+      stacked.middleCols(3 * b, 3) = estimates[std::size_t(b)].irradiance[g];
+    Stopwatch clock;
+    const Eigen::MatrixXf terms =
+        subsurface_direct_columns(mesh, stacked, channels.groups[g].subsurface);
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "ground truth: the dipole summed over all %zu^2 vertex pairs for %lld batches "
+                  "in %.1f s",
+                  mesh.vertex_count(), static_cast<long long>(batches), clock.seconds());
+    options.message(line);
+    for (Eigen::Index b = 0; b < batches; ++b)
+      for (int c = 0; c < 3; ++c)
+        if (channels.group_of_channel[std::size_t(c)] == static_cast<int>(g))
+          estimates[std::size_t(b)].radiance.col(c) += albedo[c] * terms.col(3 * b + c);
+  }
 }
 
 // Independent batches give the error bar of their mean whatever the sampling
@@ -165,17 +204,20 @@ Reference traced_reference(const SceneSpec& scene, const Mesh& mesh, const Envir
   out.samples = samples;
   out.batches = std::min(kReferenceBatches, samples);
   const auto rows = static_cast<Eigen::Index>(mesh.vertex_count());
-  Eigen::MatrixX3d sum = Eigen::MatrixX3d::Zero(rows, 3), squares = sum;
+  std::vector<SceneEstimate> estimates;
   for (int b = 0; b < out.batches; ++b) {
     const std::string label = out.batches == 1 ? std::string()
                                                : " (batch " + std::to_string(b + 1) + " of " +
                                                      std::to_string(out.batches) + ")";
-    const Eigen::MatrixX3d estimate =
-        scene_estimate(scene, mesh, lighting, camera, options,
-                       {samples / out.batches, batch_seed(seed, b), label})
-            .cast<double>();
-    sum += estimate;
-    squares += estimate.array().square().matrix();
+    estimates.push_back(scene_estimate(scene, mesh, lighting, camera, options,
+                                       {samples / out.batches, batch_seed(seed, b), label}));
+  }
+  add_dipole_terms(scene, mesh, options, estimates);
+  Eigen::MatrixX3d sum = Eigen::MatrixX3d::Zero(rows, 3), squares = sum;
+  for (const SceneEstimate& estimate : estimates) {
+    const Eigen::MatrixX3d radiance = estimate.radiance.cast<double>();
+    sum += radiance;
+    squares += radiance.array().square().matrix();
   }
   const double n = out.batches;
   out.radiance = (sum / n).cast<float>();

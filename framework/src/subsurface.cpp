@@ -226,6 +226,11 @@ MatrixXfRow subsurface_transfer(const Mesh& mesh, const MatrixXfRow& transfer,
 
 Eigen::MatrixX3f subsurface_direct(const Mesh& mesh, const Eigen::MatrixX3f& irradiance,
                                    const SubsurfaceMaterial& m) {
+  return subsurface_direct_columns(mesh, Eigen::MatrixXf(irradiance), m);
+}
+
+Eigen::MatrixXf subsurface_direct_columns(const Mesh& mesh, const Eigen::MatrixXf& irradiance,
+                                          const SubsurfaceMaterial& m) {
   check(m);
   const auto v = static_cast<Eigen::Index>(mesh.vertex_count());
   if (irradiance.rows() != v) throw Error("subsurface: irradiance rows do not match the mesh");
@@ -233,13 +238,13 @@ Eigen::MatrixX3f subsurface_direct(const Mesh& mesh, const Eigen::MatrixX3f& irr
   const double scale = m.mm_per_unit, f_dt = 1.0 - diffuse_fresnel_reflectance(m.eta);
   const std::vector<double> area = vertex_areas(mesh);
   Eigen::Array3Xd position(3, v);
-  Eigen::MatrixX3d weighted(v, 3);  // A_q (mm^2) E_q / pi
+  Eigen::MatrixXd weighted(v, irradiance.cols());  // A_q (mm^2) E_q / pi
   for (Eigen::Index q = 0; q < v; ++q) {
     position.col(q) = mesh.positions[q].cast<double>() * scale;
     weighted.row(q) = area[q] * scale * scale * irradiance.row(q).cast<double>();
   }
   const double z_r = profile.z_r, z_v = profile.z_v, sigma_tr = profile.sigma_tr;
-  Eigen::MatrixX3f out(v, 3);
+  Eigen::MatrixXf out(v, irradiance.cols());
   // Every pair, in vectorised rows: R_d(|x_p - x_q|) for all q at once.
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, v, 64), [&](const auto& range) {
     Eigen::ArrayXd r2(v), d_r(v), d_v(v), rd(v);

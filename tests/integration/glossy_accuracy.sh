@@ -29,7 +29,7 @@ worst() {  # order, settings...: prints the worst relative RMS; warnings to warn
   for setting in "$@"; do
     IFS='|' read -r rotation camera <<<"$setting"
     make_scene "$order" "$rotation" "$camera"
-    out=$("$prt" -q render "$work/scene.toml" --compare 2>"$work/stderr.txt")
+    out=$("$prt" -q render "$work/scene.toml" --compare --no-budget 2>"$work/stderr.txt")
     cat "$work/stderr.txt" >>"$work/warnings.txt"
     rel=$(sed -n 's/.*(relative \([0-9.]*\)).*/\1/p' <<<"$out")
     echo "order $order, rotation $rotation, camera ${camera:-scene}: relative RMS $rel" >&2

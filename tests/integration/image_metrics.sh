@@ -81,7 +81,9 @@ samples = 64
 EOT
 (cd "$work" && "$prt" -q bake box.toml -o box.h5 >/dev/null)
 first=$(cd "$work" && "$prt" -q render box.toml -b box.h5 -o box.exr --compare)
-second=$(cd "$work" && "$prt" -q render box.toml -b box.h5 -o box.exr --compare --force)
+second=$(cd "$work" && "$prt" -q render box.toml -b box.h5 -o box.exr --compare --force --no-budget)
+grep -q "light truncation" <<<"$first" || { echo "FAIL: no error budget in: $first"; exit 1; }
+grep -q "error budget" <<<"$second" && { echo "FAIL: --no-budget printed the budget"; exit 1; }
 grep -q "noise floor" <<<"$first" || { echo "FAIL: no noise floor in: $first"; exit 1; }
 grep -q "reused from the cache" <<<"$first" && { echo "FAIL: first run claims a cached reference"; exit 1; }
 grep -q "reused from the cache" <<<"$second" || { echo "FAIL: second --compare traced again: $second"; exit 1; }

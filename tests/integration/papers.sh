@@ -30,7 +30,7 @@ local_scene() {  # scene file, output name: paths into the work folder, fewer sa
 # 1. Glossy inter-reflection.
 local_scene box_glossy_bounces.toml box
 "$prt" -q bake "$work/box.toml" >/dev/null
-out=$("$prt" -q render "$work/box.toml" --compare)
+out=$("$prt" -q render "$work/box.toml" --compare --no-budget)
 with=$(relative "error against ground truth" "$out")
 without=$(relative "error of the same transfer without its 2 bounces" "$out")
 echo "glossy box, 2 bounces: relative RMS $with; without the bounces $without"
@@ -41,7 +41,7 @@ below "$with" 0.2 || { echo "FAIL: glossy bounces too far from the ground truth"
 # 2. Point lights and eigentransport.
 local_scene bunny_eigen_point.toml point
 "$prt" -q bake "$work/point.toml" >/dev/null
-out=$("$prt" -q render "$work/point.toml" --compare)
+out=$("$prt" -q render "$work/point.toml" --compare --no-budget)
 rule=$(relative "error against ground truth" "$out")
 brute=$(relative "error of brute-force re-projection" "$out")
 echo "eigentransport, point light + environment: nearest rule $rule, brute force $brute"
@@ -51,7 +51,7 @@ below "$rule" 0.15 && below "$brute" 0.15 || { echo "FAIL: point-light error too
 # 3. Subsurface against a ground truth that sums the dipole over all vertex pairs.
 local_scene bunny_subsurface.toml subsurface
 "$prt" -q bake "$work/subsurface.toml" >/dev/null
-out=$("$prt" -q render "$work/subsurface.toml" --compare)
+out=$("$prt" -q render "$work/subsurface.toml" --compare --no-budget)
 error=$(relative "error against ground truth" "$out")
 echo "subsurface bunny against the pair-sum ground truth: relative RMS $error"
 below "$error" 0.08 || { echo "FAIL: subsurface error too large"; echo "$out"; exit 1; }

@@ -70,6 +70,11 @@ class SubsurfaceScattering {
 // Lambertian surface, e.g. Monte Carlo with visibility). Returns v x 3.
 Eigen::MatrixX3f subsurface_direct(const Mesh& mesh, const Eigen::MatrixX3f& irradiance,
                                    const SubsurfaceMaterial& material);
+// The same for any number of irradiance columns (v x k; e.g. the Monte Carlo
+// batches of several estimates at once: the pair kernel, the cost, is
+// evaluated once for all columns).
+Eigen::MatrixXf subsurface_direct_columns(const Mesh& mesh, const Eigen::MatrixXf& irradiance,
+                                          const SubsurfaceMaterial& material);
 
 // A third of the area of each triangle around each vertex (mesh units^2).
 std::vector<double> vertex_areas(const Mesh& mesh);
