@@ -39,6 +39,15 @@ double off_by(const Image& image, int x, int y, const Eigen::Vector3f& expected)
 // 8-bit framebuffers may round: a renderer is held to 1/255 of the value.
 constexpr double kTolerance = 1.0 / 255 + 1e-5;
 
+// Per-vertex radiance drawn from the front camera, no background.
+RenderInput radiance_input(const Mesh& mesh, const Eigen::MatrixX3f& radiance) {
+  RenderInput input;
+  input.mesh = &mesh;
+  input.vertex_radiance = &radiance;
+  input.camera = front_camera();
+  return input;
+}
+
 void mesh_translate(Mesh& mesh, const Eigen::Vector3f& by) {
   for (auto& p : mesh.positions) p += by;
 }
@@ -50,10 +59,7 @@ static void renderer_check_0(Kit& kit) {
   const Mesh sphere = make_sphere(3);
   const Eigen::MatrixX3f radiance =
       Eigen::MatrixX3f::Constant(Eigen::Index(sphere.vertex_count()), 3, 0.5f);
-  RenderInput input;
-  input.mesh = &sphere;
-  input.vertex_radiance = &radiance;
-  input.camera = front_camera();
+  const RenderInput input = radiance_input(sphere, radiance);
   const Image image = make(kit)->render(input);
   KIT_CHECK_EQUAL(kit, image.width, kWidth);
   KIT_CHECK_EQUAL(kit, image.height, kHeight);
@@ -72,10 +78,7 @@ static void renderer_check_1(Kit& kit) {
   const Eigen::Vector3f colour(0.25f, 0.5f, 0.75f), sky(0.1f, 0.2f, 0.3f);
   const Eigen::MatrixX3f radiance =
       colour.transpose().replicate(Eigen::Index(sphere.vertex_count()), 1);
-  RenderInput input;
-  input.mesh = &sphere;
-  input.vertex_radiance = &radiance;
-  input.camera = front_camera();
+  RenderInput input = radiance_input(sphere, radiance);
   auto renderer = make(kit);
   const Image bare = renderer->render(input);
   KIT_CHECK_AT_MOST(kit, off_by(bare, kWidth / 2, kHeight / 2, colour), kTolerance);
@@ -106,10 +109,7 @@ static void renderer_check_2(Kit& kit) {
     const Eigen::RowVector3f red(0.8f, 0.1f, 0.1f), blue(0.1f, 0.1f, 0.8f);
     for (Eigen::Index v = 0; v < radiance.rows(); ++v)
       radiance.row(v) = (v < Eigen::Index(offset)) == near_first ? red : blue;
-    RenderInput input;
-    input.mesh = &both;
-    input.vertex_radiance = &radiance;
-    input.camera = front_camera();
+    const RenderInput input = radiance_input(both, radiance);
     const Image image = make(kit)->render(input);
     Kit::Note note(kit, near_first ? "the nearer sphere first in the mesh"
                                    : "the nearer sphere last in the mesh");
@@ -143,10 +143,7 @@ static void renderer_check_3(Kit& kit) {
   by_transfer.albedo = albedo;
   by_transfer.camera = front_camera();
   const Image a = renderer->render(by_transfer);
-  RenderInput by_radiance;
-  by_radiance.mesh = &sphere;
-  by_radiance.vertex_radiance = &radiance;
-  by_radiance.camera = front_camera();
+  const RenderInput by_radiance = radiance_input(sphere, radiance);
   const Image b = renderer->render(by_radiance);
   double worst = 0;
   for (std::size_t i = 0; i < a.rgb.size() && a.rgb.size() == b.rgb.size(); ++i)
@@ -161,10 +158,7 @@ static void renderer_check_4(Kit& kit) {
   Eigen::MatrixX3f radiance(Eigen::Index(sphere.vertex_count()), 3);
   for (Eigen::Index p = 0; p < radiance.rows(); ++p)
     radiance.row(p) = (sphere.normals[std::size_t(p)].array() * 0.5f + 0.5f).matrix().transpose();
-  RenderInput input;
-  input.mesh = &sphere;
-  input.vertex_radiance = &radiance;
-  input.camera = front_camera();
+  const RenderInput input = radiance_input(sphere, radiance);
   auto renderer = make(kit);
   const Image first = renderer->render(input);
   const Image second = renderer->render(input);
