@@ -13,9 +13,9 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <optional>
 #include <set>
 #include <sstream>
 #include <type_traits>
@@ -202,8 +202,7 @@ struct Reused {
   // Ground truth under each light's band-limited reconstruction, per light
   // basis setting: the error budget's middle term.
   std::map<std::string, std::vector<Reference>> limited_truths;
-  std::optional<ReferenceCache> cache;  // references kept on disk between runs
-  const ReferenceCache* kept() const { return cache ? &*cache : nullptr; }
+  std::unique_ptr<const ReferenceCache> cache;  // references kept on disk between runs
 };
 
 // One configuration's bake: rays and projection reused, compression its own.
@@ -332,7 +331,7 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
       rotated.lighting.set(keys::lighting::rotation.name(),
                            keys::lighting::rotation(scene.lighting) + 360.0 * light / args.lights);
       truth_list.push_back(reference_radiance(rotated, data.mesh, rotated.load_environment(),
-                                              camera, quiet, reused.kept()));
+                                              camera, quiet, reused.cache.get()));
     }
     const Reference& truth = truth_list[light];
     m.noise_floor += truth.noise_floor() / args.lights;
@@ -342,7 +341,7 @@ Measured measure_lights(Context& context, const BenchArgs& args, const SceneSpec
     auto& limited_list = reused.limited_truths[limited_key];
     if (static_cast<int>(limited_list.size()) <= light)
       limited_list.push_back(band_limited_truth(scene, data.mesh, relighting, turning.environment(),
-                                                l, camera, quiet, reused.kept()));
+                                                l, camera, quiet, reused.cache.get()));
     const Eigen::MatrixX3f exact = relighting.relight(exact_kernel, l, camera).vertex_radiance;
     const ErrorBudget budget =
         error_budget(truth.radiance, limited_list[light].radiance, exact, relit.vertex_radiance);
@@ -386,9 +385,7 @@ nlohmann::ordered_json result_line(const std::string& label, std::size_t index, 
   record["projection_rms"] = m.projection_rms;
   record["compression_rms"] = m.compression_rms;
   record["noise_floor"] = m.noise_floor;
-  // Against a noisy reference E[rms^2] = error^2 + floor^2: within twice the
-  // floor the reference cannot rank this configuration.
-  record["resolved"] = m.rms > 2 * m.noise_floor;
+  record["resolved"] = resolved(m.rms, m.noise_floor);
   record["p99"] = m.p99;
   record["max"] = m.max_error;
   record["image_error"] = m.image_error;

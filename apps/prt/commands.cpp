@@ -95,8 +95,8 @@ void override_renderer(Context& context, const RenderArgs& args, SceneSpec& scen
 void compare_with_truth(Context& context, const RenderArgs& args, const SceneSpec& scene,
                         const BakeData& data, const Rendered& result, StageTimes& times,
                         const fs::path& output) {
-  const std::optional<ReferenceCache> cache = reference_cache(args.reference);
-  const ReferenceCache* kept = cache ? &*cache : nullptr;
+  const auto cache = reference_cache(args.reference);
+  const ReferenceCache* kept = cache.get();
   const Environment environment = scene.load_environment();
   const Camera camera = scene.make_camera(data.mesh);
   Stopwatch clock;
@@ -168,9 +168,8 @@ int render(Context& context, const RenderArgs& args) {
   Rendered result;
   if (args.ground_truth) {
     const Mesh mesh = scene.load_mesh();
-    const std::optional<ReferenceCache> cache = reference_cache(args.reference);
     result = render_ground_truth(scene, mesh, context.registry, {context.quiet}, times, nullptr,
-                                 cache ? &*cache : nullptr);
+                                 reference_cache(args.reference).get());
   } else {
     clock = Stopwatch();
     const BakeData data = read_bake(bake_file);

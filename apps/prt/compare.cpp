@@ -176,11 +176,11 @@ void write_tables(const std::vector<Row>& rows, const CompareArgs& args) {
   for (const Row& r : rows) {
     const bool has_transport = std::isfinite(r.transport_error);
     char line[512];
-    const bool resolved = r.shading_rms > 2 * r.noise_floor;
+    const bool is_resolved = resolved(r.shading_rms, r.noise_floor);
     std::snprintf(line, sizeof line, "%s,%d,%.0f,%s,%.6g,%.6g,%.6g,%s,%.3f,%.5f\n",
                   nlohmann::json(r.spec).dump().c_str(), r.coefficients, r.bytes,
                   transport_text(r.transport_error, "%.6g", "").c_str(), r.shading_rms,
-                  r.shading_relative, r.noise_floor, resolved ? "true" : "false", r.seconds,
+                  r.shading_relative, r.noise_floor, is_resolved ? "true" : "false", r.seconds,
                   r.relight_seconds);
     csv << line;
     json.push_back({{"basis", r.spec},
@@ -191,7 +191,7 @@ void write_tables(const std::vector<Row>& rows, const CompareArgs& args) {
                     {"shading_rms", r.shading_rms},
                     {"shading_relative_rms", r.shading_relative},
                     {"noise_floor", r.noise_floor},
-                    {"resolved", r.shading_rms > 2 * r.noise_floor},
+                    {"resolved", resolved(r.shading_rms, r.noise_floor)},
                     {"seconds", r.seconds},
                     {"relight_seconds", r.relight_seconds}});
   }
@@ -204,7 +204,7 @@ void write_tables(const std::vector<Row>& rows, const CompareArgs& args) {
                 r.coefficients, r.bytes, transport_text(r.transport_error, "%.4f", "-").c_str(),
                 r.shading_rms, r.shading_relative, r.noise_floor, r.seconds,
                 1e3 * r.relight_seconds,
-                r.shading_rms > 2 * r.noise_floor ? "" : "  (not resolved: raise --samples)");
+                resolved(r.shading_rms, r.noise_floor) ? "" : "  (not resolved: raise --samples)");
 }
 
 }  // namespace
@@ -228,9 +228,8 @@ int compare_bases(Context& context, const CompareArgs& args) {
   const Environment environment = scene.load_environment();
   const Camera camera = scene.make_camera(mesh);
   // The same truth and the same relighting as `prt render --compare`.
-  const std::optional<ReferenceCache> cache = reference_cache(args.reference);
   const Reference truth = reference_radiance(scene, mesh, environment, camera, {context.quiet},
-                                             cache ? &*cache : nullptr);
+                                             reference_cache(args.reference).get());
   std::fprintf(stderr, "%s\n", reference_summary(truth).c_str());
   const Shared shared{set, traced, mesh, environment, camera, truth};
   std::vector<Row> rows;

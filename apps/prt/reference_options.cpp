@@ -12,15 +12,15 @@ void apply_samples(const ReferenceArgs& args, SceneSpec& scene) {
                          SourceLocation{"--samples"});
 }
 
-std::optional<ReferenceCache> reference_cache(const ReferenceArgs& args) {
-  if (args.no_cache) return std::nullopt;
-  return ReferenceCache(args.cache.empty() ? ReferenceCache::default_folder()
-                                           : std::filesystem::path(args.cache));
+std::unique_ptr<const ReferenceCache> reference_cache(const ReferenceArgs& args) {
+  if (args.no_cache) return nullptr;
+  return std::make_unique<const ReferenceCache>(
+      args.cache.empty() ? ReferenceCache::default_folder() : std::filesystem::path(args.cache));
 }
 
 std::string noise_note(double rms, double floor) {
   char text[200];
-  if (floor > 0 && rms <= 2 * floor)
+  if (floor > 0 && !resolved(rms, floor))
     std::snprintf(text, sizeof text,
                   "noise floor %.4g: NOT RESOLVED, within twice the reference's own noise "
                   "(raise --samples)",

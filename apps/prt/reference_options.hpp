@@ -1,7 +1,7 @@
 // The reference options of `prt render --compare`, `prt bench` and
 // `prt compare-bases`, and how their noise floor is printed.
 #pragma once
-#include <optional>
+#include <memory>
 #include <string>
 
 #include "commands.hpp"
@@ -14,8 +14,14 @@ namespace prt::cli {
 void apply_samples(const ReferenceArgs& args, SceneSpec& scene);
 
 // The cache folder --cache names (default: ReferenceCache::default_folder()),
-// or none with --no-cache.
-std::optional<ReferenceCache> reference_cache(const ReferenceArgs& args);
+// or null with --no-cache.
+std::unique_ptr<const ReferenceCache> reference_cache(const ReferenceArgs& args);
+
+// Against a noisy reference E[rms^2] = error^2 + floor^2: an RMS within
+// twice the floor is not resolved (the reference cannot rank it).
+inline bool resolved(double rms, double floor) {
+  return rms > 2 * floor;
+}
 
 // "noise floor 0.0021" and, when `rms` is within twice it, that the
 // reference cannot tell this error from its own noise.

@@ -12,46 +12,50 @@
 
 namespace prt {
 
-std::vector<double> vertex_errors(const TransferSignal& signal,
-                                  const CompressedTransfer& compressed,
-                                  const RenderedMetric* metric) {
+namespace {
+
+// Each vertex's squared error |F(t_p - t~_p)|^2 (F the rendered metric's
+// whitening, identity without one) and, when `energies` is given, |F t_p|^2
+// in the same pass over the rows (an out-of-core signal is read once).
+std::vector<double> row_errors(const TransferSignal& signal, const CompressedTransfer& compressed,
+                               const RenderedMetric* metric, std::vector<double>* energies) {
   std::vector<double> errors(std::size_t(signal.vertices()));
+  if (energies) energies->assign(errors.size(), 0.0);
   const auto rows = signal.rows();
   for_each_row_block(Eigen::Index(0), signal.vertices(), Eigen::Index(4096),
                      [&](Eigen::Index begin, Eigen::Index end) {
                        Eigen::RowVectorXf row(signal.dimension());
                        Eigen::MatrixXd difference(1, metric ? signal.dimension() : 0);
+                       Eigen::MatrixXd exact = difference;
                        for (Eigen::Index p = begin; p < end; ++p) {
                          compressed.decode_row(p, row);
                          if (!metric) {  // coefficient space: the sum as it always was
                            errors[std::size_t(p)] =
                                (rows.row(p).cast<double>() - row.cast<double>()).squaredNorm();
+                           if (energies)
+                             (*energies)[std::size_t(p)] = rows.row(p).cast<double>().squaredNorm();
                            continue;
                          }
                          difference = rows.row(p).cast<double>() - row.cast<double>();
                          metric->whiten_rows(difference, signal.exit_rows);
                          errors[std::size_t(p)] = difference.squaredNorm();
+                         if (!energies) continue;
+                         exact = rows.row(p).cast<double>();
+                         metric->whiten_rows(exact, signal.exit_rows);
+                         (*energies)[std::size_t(p)] = exact.squaredNorm();
                        }
                        signal.release(begin, end);
                      });
   return errors;
 }
 
-namespace {
-
-// The all-zero encoding of `compressed`'s shape: its error is the signal's energy.
-CompressedTransfer zero_form(const CompressedTransfer& compressed) {
-  CompressedTransfer zero;
-  zero.compressor = "zero";
-  zero.dimension = compressed.dimension;
-  zero.cluster_of_vertex.assign(compressed.cluster_of_vertex.size(), 0);
-  zero.weights = MatrixXfRow::Zero(compressed.vertices(), 0);
-  zero.means = MatrixXfRow::Zero(1, compressed.dimension);
-  zero.representatives = {MatrixXfRow::Zero(0, compressed.dimension)};
-  return zero;
-}
-
 }  // namespace
+
+std::vector<double> vertex_errors(const TransferSignal& signal,
+                                  const CompressedTransfer& compressed,
+                                  const RenderedMetric* metric) {
+  return row_errors(signal, compressed, metric, nullptr);
+}
 
 CompressionReport measure(const TransferSignal& signal, const CompressedTransfer& compressed,
                           const Mesh* mesh, double encode_seconds, const Distribution& where,
@@ -59,10 +63,11 @@ CompressionReport measure(const TransferSignal& signal, const CompressedTransfer
   CompressionReport r;
   if (metric && metric->identity()) metric = nullptr;
   r.rendered_metric = metric != nullptr;
-  std::vector<double> errors = vertex_errors(signal, compressed, metric);
+  std::vector<double> energies;
+  std::vector<double> errors = row_errors(signal, compressed, metric, &energies);
   const auto parts = where.row_parts(signal.vertices());
   r.squared_error = parts->sum_rows(errors);
-  r.signal_energy = parts->sum_rows(vertex_errors(signal, zero_form(compressed), metric));
+  r.signal_energy = parts->sum_rows(energies);
   if (parts->distributed()) {  // every vertex's error on the first part
     const auto all = parts->gather(to_bytes(errors), 0);
     errors.clear();

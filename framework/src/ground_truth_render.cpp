@@ -20,7 +20,6 @@ namespace prt {
 
 namespace {
 
-// The ground truth (albedo 1) of one colour channel's material.
 // One batch's estimate: `samples` per vertex drawn with `seed`.
 struct Batch {
   int samples = 0;
@@ -52,6 +51,7 @@ struct ChannelEstimate {
   Eigen::MatrixX3f radiance, irradiance;
 };
 
+// The ground truth (albedo 1) of one colour channel's material, one batch.
 ChannelEstimate channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
                                      const Environment& lighting, const Camera& camera,
                                      const RunOptions& options, const ChannelMaterial& material,
@@ -244,9 +244,9 @@ Reference reference_radiance(const SceneSpec& scene, const Mesh& mesh, const Env
       cache ? reference_key(scene, mesh, lighting, camera, samples) : std::string();
   if (cache)
     if (std::optional<Reference> kept = cache->load(key, mesh.vertex_count())) {
-      options.message(
-          "ground truth: reused " + kept->cached.string() + " (" + std::to_string(samples) +
-          " samples per vertex; prt clears nothing: " + "remove the folder to recompute)");
+      options.message("ground truth: reused " + kept->cached.string() + " (" +
+                      std::to_string(samples) +
+                      " samples per vertex; prt clears nothing: remove the folder to recompute)");
       return *kept;
     }
   Reference out = traced_reference(scene, mesh, lighting, camera, options, samples);
