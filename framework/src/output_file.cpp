@@ -176,22 +176,11 @@ void restore_handlers() {
   sigaction(SIGTERM, &previous_term, nullptr);
 }
 
-// Holds a temporary's path in a slot while it exists.
+// Holds a temporary's path in a slot while it may exist. The path is held
+// before the file is created, so a signal between the two removes it too.
 class TemporaryRegistration {
  public:
-  explicit TemporaryRegistration(const fs::path& path) {
-    install_handlers();
-    const std::string text = path.string();
-    if (text.size() >= kMaxPath) return;
-    for (auto& s : temporaries) {
-      int expected = 0;
-      if (!s.state.compare_exchange_strong(expected, 1)) continue;
-      std::memcpy(s.path, text.c_str(), text.size() + 1);
-      s.state.store(2);
-      slot_ = &s;
-      return;
-    }
-  }
+  TemporaryRegistration() { install_handlers(); }
   ~TemporaryRegistration() {
     if (slot_) slot_->state.store(0);
     restore_handlers();
@@ -199,7 +188,24 @@ class TemporaryRegistration {
   TemporaryRegistration(const TemporaryRegistration&) = delete;
   TemporaryRegistration& operator=(const TemporaryRegistration&) = delete;
 
+  void hold(const fs::path& path) {
+    const std::string text = path.string();
+    if (text.size() >= kMaxPath) return;
+    if (!slot_) slot_ = claim_slot();
+    if (!slot_) return;
+    slot_->state.store(1);  // the handler skips a slot while its path is rewritten
+    std::memcpy(slot_->path, text.c_str(), text.size() + 1);
+    slot_->state.store(2);
+  }
+
  private:
+  static TemporarySlot* claim_slot() {
+    for (auto& s : temporaries) {
+      int expected = 0;
+      if (s.state.compare_exchange_strong(expected, 1)) return &s;
+    }
+    return nullptr;
+  }
   TemporarySlot* slot_ = nullptr;
 };
 
@@ -239,6 +245,7 @@ void write_atomically(const fs::path& file, const std::function<void(const fs::p
   remove_stale_temporaries(dir, file.filename().string());
   fs::path temporary;
   int descriptor = -1;
+  TemporaryRegistration registration;
   for (int attempt = 0; attempt < 100 && descriptor < 0; ++attempt) {
     // Built by appends: GCC 12 warns falsely (-Wrestrict) on "." + std::string.
     std::string name = ".";
@@ -248,6 +255,7 @@ void write_atomically(const fs::path& file, const std::function<void(const fs::p
         .append("-")
         .append(std::to_string(temporary_counter++));
     temporary = folder / name;
+    registration.hold(temporary);
     descriptor = open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (descriptor < 0 && errno != EEXIST)
       throw Error(file.string() +
@@ -255,7 +263,6 @@ void write_atomically(const fs::path& file, const std::function<void(const fs::p
   }
   if (descriptor < 0) throw Error(file.string() + ": cannot create a unique temporary file");
   close(descriptor);
-  TemporaryRegistration registration(temporary);
   try {
     write(temporary);
     // Deferred write errors (a full disk on a file system that allocates
