@@ -14,6 +14,7 @@
 #include <random>
 #include <utility>
 
+#include "denormals.hpp"
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
 #include "prt/environment_sampler.hpp"
@@ -45,7 +46,11 @@ RayCaster::RayCaster(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
   if (!impl_->device) throw Error("Embree: cannot create a device");
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);  // watertight: no leaks at shared edges
+  // A high-quality BVH: its longer build (~0.03 s on the bunny) pays back in
+  // traversal over the bake's millions of rays.
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
   RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
   auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
                                                                RTC_FORMAT_FLOAT3, 3 * sizeof(float),
                                                                mesh.positions.size()));
@@ -98,6 +103,7 @@ Eigen::Vector3f direction_of_ray(const RTCRay& r) {
 
 void RayCaster::occluded(const float* origins, const float* directions, std::size_t count,
                          std::uint8_t* escaped, const float* far) const {
+  const FlushDenormals flush_denormals;
   constexpr std::size_t kChunk = 256;
   RTCRay rays[kChunk];
   RTCIntersectContext context;
@@ -117,6 +123,7 @@ void RayCaster::occluded(const float* origins, const float* directions, std::siz
 void RayCaster::intersect(const Mesh& mesh, const float* origins, const float* directions,
                           std::size_t count, std::int64_t* triangle, float* u, float* v,
                           std::uint8_t* escaped) const {
+  const FlushDenormals flush_denormals;
   constexpr std::size_t kChunk = 256;
   RTCRayHit rays[kChunk];
   RTCIntersectContext context;
@@ -142,6 +149,7 @@ std::uint64_t RayCaster::trace_visibility(const Mesh& mesh, const std::uint32_t*
                                           std::size_t count, const float* directions, std::size_t s,
                                           std::uint64_t* bits,
                                           std::vector<SurfaceHit>* hits) const {
+  const FlushDenormals flush_denormals;
   constexpr unsigned kChunk = 1024;
   const std::size_t words = VisibilityBits::words_for(s);
   std::fill(bits, bits + count * words, 0);

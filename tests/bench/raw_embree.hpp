@@ -9,6 +9,7 @@
 // `chunk`; nothing kept but the count of escaping rays.
 #pragma once
 #include <embree3/rtcore.h>
+#include <pmmintrin.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -25,7 +26,9 @@ struct RawSettings {
   bool robust = true;
   RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;
   unsigned chunk = 1024;
-  std::size_t block = 64;  // vertices per task
+  std::size_t block = 64;   // vertices per task
+  bool ftz = false;         // flush denormals to zero on every tracing thread
+  bool per_vertex = false;  // one rtcOccluded1M call per vertex instead of full chunks
 };
 
 struct RawResult {
@@ -62,7 +65,11 @@ inline RawResult raw_trace(const Mesh& mesh, const DirectionSet& set,
   std::atomic<std::uint64_t> rays{0}, escaped{0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), settings.block),
                     [&](const auto& range) {
-                      std::vector<RTCRay> stream(settings.chunk);
+                      if (settings.ftz) {
+                        _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+                        _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+                      }
+                      std::vector<RTCRay> stream(std::max<std::size_t>(settings.chunk, set.size()));
                       RTCIntersectContext context;
                       rtcInitIntersectContext(&context);
                       context.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
@@ -87,6 +94,7 @@ inline RawResult raw_trace(const Mesh& mesh, const DirectionSet& set,
                           r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
                           if (++filled == settings.chunk) flush();
                         }
+                        if (settings.per_vertex && filled) flush();
                       }
                       if (filled) flush();
                       rays += cast;

@@ -2,6 +2,7 @@
 // machines are shared and noisy).
 #pragma once
 #include <algorithm>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -42,6 +43,21 @@ std::pair<double, double> alternating_median_seconds(int repeats, const RunA& ru
     b.push_back(clock_b.seconds());
   }
   return {median(a), median(b)};
+}
+
+// The same for any number of runs, taken in turn: medians in run order.
+inline std::vector<double> alternating_medians(int repeats,
+                                               const std::vector<std::function<void()>>& runs) {
+  std::vector<std::vector<double>> times(runs.size());
+  for (int r = 0; r < repeats; ++r)
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      Stopwatch clock;
+      runs[i]();
+      times[i].push_back(clock.seconds());
+    }
+  std::vector<double> medians;
+  for (auto& t : times) medians.push_back(median(t));
+  return medians;
 }
 
 }  // namespace prt::bench
