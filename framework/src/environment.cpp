@@ -195,7 +195,14 @@ Eigen::Vector3f Environment::radiance(const Eigen::Vector3d& direction) const {
 }
 
 Eigen::Vector3f Environment::texel_radiance(const Eigen::Vector3d& direction) const {
-  const Eigen::Vector2d uv = equirect_uv(rotation_.transpose() * direction);
+  return texel_radiance_at(uv_of(direction));
+}
+
+Eigen::Vector2d Environment::uv_of(const Eigen::Vector3d& direction) const {
+  return equirect_uv(rotation_.transpose() * direction);
+}
+
+Eigen::Vector3f Environment::texel_radiance_at(const Eigen::Vector2d& uv) const {
   return intensity_ * texel(static_cast<int>(uv.x() * width_), static_cast<int>(uv.y() * height_));
 }
 

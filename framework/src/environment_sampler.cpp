@@ -21,6 +21,11 @@ EnvironmentSampler::EnvironmentSampler(const Environment& env)
   texel_probability_.assign(static_cast<std::size_t>(width_) * height_, 0.0);
   column_cdf_.assign(static_cast<std::size_t>(height_) * (width_ + 1), 0.0);
   row_cdf_.assign(height_ + 1, 0.0);
+  row_z_.resize(height_ + 1);
+  for (int y = 0; y <= height_; ++y) row_z_[y] = std::cos(M_PI * y / height_);
+  texel_solid_angle_.resize(height_);
+  for (int y = 0; y < height_; ++y)
+    texel_solid_angle_[y] = (2.0 * M_PI / width_) * (row_z_[y] - row_z_[y + 1]);
   double total = 0;
   for (int y = 0; y < height_; ++y) {
     const double solid_angle = std::cos(M_PI * y / height_) - std::cos(M_PI * (y + 1) / height_);
@@ -57,21 +62,25 @@ EnvironmentSampler::Sample EnvironmentSampler::sample(double u1, double u2) cons
   const double column_width = cdf[x + 1] - cdf[x];
   const double fx = column_width > 0 ? (u2 - cdf[x]) / column_width : 0.5;
   // Uniform in solid angle inside the texel, so pdf() is exact.
-  const double z0 = std::cos(M_PI * y / height_), z1 = std::cos(M_PI * (y + 1) / height_);
+  const double z0 = row_z_[y], z1 = row_z_[y + 1];
   const double z = z0 + std::clamp(fy, 0.0, 1.0) * (z1 - z0);
   const Eigen::Vector3d local = equirect_direction((x + std::clamp(fx, 0.0, 1.0)) / width_,
                                                    std::acos(std::clamp(z, -1.0, 1.0)) / M_PI);
   const Eigen::Vector3d world = rotation_ * local;
-  return {world, pdf(world)};
+  // The density at the direction's own coordinates (not (x + fx, ...)), so
+  // that it is pdf(world) exactly.
+  const Eigen::Vector2d uv = equirect_uv(rotation_.transpose() * world);
+  return {world, pdf_at(uv), uv};
 }
 
 double EnvironmentSampler::pdf(const Eigen::Vector3d& direction) const {
-  const Eigen::Vector2d uv = equirect_uv(rotation_.transpose() * direction);
+  return pdf_at(equirect_uv(rotation_.transpose() * direction));
+}
+
+double EnvironmentSampler::pdf_at(const Eigen::Vector2d& uv) const {
   const int x = std::clamp(static_cast<int>(uv.x() * width_), 0, width_ - 1);
   const int y = std::clamp(static_cast<int>(uv.y() * height_), 0, height_ - 1);
-  const double solid_angle =
-      (2.0 * M_PI / width_) * (std::cos(M_PI * y / height_) - std::cos(M_PI * (y + 1) / height_));
-  return texel_probability_[static_cast<std::size_t>(y) * width_ + x] / solid_angle;
+  return texel_probability_[static_cast<std::size_t>(y) * width_ + x] / texel_solid_angle_[y];
 }
 
 }  // namespace prt

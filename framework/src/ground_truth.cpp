@@ -47,6 +47,7 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, 16), [&](const auto& range) {
     std::vector<float> origins(3 * n), directions(3 * n);
     std::vector<double> cosine_pdf(n), map_pdf(n, 0.0);
+    std::vector<Eigen::Vector2d> uv(n, Eigen::Vector2d::Zero());  // a constant map: any texel
     std::vector<std::uint8_t> escaped(n);
     for (std::size_t v = range.begin(); v < range.end(); ++v) {
       // Seeded per vertex, so results do not depend on scheduling.
@@ -60,14 +61,17 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
         const int stratum = k % per_strategy;
         const double u1 = (stratum / side + jitter(rng)) / side;
         const double u2 = (stratum % side + jitter(rng)) / side;
+        // The map coordinates are found once per sample, for its density
+        // and, if it escapes, its texel.
         Eigen::Vector3d d;
         if (k < per_strategy) {  // cosine-weighted hemisphere
           d = hemisphere.sample(u1, u2);
+          if (use_map) uv[k] = environment.uv_of(d), map_pdf[k] = sampler->pdf_at(uv[k]);
         } else {
-          d = sampler->sample(u1, u2).direction;
+          const EnvironmentSampler::Sample sample = sampler->sample(u1, u2);
+          d = sample.direction, uv[k] = sample.uv, map_pdf[k] = sample.pdf;
         }
         cosine_pdf[k] = std::max(0.0, d.dot(nrm)) / M_PI;
-        if (use_map) map_pdf[k] = sampler->pdf(d);
         for (int c = 0; c < 3; ++c) origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
       }
       caster.occluded(origins.data(), directions.data(), n, escaped.data());
@@ -79,7 +83,7 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
         // f / (N (p_cosine + p_map)).
         double weight = cosine_pdf[k] / (per_strategy * (cosine_pdf[k] + map_pdf[k]));
         if (reflectance) weight *= reflectance(v, d);  // pi rho replaces albedo 1
-        sum += weight * environment.texel_radiance(d).cast<double>();
+        sum += weight * environment.texel_radiance_at(uv[k]).cast<double>();
       }
       radiance.row(static_cast<Eigen::Index>(v)) = sum.cast<float>().transpose();
     }

@@ -143,7 +143,7 @@ class GlossyPaths {
         if (cosine > 0) {
           const double rho = s_.brdf.evaluate(hit.frame * sample.direction, out_local);
           env_weight_[j] = throughput * rho * cosine / (sample.pdf + cosine / M_PI);
-          env_light_[j] = s_.environment.texel_radiance(sample.direction).cast<double>();
+          env_light_[j] = s_.environment.texel_radiance_at(sample.uv).cast<double>();
         }
         put(env_origins_, j, o), put(env_directions_, j, sample.direction);
       }
@@ -168,9 +168,10 @@ class GlossyPaths {
       if (path.throughput <= 0) continue;
       if (escaped_[j]) {
         const double cosine_pdf = std::max(0.0, path.direction.dot(surfaces[j].normal)) / M_PI;
-        const double map_pdf = s_.sampler ? s_.sampler->pdf(path.direction) : 0.0;
+        const Eigen::Vector2d uv = s_.environment.uv_of(path.direction);
+        const double map_pdf = s_.sampler ? s_.sampler->pdf_at(uv) : 0.0;
         const double mis = cosine_pdf > 0 ? cosine_pdf / (cosine_pdf + map_pdf) : 0.0;
-        sum += path.throughput * mis * s_.environment.texel_radiance(path.direction).cast<double>();
+        sum += path.throughput * mis * s_.environment.texel_radiance_at(uv).cast<double>();
       } else if (triangle_[j] >= 0 && depth < s_.bounces) {
         continuing.push_back({path.direction, path.throughput, triangle_[j], u_[j], v_[j]});
       }

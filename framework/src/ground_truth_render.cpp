@@ -174,7 +174,7 @@ std::uint64_t batch_seed(std::uint64_t seed, int batch) {
 std::string reference_key(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
                           const Camera& camera, int samples) {
   ReferenceKey key;
-  key.add("prt reference v1: batches " + std::to_string(kReferenceBatches));
+  key.add("prt reference v2: batches " + std::to_string(kReferenceBatches));
   key.add(mesh.positions.data(), mesh.positions.size() * sizeof(mesh.positions[0]));
   key.add(mesh.normals.data(), mesh.normals.size() * sizeof(mesh.normals[0]));
   key.add(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));

@@ -34,6 +34,11 @@ class Environment {
   // The texel's constant radiance: the piecewise-constant function that the
   // basis projection and the ground truth both integrate.
   Eigen::Vector3f texel_radiance(const Eigen::Vector3d& direction) const;
+  // The map coordinates of a world direction (the map's rotation undone), so
+  // that a caller needing both a texel and its sampling density finds them
+  // with one atan2/acos.
+  Eigen::Vector2d uv_of(const Eigen::Vector3d& direction) const;
+  Eigen::Vector3f texel_radiance_at(const Eigen::Vector2d& uv) const;
 
   // Projects the environment into `basis`: size() x 3 (RGB). The map's texels
   // are integrated with their solid angles, a block of rows at a time, each

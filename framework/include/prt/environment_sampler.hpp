@@ -16,11 +16,14 @@ class EnvironmentSampler {
   struct Sample {
     Eigen::Vector3d direction;  // world space (the map's rotation applied)
     double pdf;                 // per unit solid angle
+    Eigen::Vector2d uv;         // the map coordinates of `direction`
   };
   // Maps two uniform numbers in [0, 1) to a direction.
   Sample sample(double u1, double u2) const;
   // Density of sample() at a world direction.
   double pdf(const Eigen::Vector3d& direction) const;
+  // The same at map coordinates (Environment::uv_of of the direction).
+  double pdf_at(const Eigen::Vector2d& uv) const;
 
  private:
   int width_, height_;
@@ -28,6 +31,9 @@ class EnvironmentSampler {
   std::vector<double> row_cdf_;            // height + 1
   std::vector<double> column_cdf_;         // height x (width + 1)
   std::vector<double> texel_probability_;  // height x width
+  // Per row, computed once (sample() and pdf() ran four cosines a call):
+  std::vector<double> row_z_;              // cos(pi y / height), height + 1
+  std::vector<double> texel_solid_angle_;  // of a texel of row y, height
 };
 
 }  // namespace prt
