@@ -39,6 +39,7 @@ run rotation "$bin/bench_rotation" 10
 run light "$bin/bench_light" 10
 run bake_1024 "$bin/bench_bake" "$root/data/meshes/bunny00.off" 1024 10 5
 run bake_4096 "$bin/bench_bake" "$root/data/meshes/bunny00.off" 4096 10 5
+run truth "$bin/bench_truth" "$root/data/meshes/bunny00.off" "$root/data/hdri/courtyard.exr" 256 3
 run compress_diffuse "$bin/bench_compress" "$out/bunny.h5" 256 8 iterative
 run compress_glossy "$bin/bench_compress" "$out/bunny_glossy_24x25.h5" 256 8 iterative 40
 run eigen "$bin/bench_eigen"
@@ -49,7 +50,7 @@ table="$out/table.md"
 {
   echo "| stage | time | bound (same run) | ratio | limit | result |"
   echo "|---|---|---|---|---|---|"
-  for log in rotation light bake_1024 bake_4096 compress_diffuse compress_glossy eigen \
+  for log in rotation light bake_1024 bake_4096 truth compress_diffuse compress_glossy eigen \
     view_diffuse view_glossy; do
     if grep -q '^PERF|' "$out/$log.log"; then
       grep '^PERF|' "$out/$log.log" | awk -F'|' '{ printf "|"; for (i = 2; i <= NF; ++i) printf " %s |", $i; print "" }'
