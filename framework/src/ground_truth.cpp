@@ -47,7 +47,9 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, 16), [&](const auto& range) {
     std::vector<float> origins(3 * n), directions(3 * n);
     std::vector<double> cosine_pdf(n), map_pdf(n, 0.0);
-    std::vector<Eigen::Vector2d> uv(n, Eigen::Vector2d::Zero());  // a constant map: any texel
+    // Map coordinates, found once per sample for its density and its texel
+    // (a constant map: any texel).
+    std::vector<Eigen::Vector2d> uv(n, Eigen::Vector2d::Zero());
     std::vector<std::uint8_t> escaped(n);
     for (std::size_t v = range.begin(); v < range.end(); ++v) {
       // Seeded per vertex, so results do not depend on scheduling.
@@ -61,8 +63,6 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
         const int stratum = k % per_strategy;
         const double u1 = (stratum / side + jitter(rng)) / side;
         const double u2 = (stratum % side + jitter(rng)) / side;
-        // The map coordinates are found once per sample, for its density
-        // and, if it escapes, its texel.
         Eigen::Vector3d d;
         if (k < per_strategy) {  // cosine-weighted hemisphere
           d = hemisphere.sample(u1, u2);

@@ -48,14 +48,8 @@ int main(int argc, char** argv) {
               mesh_file.c_str(), mesh.vertex_count(), rays, order, order * order);
 
   const std::vector<std::uint32_t> order_of_vertices = morton_order(mesh);
-  bench::RawSettings anchor;
-  anchor.robust = false;
-  anchor.quality = RTC_BUILD_QUALITY_HIGH;
-  anchor.ftz = true;
-  anchor.per_vertex = true;
-  anchor.chunk = static_cast<unsigned>(set.size());
-  bench::RawSettings anchor_robust = anchor;
-  anchor_robust.robust = true;
+  const bench::RawSettings anchor = bench::anchor_settings(set.size());
+  const bench::RawSettings anchor_robust = bench::anchor_settings(set.size(), true);
   const Eigen::MatrixXd projection = set.weights.asDiagonal() * sh::evaluate(order, set.directions);
 
   std::uint64_t rays_anchor = 0, rays_robust = 0, rays_bake = 0;

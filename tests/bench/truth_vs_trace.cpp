@@ -40,12 +40,7 @@ int main(int argc, char** argv) {
   environment.set_rotation(rotation_about_up(90.0));  // as scenes/bunny.toml
   const DirectionSet set = DirectionSet::fibonacci(1024);
   const std::vector<std::uint32_t> order = morton_order(mesh);
-  bench::RawSettings anchor;
-  anchor.robust = false;
-  anchor.quality = RTC_BUILD_QUALITY_HIGH;
-  anchor.ftz = true;
-  anchor.per_vertex = true;
-  anchor.chunk = static_cast<unsigned>(set.size());
+  const bench::RawSettings anchor = bench::anchor_settings(set.size());
 
   std::uint64_t anchor_rays = 0;
   const std::vector<double> seconds = bench::alternating_medians(

@@ -22,6 +22,7 @@
 
 #include "prt/direction_set.hpp"
 #include "prt/mesh.hpp"
+#include "raw_embree.hpp"
 
 #ifndef PRT_SOURCE_DIR
 #define PRT_SOURCE_DIR "."
@@ -33,25 +34,9 @@ using namespace prt;
 
 class Tracer {
  public:
-  Tracer(const Mesh& mesh, bool robust) : device_(rtcNewDevice(nullptr)) {
-    scene_ = rtcNewScene(device_);
-    if (robust) rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* p = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                          RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                          mesh.positions.size()));
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v)
-      for (int c = 0; c < 3; ++c) p[3 * v + c] = mesh.positions[v][c];
-    auto* index = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                3 * sizeof(unsigned), mesh.triangles.size()));
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-      for (int c = 0; c < 3; ++c) index[3 * t + c] = mesh.triangles[t][c];
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(scene_, geometry);
-    rtcReleaseGeometry(geometry);
-    rtcCommitScene(scene_);
-  }
+  Tracer(const Mesh& mesh, bool robust)
+      : device_(rtcNewDevice(nullptr)),
+        scene_(bench::build_scene(device_, mesh, robust, RTC_BUILD_QUALITY_MEDIUM)) {}
   ~Tracer() {
     rtcReleaseScene(scene_);
     rtcReleaseDevice(device_);
@@ -74,7 +59,7 @@ class Tracer {
 
  private:
   RTCDevice device_;
-  RTCScene scene_ = nullptr;
+  RTCScene scene_;
 };
 
 Eigen::Vector3f face_normal(const Mesh& mesh, std::size_t t) {
