@@ -47,8 +47,7 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, 16), [&](const auto& range) {
     std::vector<float> origins(3 * n), directions(3 * n);
     std::vector<double> cosine_pdf(n), map_pdf(n, 0.0);
-    // Map coordinates, found once per sample for its density and its texel
-    // (a constant map: any texel).
+    // One map lookup per sample, for its density and its texel.
     std::vector<Eigen::Vector2d> uv(n, Eigen::Vector2d::Zero());
     std::vector<std::uint8_t> escaped(n);
     for (std::size_t v = range.begin(); v < range.end(); ++v) {
