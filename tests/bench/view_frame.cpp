@@ -152,13 +152,11 @@ int main(int argc, char** argv) {
                 1e3 * bound);
     std::printf("CPU  relight / streaming ratio %.2f\n", relight_s / bound);
     const double ratio = relight_s / bound;
-    if (data.transfer.glossy())  // no limit set for glossy (compute-bound: N_r dots per vertex)
-      std::printf("PERF|CPU relight, %s %s RGB|%.3f ms|streaming %.2f MB %.3f ms|%.2f|-|INFO\n",
-                  kind.c_str(), shape.c_str(), 1e3 * relight_s, bytes / 1e6, 1e3 * bound, ratio);
-    else
-      std::printf("PERF|CPU relight, %s %s RGB|%.3f ms|streaming %.2f MB %.3f ms|%.2f|1.3|%s\n",
-                  kind.c_str(), shape.c_str(), 1e3 * relight_s, bytes / 1e6, 1e3 * bound, ratio,
-                  ratio <= 1.3 ? "PASS" : "FAIL");
+    // Glossy's limit is issue 42's (N_r dots per vertex besides the sums).
+    const double cpu_limit = data.transfer.glossy() ? 1.5 : 1.3;
+    std::printf("PERF|CPU relight, %s %s RGB|%.3f ms|streaming %.2f MB %.3f ms|%.2f|%.1f|%s\n",
+                kind.c_str(), shape.c_str(), 1e3 * relight_s, bytes / 1e6, 1e3 * bound, ratio,
+                cpu_limit, ratio <= cpu_limit ? "PASS" : "FAIL");
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_view: %s\n", e.what());

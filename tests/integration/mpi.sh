@@ -40,10 +40,11 @@ environment = "$src/data/hdri/courtyard.exr"
 SCENE
 }
 scene iterative bunny00.off $'plugin = "sh"\norder = 8' \
-  $'plugin = "cpca"\nmethod = "iterative"\nclusters = 64\ncomponents = 4\nsupercluster = "greedy"'
+  $'plugin = "cpca"\nmethod = "iterative"\nclusters = 64\ncomponents = 4\nreclassify = true\nsupercluster = "greedy"'
 scene static armadillo.off $'plugin = "sh"\norder = 6' \
-  $'plugin = "cpca"\nclusters = 32\ncomponents = 6\ninit = "hyperbox"'
+  $'plugin = "cpca"\nclusters = 32\ncomponents = 6\ninit = "hyperbox"\nreclassify = true\nsupercluster = "chen"'
 scene pca refined_elephant.off $'plugin = "sh"\norder = 6' $'plugin = "pca"\ncomponents = 8'
+scene exact ChineseDragon-10kv.off $'plugin = "sh"\norder = 4' $'plugin = "none"'
 scene glossy_vq armadillo.off $'plugin = "sh"\norder = 4' $'plugin = "vq"\nclusters = 48' \
   $'brdf = "phong"\nspecular = 0.5\nexponent = 8'
 
@@ -82,7 +83,7 @@ components = 4
 environment = "$src/data/hdri/courtyard.exr"
 SCENE
 
-for name in iterative eigen static pca glossy_vq haar_sparse; do
+for name in iterative eigen static pca exact glossy_vq haar_sparse; do
   "$prt" -q bake "$work/$name.toml" -o "$work/$name.serial.h5" >/dev/null
   ranks="1 2 3 4"
   [ "$name" = iterative ] || [ "$name" = eigen ] || ranks="3"
@@ -176,14 +177,24 @@ cmp -s "$work/iterative.serial.h5" "$work/cpca_kill.h5" ||
   { echo "FAIL: the resumed distributed CPCA changes the file"; exit 1; }
 echo "killed between distributed CPCA passes on 3 ranks, resumed: $(grep -o 'resuming: CPCA at [^,]*, pass [0-9]*' <<<"$out"); the file is identical"
 
+# The example scene with reclassification and superclusters, as issue 42
+# states it: two ranks give prt bake's file (the scenes above check 1-4).
+"$prt" -q bake "$src/scenes/bunny_cpca.toml" -o "$work/bunny_cpca.serial.h5" >/dev/null
+"${mpirun[@]}" -np 2 "$prt_mpi" -q bake "$src/scenes/bunny_cpca.toml" -o "$work/bunny_cpca.2.h5" >/dev/null
+cmp -s "$work/bunny_cpca.serial.h5" "$work/bunny_cpca.2.h5" ||
+  { echo "FAIL: scenes/bunny_cpca.toml on 2 ranks differs from prt bake"; exit 1; }
+grep -q 'reclassified_vertices' < <("$prt" info "$work/bunny_cpca.2.h5") ||
+  { echo "FAIL: scenes/bunny_cpca.toml was not reclassified"; exit 1; }
+echo "scenes/bunny_cpca.toml (reclassify, greedy superclusters): prt-mpi on 2 ranks = prt bake"
+
 # Refusals end every rank with one clear message and no output.
 scene coherent bunny00.off $'plugin = "sh"\norder = 4' \
-  $'plugin = "cpca"\nclusters = 8\nreclassify = true'
+  $'plugin = "vq"\nclusters = 8\nalpha = 0.5'
 if out=$(timeout 120 "${mpirun[@]}" -np 2 "$prt_mpi" -q bake "$work/coherent.toml" \
            -o "$work/coherent.h5" 2>&1); then
-  echo "FAIL: reclassification accepted under prt-mpi"; exit 1
+  echo "FAIL: geometry-coherent clustering accepted under prt-mpi"; exit 1
 fi
-grep -q 'cannot run distributed: it reclassifies' <<<"$out" || { echo "FAIL: $out"; exit 1; }
+grep -q 'cannot run distributed: it clusters by geometry' <<<"$out" || { echo "FAIL: $out"; exit 1; }
 [ ! -e "$work/coherent.h5" ] || { echo "FAIL: output written"; exit 1; }
 sed -e 's/^\[compressor\]/[material]\nbrdf = "phong"\nspecular = 0.5\n[exit]\nplugin = "hsh"\norder = 3\n[compressor]/' \
   "$work/eigen.toml" >"$work/eigen_glossy.toml"

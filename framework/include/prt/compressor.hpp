@@ -43,7 +43,7 @@ class Compressor : public PluginObject {
   // Capability: encode_shard runs on shards of the signal across parts. An
   // empty answer means yes; otherwise it says why not (e.g. a parameter that
   // needs every vertex in one process).
-  virtual std::string why_not_distributed() const { return "it does not run distributed"; }
+  virtual std::string why_not_distributed() const { return "does not run distributed"; }
   // Encodes this part's rows; the first part returns the whole compressed
   // form, the others their rows of it. One part: encode().
   virtual CompressedTransfer encode_shard(const TransferSignal& local, const Mesh* mesh,

@@ -109,7 +109,10 @@ inline CoherenceOptions coherence_options(const Params& p) {
   return o;
 }
 
-// Reclassification, then superclustering, as the scene asks.
+// Reclassification, then superclustering, as the scene asks. Distributed,
+// every part calls it after gather_rows: the first holds the whole
+// compressed form and runs both passes, the others take back their rows
+// that reclassification changed.
 inline void improve_coherence(const CoherenceOptions& o, const Params& p,
                               const clustering::Rows& rows, const Mesh* mesh,
                               CompressedTransfer& compressed) {
@@ -119,14 +122,15 @@ inline void improve_coherence(const CoherenceOptions& o, const Params& p,
              "cluster coherence needs the mesh");
     return;
   }
-  if (o.reclassify || o.supercluster)
+  const bool first = rows.parts->first();
+  if (first && (o.reclassify || o.supercluster))
     compressed.statistics["overdraw_before_coherence"] =
         average_overdraw(*mesh, compressed.cluster_of_vertex);
-  if (o.reclassify)
-    compressed.statistics["reclassified_vertices"] = static_cast<double>(clustering::reclassify(
-        rows.x, *mesh, o.error_budget, compressed,
-        [&rows](Eigen::Index begin, Eigen::Index end) { rows.release(begin, end); }));
-  if (o.supercluster) {
+  if (o.reclassify) {
+    const std::size_t moves = clustering::reclassify(rows, *mesh, o.error_budget, compressed);
+    if (first) compressed.statistics["reclassified_vertices"] = static_cast<double>(moves);
+  }
+  if (o.supercluster && first) {
     const int per_cluster = compressed.components + 1;  // RGB registers: c_0 .. c_n'
     const int cap = std::max<int>(1, o.registers / per_cluster);
     clustering::supercluster(*mesh, cap, o.method, compressed);
@@ -157,7 +161,8 @@ inline void report_budget_used(const std::string& name, const Params& p,
 }
 
 // The compressed form of clusters and their models, then the coherence
-// passes. Distributed: the rows are gathered on rank 0, which superclusters.
+// passes. Distributed: the compressed rows are gathered on rank 0, which
+// reclassifies (with every row gathered too) and superclusters.
 inline CompressedTransfer finish(const std::string& name, const CoherenceOptions& o,
                                  const Params& p, const clustering::Rows& rows,
                                  const std::vector<std::int32_t>& labels,
@@ -170,21 +175,14 @@ inline CompressedTransfer finish(const std::string& name, const CoherenceOptions
     rows.release_all();  // moved vertices were re-read where they lie
     return c;
   }
-  if (o.reclassify) p.fail("reclassify", "needs every vertex in one process");
   clustering::gather_rows(rows, c);
-  if (rows.parts->first()) {
-    CoherenceOptions without = o;
-    without.reclassify = false;
-    improve_coherence(without, p, rows, mesh, c);
-  }
+  improve_coherence(o, p, rows, mesh, c);
   return c;
 }
 
 // Why a clustering compressor with these options cannot run distributed
 // (empty: it can).
-inline std::string why_not_distributed(const CoherenceOptions& o, const clustering::LbgOptions& l) {
-  if (o.reclassify)
-    return "reclassifies vertices (reclassify = true), which needs every vertex in one process";
+inline std::string why_not_distributed(const CoherenceOptions&, const clustering::LbgOptions& l) {
   if (l.alpha > 0)
     return "clusters by geometry (alpha > 0), which needs every vertex in one process";
   return "";

@@ -1,6 +1,8 @@
 // The exact "compression" (exact_form): a cluster per vertex whose mean is the
 // vertex's transfer and no components, so nothing is lost.
 #include <array>
+#include <cstring>
+#include <numeric>
 
 #include "prt/compressor.hpp"
 #include "prt/plugin.hpp"
@@ -28,6 +30,38 @@ class NoCompression final : public Compressor {
   CompressedTransfer encode(const TransferSignal& signal, const Mesh*) const override {
     CompressedTransfer c = exact_form(signal);
     c.compressor = "none";
+    return c;
+  }
+
+  std::string why_not_distributed() const override { return ""; }
+
+  // Each part's exact form of its rows; the first part's gathers every
+  // part's rows as its means (a cluster per vertex of the whole mesh).
+  CompressedTransfer encode_shard(const TransferSignal& local, const Mesh* mesh,
+                                  const Distribution& where) const override {
+    CompressedTransfer c = encode(local, mesh);
+    if (!where.distributed()) return c;
+    const RowParts& parts = *where.parts;
+    const std::size_t bytes = std::size_t(c.means.size()) * sizeof(float);
+    std::vector<char> mine(bytes);
+    if (bytes > 0) std::memcpy(mine.data(), c.means.data(), bytes);
+    const auto all = parts.gather(mine, 0);
+    if (!parts.first()) return c;
+    const Eigen::Index total = parts.shard().total, n = c.dimension;
+    c.means.resize(total, n);
+    char* at = reinterpret_cast<char*>(c.means.data());
+    for (int part = 0; part < parts.count(); ++part) {
+      const std::vector<char>& theirs = all[std::size_t(part)];
+      if (theirs.size() != std::size_t(parts.shard_of(part).rows() * n) * sizeof(float))
+        throw Error("compressor \"none\": part " + std::to_string(part) +
+                    " sent rows of the wrong size");
+      if (!theirs.empty()) std::memcpy(at, theirs.data(), theirs.size());
+      at += theirs.size();
+    }
+    c.cluster_of_vertex.resize(std::size_t(total));
+    std::iota(c.cluster_of_vertex.begin(), c.cluster_of_vertex.end(), 0);
+    c.weights = MatrixXfRow(total, 0);
+    c.representatives.assign(std::size_t(total), MatrixXfRow(0, n));
     return c;
   }
 };

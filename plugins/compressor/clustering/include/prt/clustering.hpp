@@ -226,6 +226,14 @@ double approximation_error(RowsRef x, Eigen::Index p, const ClusterModel& model,
 std::size_t reclassify(RowsRef x, const Mesh& mesh, double error_budget,
                        CompressedTransfer& compressed,
                        const std::function<void(Eigen::Index, Eigen::Index)>& release = {});
+// The same over the parts of a run, after gather_rows: the first part
+// reclassifies every row as one process would (the result is the serial
+// run's, bit for bit) and the others take back their rows that changed.
+// Returns the number of moves on the first part, 0 elsewhere.
+std::size_t reclassify(const Rows& rows, const Mesh& mesh, double error_budget,
+                       CompressedTransfer& compressed);
+// The whole signal's rows on the first part, in row order; empty elsewhere.
+MatrixXfRow gather_signal(const Rows& rows);
 
 enum class SuperclusterMethod { greedy_merge, chen_selection };
 
