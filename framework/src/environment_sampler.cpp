@@ -61,16 +61,18 @@ EnvironmentSampler::Sample EnvironmentSampler::sample(double u1, double u2) cons
   const int x = find_interval(cdf, width_, u2);
   const double column_width = cdf[x + 1] - cdf[x];
   const double fx = column_width > 0 ? (u2 - cdf[x]) / column_width : 0.5;
-  // Uniform in solid angle inside the texel, so pdf() is exact.
+  // Uniform in solid angle inside the texel, so pdf() is exact: z = cos
+  // theta uniform between the row's bounds, then equirect_direction's
+  // convention with sin theta from z (no acos and back).
   const double z0 = row_z_[y], z1 = row_z_[y + 1];
-  const double z = z0 + std::clamp(fy, 0.0, 1.0) * (z1 - z0);
-  const Eigen::Vector3d local = equirect_direction((x + std::clamp(fx, 0.0, 1.0)) / width_,
-                                                   std::acos(std::clamp(z, -1.0, 1.0)) / M_PI);
-  const Eigen::Vector3d world = rotation_ * local;
-  // The density at the direction's own coordinates (not (x + fx, ...)), so
-  // that it is pdf(world) exactly.
-  const Eigen::Vector2d uv = equirect_uv(rotation_.transpose() * world);
-  return {world, pdf_at(uv), uv};
+  const double z = std::clamp(z0 + std::clamp(fy, 0.0, 1.0) * (z1 - z0), -1.0, 1.0);
+  const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+  const double phi = 2.0 * M_PI * ((x + std::clamp(fx, 0.0, 1.0)) / width_ - 0.5);
+  const Eigen::Vector3d local(s * std::sin(phi), z, -s * std::cos(phi));
+  // The texel it was drawn in gives its density and its radiance: its
+  // centre's coordinates (no atan2 back from the direction).
+  const Eigen::Vector2d centre((x + 0.5) / width_, (y + 0.5) / height_);
+  return {rotation_ * local, pdf_at(centre), centre};
 }
 
 double EnvironmentSampler::pdf(const Eigen::Vector3d& direction) const {

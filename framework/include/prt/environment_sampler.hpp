@@ -16,7 +16,7 @@ class EnvironmentSampler {
   struct Sample {
     Eigen::Vector3d direction;  // world space (the map's rotation applied)
     double pdf;                 // per unit solid angle
-    Eigen::Vector2d uv;         // the map coordinates of `direction`
+    Eigen::Vector2d uv;         // the map coordinates of the centre of its texel
   };
   // Maps two uniform numbers in [0, 1) to a direction.
   Sample sample(double u1, double u2) const;
