@@ -74,11 +74,15 @@ std::vector<float> checked_pixels(const std::filesystem::path& file, const float
         rgb[(static_cast<std::size_t>(y) * width + x) * 3 + c] = std::max(value, 0.f);
       }
   if (negative > 0 && negative_sum > 1e-3 * positive_sum) {
-    char text[200];
-    std::snprintf(
-        text, sizeof text,
-        ": %zu negative value(s), %.2g%% of the map's energy, clamped to 0 (the lowest, %g, at ",
-        negative, 100 * negative_sum / std::max(positive_sum, 1e-300), double(lowest));
+    // A map with no positive value has no energy to compare them with.
+    char share[64] = "no positive value in the map";
+    if (positive_sum > 0)
+      std::snprintf(share, sizeof share, "%.2g%% of the map's energy",
+                    100 * negative_sum / positive_sum);
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  ": %zu negative value(s), %s, clamped to 0 (the lowest, %g, at ", negative, share,
+                  double(lowest));
     log_warning(file.string() + text + pixel_name(lowest_x, lowest_y) + ")");
   }
   return rgb;

@@ -18,6 +18,7 @@
 #include "prt/environment.hpp"
 #include "prt/error.hpp"
 #include "prt/image.hpp"
+#include "prt/log.hpp"
 #include "prt/mesh.hpp"
 #include "prt/output_file.hpp"
 #include "prt/registry.hpp"
@@ -165,8 +166,13 @@ TEST_CASE("environment maps: damaged magnitudes, missing channels, negative valu
   write_exr(dir / "grey.exr", {"Y"}, 2.f);
   CHECK(Environment::load(dir / "grey.exr").pixels() == std::vector<float>(4 * 2 * 3, 2.f));
   write_exr(dir / "negative.exr", {"R", "G", "B"}, -0.5f);
-  // Clamped to 0, with a warning.
+  // Clamped to 0, with a warning that does not divide by the zero energy
+  // left (it said "1.2e+303% of the map's energy").
+  std::string warning;
+  set_log_sink([&](LogLevel, const std::string& text) { warning += text; });
   CHECK(Environment::load(dir / "negative.exr").pixels() == std::vector<float>(4 * 2 * 3, 0.f));
+  set_log_sink(nullptr);
+  CHECK_THAT(warning, Contains("24 negative value(s), no positive value in the map"));
   write_exr(dir / "fine.exr", {"R", "G", "B"}, 1.5f);
   CHECK(Environment::load(dir / "fine.exr").pixels() == std::vector<float>(4 * 2 * 3, 1.5f));
 }
