@@ -3,11 +3,14 @@
 // own advice). The thread's previous mode is restored on exit, so the
 // double-precision projection that follows on the same thread is unchanged.
 #pragma once
+#if defined(__SSE2__)
 #include <pmmintrin.h>
 #include <xmmintrin.h>
+#endif
 
 namespace prt {
 
+#if defined(__SSE2__)
 class FlushDenormals {
  public:
   FlushDenormals() : saved_(_mm_getcsr()) {
@@ -21,5 +24,8 @@ class FlushDenormals {
  private:
   unsigned saved_;
 };
+#else
+struct FlushDenormals {};  // elsewhere the trace keeps the thread's mode
+#endif
 
 }  // namespace prt

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -197,6 +198,10 @@ class TemporaryRegistration {
     std::memcpy(slot_->path, text.c_str(), text.size() + 1);
     slot_->state.store(2);
   }
+  // The held name turned out to be another file's (EEXIST): not ours to remove.
+  void drop() {
+    if (slot_) slot_->state.store(1);
+  }
 
  private:
   static TemporarySlot* claim_slot() {
@@ -230,7 +235,16 @@ void remove_stale_temporaries(const fs::path& folder, const std::string& name) {
   }
 }
 
-std::atomic<unsigned> temporary_counter{0};
+// Starts at a value of this process's own (its start time and an address),
+// so that a process of the same PID in another PID namespace sharing the
+// folder, or a stale file of an earlier one, is unlikely to hold the name
+// that is registered for removal before it is created.
+unsigned first_temporary_number() {
+  const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
+  const auto here = reinterpret_cast<std::uintptr_t>(&now);
+  return static_cast<unsigned>((std::uint64_t(now) ^ (std::uint64_t(here) << 17)) % 1000000000u);
+}
+std::atomic<unsigned> temporary_counter{first_temporary_number()};
 
 }  // namespace
 
@@ -257,6 +271,7 @@ void write_atomically(const fs::path& file, const std::function<void(const fs::p
     temporary = folder / name;
     registration.hold(temporary);
     descriptor = open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (descriptor < 0) registration.drop();
     if (descriptor < 0 && errno != EEXIST)
       throw Error(file.string() +
                   ": cannot create a temporary file beside it: " + std::strerror(errno));
