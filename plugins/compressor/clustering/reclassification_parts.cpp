@@ -11,30 +11,12 @@
 #include <cstring>
 
 #include "prt/clustering.hpp"
-#include "prt/error.hpp"
+#include "prt/row_gather.hpp"
 
 namespace prt::clustering {
 
 MatrixXfRow gather_signal(const Rows& rows) {
-  const std::size_t bytes = std::size_t(rows.local() * rows.cols()) * sizeof(float);
-  std::vector<char> mine(bytes);
-  if (bytes > 0) std::memcpy(mine.data(), rows.x.data(), bytes);
-  const auto all = rows.parts->gather(mine, 0);
-  MatrixXfRow whole;
-  if (!rows.parts->first()) return whole;
-  whole.resize(rows.total(), rows.cols());
-  char* at = reinterpret_cast<char*>(whole.data());
-  std::size_t filled = 0;
-  for (int part = 0; part < rows.parts->count(); ++part) {
-    const std::vector<char>& theirs = all[std::size_t(part)];
-    const Shard shard = rows.parts->shard_of(part);
-    if (theirs.size() != std::size_t(shard.rows() * rows.cols()) * sizeof(float))
-      throw Error("reclassification: part " + std::to_string(part) +
-                  " sent rows of the wrong size");
-    if (!theirs.empty()) std::memcpy(at + filled, theirs.data(), theirs.size());
-    filled += theirs.size();
-  }
-  return whole;
+  return gather_float_rows(*rows.parts, rows.x, "reclassification");
 }
 
 namespace {

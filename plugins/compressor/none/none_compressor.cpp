@@ -1,11 +1,11 @@
 // The exact "compression" (exact_form): a cluster per vertex whose mean is the
 // vertex's transfer and no components, so nothing is lost.
 #include <array>
-#include <cstring>
 #include <numeric>
 
 #include "prt/compressor.hpp"
 #include "prt/plugin.hpp"
+#include "prt/row_gather.hpp"
 
 namespace prt {
 
@@ -42,22 +42,10 @@ class NoCompression final : public Compressor {
     CompressedTransfer c = encode(local, mesh);
     if (!where.distributed()) return c;
     const RowParts& parts = *where.parts;
-    const std::size_t bytes = std::size_t(c.means.size()) * sizeof(float);
-    std::vector<char> mine(bytes);
-    if (bytes > 0) std::memcpy(mine.data(), c.means.data(), bytes);
-    const auto all = parts.gather(mine, 0);
-    if (!parts.first()) return c;
-    const Eigen::Index total = parts.shard().total, n = c.dimension;
-    c.means.resize(total, n);
-    char* at = reinterpret_cast<char*>(c.means.data());
-    for (int part = 0; part < parts.count(); ++part) {
-      const std::vector<char>& theirs = all[std::size_t(part)];
-      if (theirs.size() != std::size_t(parts.shard_of(part).rows() * n) * sizeof(float))
-        throw Error("compressor \"none\": part " + std::to_string(part) +
-                    " sent rows of the wrong size");
-      if (!theirs.empty()) std::memcpy(at, theirs.data(), theirs.size());
-      at += theirs.size();
-    }
+    MatrixXfRow whole = gather_float_rows(parts, c.means, "compressor \"none\"");
+    if (!parts.first()) return c;  // its own rows, as the error measure reads them
+    const Eigen::Index total = whole.rows(), n = c.dimension;
+    c.means = std::move(whole);
     c.cluster_of_vertex.resize(std::size_t(total));
     std::iota(c.cluster_of_vertex.begin(), c.cluster_of_vertex.end(), 0);
     c.weights = MatrixXfRow(total, 0);
