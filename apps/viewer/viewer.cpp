@@ -155,13 +155,28 @@ void Viewer::update_light() {
   light_dirty_ = false;
 }
 
-Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camera& cam) const {
-  const Eigen::MatrixX3f exact =
-      relighting_->relight(*encodings_[1].kernel, light, cam).vertex_radiance;
-  const Eigen::MatrixX3f shown =
-      current_ == 1
-          ? exact
-          : relighting_->relight(*encodings_[current_].kernel, light, cam).vertex_radiance;
+// Glossy transfer is folded toward the camera once it rests (the same
+// position two frames in a row), so that frames that only turn the light
+// cost n_L multiply-adds a vertex and channel (prt/view_transfer.hpp);
+// folding costs ~8 of the kernel's frames, so a moving camera keeps the kernel.
+Eigen::MatrixX3f Viewer::cpu_radiance(std::size_t index, const Eigen::MatrixX3d& light,
+                                      const Camera& cam) {
+  Encoding& e = encodings_[index];
+  const bool resting = e.last_position && *e.last_position == cam.position;
+  e.last_position = cam.position;
+  if (resting && !relighting_->sums_here()) {  // not point lights or channel transfers
+    if (!e.view_position || *e.view_position != cam.position) {
+      e.view = relighting_->view(e.transfer, cam);
+      e.view_position = cam.position;
+    }
+    if (e.view) return relighting_->relight(*e.view, light);
+  }
+  return relighting_->relight(*e.kernel, light, cam).vertex_radiance;
+}
+
+Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camera& cam) {
+  const Eigen::MatrixX3f exact = cpu_radiance(1, light, cam);
+  const Eigen::MatrixX3f shown = current_ == 1 ? exact : cpu_radiance(current_, light, cam);
   const float scale = std::max(1e-12f, exact.rowwise().norm().maxCoeff());
   Eigen::MatrixX3f colours(shown.rows(), 3);
   for (Eigen::Index p = 0; p < shown.rows(); ++p)

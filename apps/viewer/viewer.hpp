@@ -72,11 +72,19 @@ class Viewer {
     std::string name;
     CompressedTransfer transfer;
     std::unique_ptr<RelightKernel> kernel;  // laid out once encodings_ is final
+    // Glossy: the transfer folded toward a camera that rests (the heat map
+    // relights it each frame while only the light turns), where that camera
+    // was, and where the previous frame's was.
+    std::optional<ViewTransfer> view;
+    std::optional<Eigen::Vector3f> view_position, last_position;
   };
   void make_renderer(const std::string& method);
   void update_light();
   Camera camera() const;
-  Eigen::MatrixX3f heat_colours(const Eigen::MatrixX3d& light, const Camera& camera) const;
+  // Vertex radiance of encoding `index` toward `camera` on the CPU.
+  Eigen::MatrixX3f cpu_radiance(std::size_t index, const Eigen::MatrixX3d& light,
+                                const Camera& camera);
+  Eigen::MatrixX3f heat_colours(const Eigen::MatrixX3d& light, const Camera& camera);
 
   PluginRegistry& registry_;
   SceneSpec scene_;

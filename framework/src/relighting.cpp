@@ -127,6 +127,22 @@ Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& l
   return out;
 }
 
+std::optional<ViewTransfer> Relighting::view(const CompressedTransfer& transfer,
+                                             const Camera& camera) const {
+  if (!exit_ || sums_here()) return std::nullopt;
+  check_encoding(data_, transfer, "relight");
+  return ViewTransfer(transfer, exit_values_toward(camera));
+}
+
+Eigen::MatrixX3f Relighting::relight(const ViewTransfer& view,
+                                     const Eigen::MatrixX3d& light_coefficients) const {
+  if (sums_here())
+    throw Error("relight: a view's sums leave out point lights and per-channel transfers");
+  Eigen::MatrixX3f radiance = view.radiance(seen_by_transfer(light_coefficients));
+  for (int c = 0; c < 3; ++c) radiance.col(c) *= data_.albedo[c];
+  return radiance;
+}
+
 MatrixXfRow Relighting::exit_values_toward(const Camera& camera) const {
   if (!exit_) return {};
   return exit_values(*exit_, local_view_directions(data_.mesh, frames_, camera.position));

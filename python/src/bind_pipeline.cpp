@@ -184,6 +184,13 @@ void bind_pipeline(py::module_& m) {
       py::arg("signal"), py::arg("compressor"), py::arg("mesh") = nullptr,
       "Encodes a transfer: (compressed form, report).");
 
+  py::class_<ViewTransfer>(m, "View",
+                           "Glossy transfer folded toward one camera: one light-space vector "
+                           "t_p per vertex (Relighting.view).")
+      .def_property_readonly("light_space", &ViewTransfer::light_space,
+                             "v x n_L: row p is t_p = M_p^T y(v_p).")
+      .def_property_readonly("vertices", &ViewTransfer::vertices);
+
   py::class_<Relighting>(m, "Relighting",
                          "What viewing a bake needs, made once: relight it for any light, "
                          "camera and encoding.")
@@ -209,6 +216,24 @@ void bind_pipeline(py::module_& m) {
           },
           py::arg("transfer"), py::arg("light"), py::arg("camera"),
           "Radiance each vertex sends toward the camera (v x 3, albedo included).")
+      .def(
+          "view",
+          [](const Relighting& r, const CompressedTransfer& transfer, const Camera& camera) {
+            check_camera(camera);
+            return long_call([&] { return r.view(transfer, camera); });
+          },
+          py::arg("transfer"), py::arg("camera"),
+          "Glossy transfer folded toward the camera (a View), for many lights seen from one "
+          "camera: relight(view, light) then costs n_L x 3 multiply-adds a vertex. None where "
+          "relight(transfer, light, camera) makes other sums (diffuse or per-channel transfer, "
+          "point lights).")
+      .def(
+          "relight",
+          [](const Relighting& r, const ViewTransfer& view, const Eigen::MatrixX3d& light) {
+            return long_call([&] { return r.relight(view, light); });
+          },
+          py::arg("view"), py::arg("light"),
+          "Radiance toward the view's camera (v x 3, albedo included).")
       .def(
           "render",
           [](const Relighting& r, const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,

@@ -27,6 +27,7 @@
 #include "prt/progress.hpp"
 #include "prt/relight.hpp"
 #include "prt/renderer.hpp"
+#include "prt/view_transfer.hpp"
 #include "timing.hpp"
 
 #ifndef PRT_SOURCE_DIR
@@ -151,12 +152,45 @@ int main(int argc, char** argv) {
     std::printf("CPU  streaming its %.2f MB of per-vertex data  %9.3f ms\n", bytes / 1e6,
                 1e3 * bound);
     std::printf("CPU  relight / streaming ratio %.2f\n", relight_s / bound);
-    const double ratio = relight_s / bound;
-    // Glossy's limit is issue 42's (N_r dots per vertex besides the sums).
-    const double cpu_limit = data.transfer.glossy() ? 1.5 : 1.3;
-    std::printf("PERF|CPU relight, %s %s RGB|%.3f ms|streaming %.2f MB %.3f ms|%.2f|%.1f|%s\n",
-                kind.c_str(), shape.c_str(), 1e3 * relight_s, bytes / 1e6, 1e3 * bound, ratio,
-                cpu_limit, ratio <= cpu_limit ? "PASS" : "FAIL");
+    if (!data.transfer.glossy()) {
+      const double ratio = relight_s / bound;
+      std::printf("PERF|CPU relight, %s %s RGB|%.3f ms|streaming %.2f MB %.3f ms|%.2f|%.1f|%s\n",
+                  kind.c_str(), shape.c_str(), 1e3 * relight_s, bytes / 1e6, 1e3 * bound, ratio,
+                  1.3, ratio <= 1.3 ? "PASS" : "FAIL");
+      return 0;
+    }
+    // Glossy (issue 42): while the camera stays, a light change relights
+    // the transfer folded toward it (ViewTransfer, t_p . l), against
+    // streaming the bytes that frame reads; a camera change folds again.
+    std::vector<double> folds;
+    for (int f = 0; f < 5; ++f) {
+      Stopwatch clock;
+      const ViewTransfer folded(c, relit.exit_values);
+      folds.push_back(clock.seconds());
+    }
+    const ViewTransfer view(c, relit.exit_values);
+    const double view_bytes = view.streamed_bytes();
+    Stream view_stream(c.vertices(), view_bytes);
+    const auto [view_s, view_bound] = bench::alternating_median_seconds(
+        cpu_frames,
+        [&] {
+          view.radiance(light, radiance);
+          if (radiance.rows() == 0) std::puts("");
+        },
+        [&] { view_stream(); });
+    const double fold = median(folds);
+    std::printf("CPU  light change (t_p . l, camera fixed)   %9.3f ms\n", 1e3 * view_s);
+    std::printf("CPU  streaming its %.2f MB of t_p          %9.3f ms\n", view_bytes / 1e6,
+                1e3 * view_bound);
+    std::printf(
+        "CPU  camera change (fold t_p + relight)     %9.3f ms  (%.1fx a constants relight)\n",
+        1e3 * (fold + view_s), (fold + view_s) / relight_s);
+    const double ratio = view_s / view_bound;
+    std::printf(
+        "PERF|CPU relight, %s %s RGB, light change|%.3f ms|streaming %.2f MB %.3f ms|%.2f|"
+        "%.1f|%s\n",
+        kind.c_str(), shape.c_str(), 1e3 * view_s, view_bytes / 1e6, 1e3 * view_bound, ratio, 1.5,
+        ratio <= 1.5 ? "PASS" : "FAIL");
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_view: %s\n", e.what());

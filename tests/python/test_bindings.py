@@ -134,6 +134,7 @@ def test_stages_alone_relight_and_progress(root):
     radiance = relighting.relight(data.compressed, light, camera)
     rendered = prt.render(scene, data, progress=False)
     np.testing.assert_allclose(radiance, rendered["vertex_radiance"], rtol=1e-6)
+    assert relighting.view(data.compressed, camera) is None  # diffuse: relight() is the path
     # Twice the light, twice the radiance (transfer is linear in the light).
     np.testing.assert_allclose(relighting.relight(data.compressed, 2 * light, camera),
                                2 * radiance, rtol=1e-5, atol=1e-6)
@@ -234,3 +235,45 @@ def test_output_messages_name_the_python_keyword(tmp_path):
 def test_unknown_kind_is_an_error():
     with pytest.raises(ValueError, match="unknown plug-in kind"):
         prt.plugins("nonsense")
+
+
+GLOSSY_SPHERE = """
+[mesh]
+generate = "sphere"
+detail = 2
+[material]
+brdf = "phong"
+diffuse = 0.3
+specular = 0.5
+exponent = 8
+[transport]
+rays = 128
+[basis]
+plugin = "sh"
+order = 4
+[exit]
+plugin = "hsh"
+order = 3
+[lighting]
+constant = [1, 1, 1]
+"""
+
+
+def test_a_view_relights_glossy_transfer_for_many_lights(tmp_path):
+    path = tmp_path / "glossy.toml"
+    path.write_text(GLOSSY_SPHERE)
+    scene = prt.Scene(str(path))
+    data = prt.bake(scene, progress=False)
+    relighting = prt.Relighting(scene, data)
+    camera = scene.camera(data.mesh)
+    view = relighting.view(data.compressed, camera)
+    assert view.vertices == data.mesh.vertex_count
+    assert view.light_space.shape == (data.mesh.vertex_count, 16)
+    rng = np.random.default_rng(5)
+    for _ in range(3):  # three lights, one camera
+        light = rng.normal(size=(16, 3))
+        expected = relighting.relight(data.compressed, light, camera)
+        np.testing.assert_allclose(relighting.relight(view, light), expected,
+                                   atol=1e-5 * np.abs(expected).max())
+    with pytest.raises(prt.Error, match="finite 16 x 3"):
+        relighting.relight(view, np.zeros((9, 3)))

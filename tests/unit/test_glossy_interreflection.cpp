@@ -145,3 +145,28 @@ TEST_CASE("a Lambertian lobe through the glossy bounces equals diffuse inter-ref
   CHECK(e.max < 2e-3);
   CHECK((glossy.total - glossy.direct).mean() > 0.1f);
 }
+
+TEST_CASE("a view relights glossy transfer as relight() does, while the camera stays",
+          "[glossy][view]") {
+  PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
+  Progress::set_enabled(false);
+  const SceneSpec s = scene(registry, "sphere", 0);
+  StageTimes times;
+  const BakeData data = bake(s, registry, {true}, times);
+  Relighting relighting(s, data, registry);
+  const Camera camera = s.make_camera(data.mesh);
+  const std::optional<ViewTransfer> view = relighting.view(data.compressed, camera);
+  REQUIRE(view);
+  for (int trial = 0; trial < 3; ++trial) {  // three lights, one view
+    const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(relighting.basis().size(), 3);
+    const Eigen::MatrixX3f expected =
+        relighting.relight(data.compressed, light, camera).vertex_radiance;
+    const Eigen::MatrixX3f viewed = relighting.relight(*view, light);
+    CHECK((viewed - expected).cwiseAbs().maxCoeff() <= 1e-5f * expected.cwiseAbs().maxCoeff());
+  }
+  // Point lights are summed by relight(transfer, light, camera) only.
+  relighting.set_point_lights({PointLight{}});
+  CHECK_FALSE(relighting.view(data.compressed, camera));
+  CHECK_THROWS_WITH(relighting.relight(*view, relighting.light(s.load_environment())),
+                    Catch::Contains("point lights"));
+}

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <memory>
 
 #include "prt/compressor.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/registry.hpp"
 #include "prt/relight.hpp"
+#include "prt/view_transfer.hpp"
 
 using namespace prt;
 
@@ -231,4 +233,96 @@ TEST_CASE("cluster constants from panels match the per-cluster constants", "[rel
   none.compute(Eigen::MatrixX3f(0, 3), values);
   CHECK(std::all_of(values.begin(), values.end(), [](float v) { return v == 0.f; }));
   CHECK(RelightKernel(empty, 1).radiance(Eigen::MatrixX3d(0, 3)).isZero());
+}
+
+namespace {
+
+// Glossy radiance y(v_p)^T M_p l in double from the decoded transfer.
+Eigen::MatrixX3f glossy_reference(const CompressedTransfer& c, const MatrixXfRow& values,
+                                  const Eigen::MatrixX3d& light) {
+  const MatrixXfRow decoded = c.decode();
+  const Eigen::Index rows = values.cols(), n_l = light.rows();
+  Eigen::MatrixX3f expected(c.vertices(), 3);
+  for (Eigen::Index p = 0; p < c.vertices(); ++p) {
+    const Eigen::MatrixXd m =
+        Eigen::Map<const MatrixXfRow>(decoded.row(p).data(), rows, n_l).cast<double>();
+    expected.row(p) = (values.row(p).cast<double>() * m * light).cast<float>();
+  }
+  return expected;
+}
+
+}  // namespace
+
+TEST_CASE("a view folds glossy transfer toward the camera: t_p . l equals the kernel's sums",
+          "[relight][view]") {
+  const int rows = 6, n_l = 9;
+  // Clusters of every size, some over one block (512) of vertices.
+  const int vertices = 19 * 700;
+  const CompressedTransfer c = mixed_clusters(rows * n_l, vertices);
+  const MatrixXfRow values = MatrixXfRow::Random(vertices, rows);
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(n_l, 3);
+  const ViewTransfer view(c, values);
+  CHECK(view.vertices() == vertices);
+  CHECK(view.light_size() == n_l);
+  const Eigen::MatrixX3f expected = glossy_reference(c, values, light);
+  const Eigen::MatrixX3f once = view.radiance(light);
+  CHECK((once - expected).cwiseAbs().maxCoeff() < 1e-4f);
+  const RelightKernel kernel(c, rows);
+  CHECK((once - kernel.radiance(light, &values)).cwiseAbs().maxCoeff() < 1e-4f);
+  CHECK(view.radiance(light) == once);  // frame after frame, the same folded vectors
+  // The light-space vectors themselves: M_p^T y_p.
+  const MatrixXfRow t = view.light_space();
+  const MatrixXfRow decoded = c.decode();
+  for (int p : {0, 1, 4321, vertices - 1}) {
+    const Eigen::RowVectorXf t_p =
+        values.row(p) * Eigen::Map<const MatrixXfRow>(decoded.row(p).data(), rows, n_l);
+    CHECK((t.row(p) - t_p).cwiseAbs().maxCoeff() < 1e-4f);
+  }
+  // Its frame streams n_L floats a vertex, fewer than the kernel's weights and exit values here.
+  CHECK(view.streamed_bytes() >= double(vertices) * (n_l + 3) * sizeof(float));
+  CHECK(view.streamed_bytes() < kernel.streamed_bytes(true));
+}
+
+TEST_CASE("a view's result does not depend on the number of threads", "[relight][view]") {
+  const int rows = 4, n_l = 16, vertices = 9001;  // a last packet of one vertex
+  const CompressedTransfer c = mixed_clusters(rows * n_l, vertices);
+  const MatrixXfRow values = MatrixXfRow::Random(vertices, rows);
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(n_l, 3);
+  const Eigen::MatrixX3f many = ViewTransfer(c, values).radiance(light);
+  Eigen::MatrixX3f one;
+  tbb::task_arena(1).execute([&] { one = ViewTransfer(c, values).radiance(light); });
+  CHECK(one == many);
+}
+
+TEST_CASE("a view of exact, sparse and empty transfers, and its refusals", "[relight][view]") {
+  const int rows = 3, n_l = 7;
+  // Exact form: a cluster per vertex, no components.
+  const CompressedTransfer exact = exact_like(40);  // 21 coefficients = 3 x 7
+  const MatrixXfRow values = MatrixXfRow::Random(40, rows);
+  const Eigen::MatrixX3d light = Eigen::MatrixX3d::Random(n_l, 3);
+  CHECK((ViewTransfer(exact, values).radiance(light) - glossy_reference(exact, values, light))
+            .cwiseAbs()
+            .maxCoeff() < 1e-5f);
+  // Sparse form (the largest terms of each vertex, Haar's non-linear approximation).
+  TransferSignal s;
+  s.coefficients = MatrixXfRow::Random(40, rows * n_l);
+  const CompressedTransfer sparse = keep_largest(s, 5);
+  REQUIRE(sparse.sparse());
+  CHECK((ViewTransfer(sparse, values).radiance(light) - glossy_reference(sparse, values, light))
+            .cwiseAbs()
+            .maxCoeff() < 1e-5f);
+  // No vertices: an empty frame.
+  CompressedTransfer none = exact_like(0);
+  CHECK(ViewTransfer(none, MatrixXfRow(0, rows)).radiance(light).rows() == 0);
+  // Refusals: exit values of another mesh or of a size that does not divide
+  // the coefficients; a light of another size or not finite.
+  CHECK_THROWS_WITH(ViewTransfer(exact, MatrixXfRow::Zero(39, rows)),
+                    Catch::Contains("exit values are 39 x 3"));
+  CHECK_THROWS_WITH(ViewTransfer(exact, MatrixXfRow::Zero(40, 4)),
+                    Catch::Contains("does not fit 40 vertices of 21 coefficients"));
+  const ViewTransfer view(exact, values);
+  CHECK_THROWS_WITH(view.radiance(Eigen::MatrixX3d::Zero(8, 3)), Catch::Contains("finite 7 x 3"));
+  Eigen::MatrixX3d nan = light;
+  nan(2, 1) = std::nan("");
+  CHECK_THROWS_WITH(view.radiance(nan), Catch::Contains("finite 7 x 3"));
 }

@@ -3,6 +3,7 @@
 #pragma once
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "prt/renderer.hpp"
 #include "prt/run_options.hpp"
 #include "prt/scene.hpp"
+#include "prt/view_transfer.hpp"
 
 namespace prt {
 
@@ -68,6 +70,14 @@ class Relighting {
                 const Camera& camera) const {
     return relight(prepare(transfer), light, camera);
   }
+  // For frames that change only the light: glossy `transfer` folded toward
+  // `camera` (ViewTransfer: n_L x 3 multiply-adds a vertex a frame instead
+  // of (n'_k + 1) N_r x 3). Empty where relight() makes other sums (diffuse
+  // or per-channel transfer, point lights): use relight() there.
+  std::optional<ViewTransfer> view(const CompressedTransfer& transfer, const Camera& camera) const;
+  // Radiance toward the view's camera (albedo included): relight()'s
+  // vertex_radiance for the view's transfer and camera, to float rounding.
+  Eigen::MatrixX3f relight(const ViewTransfer& view, const Eigen::MatrixX3d& light) const;
   // Glossy: the exit basis toward the camera at each vertex (v x N_r); empty
   // for diffuse transfer.
   MatrixXfRow exit_values_toward(const Camera& camera) const;
