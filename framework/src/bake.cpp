@@ -115,11 +115,16 @@ void require_distributable(const SceneSpec& scene, const BakePlan& plan,
     throw Error(scene.basis.where,
                 "a distributed bake fits a basis for diffuse transfer only; this scene is "
                 "glossy: bake it with prt bake");
-  if (!per_vertex_transfer_after_fit(plan))
+  const bool coupled = !per_vertex_transfer_after_fit(plan);
+  if (coupled && plan.channels.groups.size() > 1)
+    throw Error(scene.material.location(),
+                "a distributed bake of bounces or subsurface light needs one transfer for all "
+                "colour channels; this material's channels differ: bake it with prt bake");
+  if (coupled && plan.fit)
     throw Error(scene.basis.where,
-                "a distributed bake needs a transfer each vertex gets alone; this scene's "
-                "couples vertices (bounces, subsurface light or per-channel transfers): bake "
-                "it with prt bake");
+                "a distributed bake fits a basis only to a transfer each vertex gets alone; "
+                "this scene's couples vertices (bounces or subsurface light): bake it with prt "
+                "bake");
   if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
   if (options.traced || !options.compress)
     throw Error("a distributed bake traces and compresses its own shards");
@@ -136,6 +141,8 @@ void require_distributable(const SceneSpec& scene, const BakePlan& plan,
 TransferOutcome transfer_of(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                             const RunOptions& options, const Shard& shard, bool on_disk) {
   const Communicator& comm = options.comm ? *options.comm : solo();
+  if (comm.size() > 1 && !per_vertex_transfer_after_fit(plan))
+    return coupled_shard_transfer(plan, mesh, set, options, shard);
   if (comm.size() > 1)
     return plan.fit ? fitted_shard_transfer(plan, mesh, set, options, shard, comm, on_disk)
                     : shard_transfer(plan, mesh, set, options, shard, comm, on_disk);
@@ -235,7 +242,9 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   std::string text = report.text();
   if (!text.empty() && text.back() == '\n') text.pop_back();
   options.message(text);
-  if (distributed)
+  if (stage.whole)  // every rank computed the whole transfer (bounces, subsurface light)
+    data.transfer = std::move(*stage.whole);
+  else if (distributed)
     stream_from_slabs(fitted, options, comm.size(), std::move(transfer), data);
   else  // in memory, or in its file (write_bake reads it from there)
     data.transfer = std::move(transfer);

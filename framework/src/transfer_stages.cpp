@@ -63,7 +63,8 @@ namespace {
 // Each bounce's state is kept in the bake's checkpoint (when it has one).
 BounceCheckpoint bounce_checkpoint(const RunOptions& options) {
   return {options.checkpoint, options.checkpoint_prefix,
-          [&options](const std::string& text) { options.message(text); }, options.slab_vertices};
+          [&options](const std::string& text) { options.message(text); }, options.slab_vertices,
+          options.comm};
 }
 
 // The fitted basis, or the one a killed run kept once its fit ended. The fit

@@ -5,7 +5,9 @@
 # (also killed after the fit and resumed on other ranks; VQ killed inside
 # LBG and iterative CPCA between passes, each resumed); on 3 ranks static
 # CPCA from a hyper-box start, PCA, glossy VQ and a sparse Haar
-# approximation with a rank that holds no vertex. A
+# approximation with a rank that holds no vertex; transfers that couple
+# vertices (diffuse bounces; glossy bounces with subsurface light) on 2 and 3
+# ranks, and bounces killed on 3 ranks and resumed on 2. A
 # compressor that cannot run distributed is refused on every rank with one
 # message, and a bad scene ends every rank (no hang).
 #   mpi.sh <prt> <prt-mpi> <source dir>
@@ -186,6 +188,45 @@ cmp -s "$work/bunny_cpca.serial.h5" "$work/bunny_cpca.2.h5" ||
 grep -q 'reclassified_vertices' < <("$prt" info "$work/bunny_cpca.2.h5") ||
   { echo "FAIL: scenes/bunny_cpca.toml was not reclassified"; exit 1; }
 echo "scenes/bunny_cpca.toml (reclassify, greedy superclusters): prt-mpi on 2 ranks = prt bake"
+
+# Transfers that couple vertices (issue 42): the ranks share each stage's
+# slabs (trace, bounces, subsurface term, glossy matrices) through the
+# checkpoint and each reads the others', so every rank holds the whole
+# transfer as prt bake computes it. Diffuse bounces compressed by PCA;
+# glossy bounces with subsurface light, exact.
+sed -e 's/^rays = 256/rays = 256\nbounces = 2/' "$work/pca.toml" |
+  sed -e 's|refined_elephant.off|ChineseDragon-10kv.off|' >"$work/coupled_bounces.toml"
+scene coupled_glossy ChineseDragon-10kv.off $'plugin = "sh"\norder = 4' $'plugin = "none"' \
+  $'albedo = [0.9, 0.88, 0.85]\nbrdf = "phong"\ndiffuse = 0.2\nspecular = 0.3\nexponent = 6\nsubsurface = true\nsigma_a = 0.0041\nsigma_s = 2.62\neta = 1.5\nmm_per_unit = 100'
+sed -i -e 's/^rays = 256/rays = 256\nbounces = 1/' "$work/coupled_glossy.toml"
+for name in coupled_bounces coupled_glossy; do
+  "$prt" -q bake "$work/$name.toml" -o "$work/$name.serial.h5" >/dev/null
+  for np in 2 3; do
+    "${mpirun[@]}" -np "$np" "$prt_mpi" -q bake "$work/$name.toml" -o "$work/$name.$np.h5" \
+      --slab-vertices 2048 >/dev/null
+    if ! cmp -s "$work/$name.serial.h5" "$work/$name.$np.h5"; then
+      echo "FAIL: $name on $np ranks differs from prt bake"
+      h5diff "$work/$name.serial.h5" "$work/$name.$np.h5" | head -20 || true
+      exit 1
+    fi
+    [ ! -e "$work/.$name.$np.h5.checkpoint" ] || { echo "FAIL: checkpoint left behind"; exit 1; }
+  done
+  echo "$name: prt-mpi on 2 and 3 ranks = prt bake, byte for byte"
+done
+# Killed between bounces on 3 ranks, resumed on 2: the same file.
+# (The bunny, three bounces: bounce 1's state lives while bounce 2 runs.)
+sed -e 's/^bounces = 2/bounces = 3/' -e 's|ChineseDragon-10kv.off|bunny00.off|' \
+  -e 's/^plugin = "pca"/plugin = "none"/' -e '/^components = 8$/d' "$work/coupled_bounces.toml" \
+  >"$work/coupled_kill.toml"
+"$prt" -q bake "$work/coupled_kill.toml" -o "$work/coupled_kill.serial.h5" >/dev/null
+kill_when coupled_kill coupled_kill bounce-1 --slab-vertices 4096
+out=$("${mpirun[@]}" -np 2 "$prt_mpi" bake "$work/coupled_kill.toml" -o "$work/coupled_kill.h5" \
+  --slab-vertices 4096 2>&1)
+grep -q 'resuming: inter-reflection after bounce [12] of 3' <<<"$out" ||
+  { echo "FAIL: the killed bounces were not resumed: $out"; exit 1; }
+cmp -s "$work/coupled_kill.serial.h5" "$work/coupled_kill.h5" ||
+  { echo "FAIL: the resumed distributed bounces change the file"; exit 1; }
+echo "killed after a distributed bounce on 3 ranks, resumed on 2: the file is identical"
 
 # Refusals end every rank with one clear message and no output.
 scene coherent bunny00.off $'plugin = "sh"\norder = 4' \

@@ -33,6 +33,10 @@ struct TransferOutcome {
   StageTimes times;
   std::map<std::string, double> metrics;
   std::uint64_t rays_cast = 0;
+  // A distributed bake of a transfer that couples vertices
+  // (coupled_shard_transfer): `transfer` holds this rank's shard's rows,
+  // this the whole transfer, which rank 0 writes. Null otherwise.
+  std::shared_ptr<TransferSignal> whole;
 };
 // 2. Transfer: fit (data-driven bases), project, bounces, subsurface, glossy
 //    matrices, glossy bounces. Consumes the visibility and hits.
@@ -73,6 +77,15 @@ TransferOutcome checkpointed_transfer(const BakePlan& plan, const Mesh& mesh,
 TransferOutcome shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                                const RunOptions& options, const Shard& shard,
                                const Communicator& comm, bool on_disk = false);
+// The same for a transfer that couples vertices (bounces, subsurface light):
+// the ranks share each stage's slabs (the trace's, each bounce's, the
+// subsurface term's, the glossy matrices'), kept in options.checkpoint, and
+// every rank reads the others' after each stage, so that each holds the
+// whole transfer (TransferOutcome::whole) as one process computes it, bit
+// for bit; `transfer` is the shard's rows, for the compressor.
+TransferOutcome coupled_shard_transfer(const BakePlan& plan, const Mesh& mesh,
+                                       const DirectionSet& set, const RunOptions& options,
+                                       const Shard& shard);
 // The same for a fitted basis (fitted_per_vertex_transfer): each rank traces
 // its shard's visibility in slabs, the ranks fit the basis together
 // (Basis::can_fit_distributed; one process: shard = whole, comm = solo()),

@@ -13,6 +13,7 @@
 namespace prt {
 
 class CheckpointStore;
+class Communicator;
 class Progress;
 
 struct BounceCheckpoint {
@@ -20,6 +21,10 @@ struct BounceCheckpoint {
   std::string prefix;                               // before every part's name
   std::function<void(const std::string&)> message;  // "resuming: ..."
   std::size_t slab_vertices = 65536;  // within a bounce, rows are kept a slab at a time
+  // A distributed bake's ranks (null: one process): each computes its share
+  // of a bounce's slabs and reads the others' from the store; rank 0 keeps
+  // the state between bounces.
+  const Communicator* comm = nullptr;
 };
 
 BouncedTransfer bounce_passes(const MatrixXfRow& direct, int bounces, const BounceFunction& bounce,

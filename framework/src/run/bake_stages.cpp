@@ -150,8 +150,11 @@ TransferOutcome whole_transfer(const BakePlan& plan, const Mesh& mesh, const Dir
   }
   // Traced in slabs, each kept; the stages after it keep their own parts
   // (the fit's iterations and basis, each bounce, each channel's transfer).
+  // Distributed, every rank computes its share of each stage's slabs and
+  // reads the rest: each ends with the whole transfer, and rank 0 keeps it.
   TransferOutcome out = transfer_from_rays(plan, mesh, set, slabbed_trace(plan, mesh, set, options),
                                            options, want_direct);
+  if (!SlabSharing{options.comm}.root()) return out;
   if (plan.fit) keep_basis_state(store, *out.basis);
   if (direct) store.save("direct", out.direct.coefficients);
   store.save_text("metrics", metrics_text(out.metrics));
@@ -229,6 +232,18 @@ TransferOutcome checkpointed_transfer(const BakePlan& plan, const Mesh& mesh,
     return fitted_shard_transfer(plan, mesh, set, options, whole(Eigen::Index(mesh.vertex_count())),
                                  solo(), on_disk);
   return whole_transfer(plan, mesh, set, options, want_direct);
+}
+
+TransferOutcome coupled_shard_transfer(const BakePlan& plan, const Mesh& mesh,
+                                       const DirectionSet& set, const RunOptions& options,
+                                       const Shard& shard) {
+  if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
+  SlabSharing{options.comm}.barrier();  // every rank sees the same kept stages
+  TransferOutcome out = whole_transfer(plan, mesh, set, options, plan.bounces > 0);
+  auto whole = std::make_shared<TransferSignal>(out.transfer);
+  out.transfer.coefficients = whole->coefficients.middleRows(shard.first, shard.rows());
+  out.whole = std::move(whole);
+  return out;
 }
 
 TransferOutcome shard_transfer(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,

@@ -45,7 +45,7 @@ MatrixXfRow bounce_in_slabs(const BounceCheckpoint& c, int b, const MatrixXfRow&
   return rows_in_slabs(
       *c.store, marker_of(c, b), std::size_t(previous.rows()), previous.cols(), c.slab_vertices,
       [&](const SlabRange& slab) { return bounce(previous, slab.first, slab.last); },
-      "bounce " + std::to_string(b), c.message);
+      "bounce " + std::to_string(b), c.message, {}, SlabSharing{c.comm});
 }
 
 // The last bounce kept (0: none), its state loaded into previous and out.
@@ -93,7 +93,8 @@ BouncedTransfer bounce_passes(const MatrixXfRow& direct, int bounces, const Boun
                                 : bounce(previous, 0, std::size_t(previous.rows()));
     out.total += previous;
     out.bounce_norms.push_back(previous.cast<double>().norm());
-    if (checkpoint.store) keep_state(checkpoint, b + 1, previous, out);
+    if (checkpoint.store && SlabSharing{checkpoint.comm}.root())
+      keep_state(checkpoint, b + 1, previous, out);
     if (progress) progress->add(1.0);
   }
   return out;

@@ -107,40 +107,50 @@ TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const Dire
   if (hits) out.hits.resize(v);
   std::optional<RayCaster> caster;
   Progress progress("bake transfer", double(v), plan.shadowed ? "rays" : "", options.quiet);
-  for (const auto& slab : slabs) {
-    std::uint64_t rays = 0;
-    if (store.has(rows_name(kRays, slab))) {
-      if (plan.keep_visibility)
-        copy_kept_bits(store, slab, {0, v}, words, out.visibility, kBits);
-      else
-        out.transfer.coefficients.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) =
-            kept_rows(store, slab, cols, kRows);
-      if (hits) load_hits(store, slab, mesh, s, out.hits);
-      rays = kept_count(store, kRays, slab);
-      progress.add(double(slab.size()), double(rays));
+  // The slabs not kept yet, traced here (shared: this rank's share of them)...
+  const SlabSharing sharing{options.comm};
+  std::vector<bool> here(slabs.size(), false);
+  for (std::size_t i = 0; i < slabs.size(); ++i) {
+    const SlabRange& slab = slabs[i];
+    if (!sharing.mine(i) || store.has(rows_name(kRays, slab))) continue;
+    if (plan.shadowed && !caster) caster.emplace(mesh);
+    TransportResult traced = trace_slab(plan, mesh, set, caster ? &*caster : nullptr, slab.first,
+                                        slab.last, plan.keep_visibility, hits, &progress);
+    if (plan.keep_visibility) {
+      keep_bits(store, kBits, slab, traced.visibility);
+      if (slab.size() > 0)
+        std::memcpy(out.visibility.words(slab.first), traced.visibility.words(0),
+                    slab.size() * words * sizeof(std::uint64_t));
     } else {
-      if (plan.shadowed && !caster) caster.emplace(mesh);
-      TransportResult traced = trace_slab(plan, mesh, set, caster ? &*caster : nullptr, slab.first,
-                                          slab.last, plan.keep_visibility, hits, &progress);
-      if (plan.keep_visibility) {
-        keep_bits(store, kBits, slab, traced.visibility);
-        if (slab.size() > 0)
-          std::memcpy(out.visibility.words(slab.first), traced.visibility.words(0),
-                      slab.size() * words * sizeof(std::uint64_t));
-      } else {
-        store.save(rows_name(kRows, slab), traced.transfer.coefficients);
-        out.transfer.coefficients.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) =
-            traced.transfer.coefficients;
-      }
-      if (hits) {
-        keep_hits(store, slab, traced.hits);
-        std::move(traced.hits.begin(), traced.hits.end(), out.hits.begin() + long(slab.first));
-      }
-      rays = traced.rays_cast;
-      keep_count(store, kRays, slab, rays);  // last: marks the slab kept
+      store.save(rows_name(kRows, slab), traced.transfer.coefficients);
+      out.transfer.coefficients.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) =
+          traced.transfer.coefficients;
     }
+    if (hits) {
+      keep_hits(store, slab, traced.hits);
+      std::move(traced.hits.begin(), traced.hits.end(), out.hits.begin() + long(slab.first));
+    }
+    keep_count(store, kRays, slab, traced.rays_cast);  // last: marks the slab kept
+    out.rays_cast += traced.rays_cast;
+    here[i] = true;
+  }
+  caster.reset();
+  sharing.barrier();  // every slab is kept
+  // ... and the others read back.
+  for (std::size_t i = 0; i < slabs.size(); ++i) {
+    if (here[i]) continue;
+    const SlabRange& slab = slabs[i];
+    if (plan.keep_visibility)
+      copy_kept_bits(store, slab, {0, v}, words, out.visibility, kBits);
+    else
+      out.transfer.coefficients.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) =
+          kept_rows(store, slab, cols, kRows);
+    if (hits) load_hits(store, slab, mesh, s, out.hits);
+    const std::uint64_t rays = kept_count(store, kRays, slab);
+    progress.add(double(slab.size()), double(rays));
     out.rays_cast += rays;
   }
+  sharing.barrier();  // every rank has read them
   progress.finish();
   out.trace_seconds = clock.seconds();
   return out;
@@ -173,7 +183,8 @@ TransferSignal slabbed_glossy_transfer(const BakePlan& plan, const Mesh& mesh,
       "the glossy matrices", [&](const std::string& text) { options.message(text); },
       [&](const SlabRange& slab) {
         if (progress) progress->add(double(slab.size()));
-      });
+      },
+      SlabSharing{options.comm});
   return out;
 }
 
@@ -189,7 +200,8 @@ MatrixXfRow slabbed_subsurface(const Mesh& mesh, const MatrixXfRow& transfer,
         if (!scattering) scattering.emplace(mesh, transfer, material);
         return scattering->rows(slab.first, slab.last);
       },
-      "subsurface scattering", [&](const std::string& text) { options.message(text); });
+      "subsurface scattering", [&](const std::string& text) { options.message(text); }, {},
+      SlabSharing{options.comm});
 }
 
 }  // namespace prt

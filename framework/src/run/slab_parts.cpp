@@ -85,24 +85,33 @@ MatrixXfRow rows_in_slabs(const CheckpointStore& store, const std::string& what,
                           const std::function<MatrixXfRow(const SlabRange&)>& compute,
                           const std::string& label,
                           const std::function<void(const std::string&)>& message,
-                          const std::function<void(const SlabRange&)>& on_kept) {
+                          const std::function<void(const SlabRange&)>& on_kept,
+                          SlabSharing sharing) {
   const auto slabs = slabs_of(0, vertices, std::max<std::size_t>(1, slab_vertices));
   say_kept_slabs(
       store, slabs, [&](const SlabRange& slab) { return store.has(rows_name(what.c_str(), slab)); },
       label, message);
   MatrixXfRow out(Eigen::Index(vertices), cols);
-  for (const auto& slab : slabs) {
-    const std::string name = rows_name(what.c_str(), slab);
-    MatrixXfRow rows;
-    if (store.has(name)) {
-      rows = kept_rows(store, slab, cols, what.c_str());
-      if (on_kept) on_kept(slab);
-    } else {
-      rows = compute(slab);
-      store.save(name, rows);
-    }
+  // Each slab is computed once (kept slabs of a killed run are not), then
+  // the others are read from the checkpoint.
+  std::vector<bool> here(slabs.size(), false);
+  for (std::size_t i = 0; i < slabs.size(); ++i) {
+    const SlabRange& slab = slabs[i];
+    if (!sharing.mine(i) || store.has(rows_name(what.c_str(), slab))) continue;
+    const MatrixXfRow rows = compute(slab);
+    store.save(rows_name(what.c_str(), slab), rows);
     out.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) = rows;
+    here[i] = true;
   }
+  sharing.barrier();  // every slab is kept
+  for (std::size_t i = 0; i < slabs.size(); ++i) {
+    if (here[i]) continue;
+    const SlabRange& slab = slabs[i];
+    out.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) =
+        kept_rows(store, slab, cols, what.c_str());
+    if (on_kept) on_kept(slab);
+  }
+  sharing.barrier();  // every rank has read them: a caller may now replace them
   return out;
 }
 

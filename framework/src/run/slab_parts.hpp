@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "prt/checkpoint.hpp"
+#include "prt/communicator.hpp"
 #include "prt/error.hpp"
 #include "prt/transport.hpp"
 #include "prt/visible_products.hpp"
@@ -70,15 +71,34 @@ std::size_t say_kept_slabs(const CheckpointStore& store, const std::vector<SlabR
                            const std::string& label,
                            const std::function<void(const std::string&)>& message);
 
+// A stage's slabs shared by the ranks of a distributed bake, each slab
+// computed by one rank (slab i by rank i mod size: the same rows whoever
+// computes them) and kept in the shared checkpoint, then read by every rank.
+// Null or one rank: every slab is this process's.
+struct SlabSharing {
+  const Communicator* comm = nullptr;
+  bool shared() const { return comm && comm->size() > 1; }
+  bool mine(std::size_t slab_index) const {
+    return !shared() || int(slab_index % std::size_t(comm->size())) == comm->rank();
+  }
+  bool root() const { return !shared() || comm->rank() == 0; }
+  void barrier() const {
+    if (shared()) comm->barrier();
+  }
+};
+
 // The rows [0, vertices) of a stage, computed slab by slab through the
 // checkpoint: a slab kept as part `what` is loaded (`on_kept` hears of it,
-// for progress), any other is computed by `compute` and kept. `message`
-// hears "resuming: k of n slabs of <label> kept in ..." when any were.
+// for progress), any other is computed by `compute` and kept (shared: by
+// one rank, and then read by all; every rank has read every slab when it
+// returns). `message` hears "resuming: k of n slabs of <label> kept in ..."
+// when any were.
 MatrixXfRow rows_in_slabs(const CheckpointStore& store, const std::string& what,
                           std::size_t vertices, Eigen::Index cols, std::size_t slab_vertices,
                           const std::function<MatrixXfRow(const SlabRange&)>& compute,
                           const std::string& label,
                           const std::function<void(const std::string&)>& message,
-                          const std::function<void(const SlabRange&)>& on_kept = {});
+                          const std::function<void(const SlabRange&)>& on_kept = {},
+                          SlabSharing sharing = {});
 
 }  // namespace prt
