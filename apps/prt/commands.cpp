@@ -154,7 +154,11 @@ int render(Context& context, const RenderArgs& args) {
   override_renderer(context, args, scene);
   StageTimes times;
   times.add("parse + validate scene", clock.seconds());
-  const fs::path output = args.output.empty() ? scene.image_path() : fs::path(args.output);
+  // The ground truth's default is the name --compare gives it (scene.truth.png),
+  // so that it never replaces the scene's render.
+  const fs::path output = !args.output.empty() ? fs::path(args.output)
+                          : args.ground_truth  ? comparison_files(scene.image_path()).truth
+                                               : scene.image_path();
   const fs::path bake_file = args.bake.empty() ? scene.bake_path() : fs::path(args.bake);
   std::vector<fs::path> inputs = scene.input_files();
   inputs.push_back(bake_file);

@@ -44,11 +44,14 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
   const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(samples / strategies))));
   const int per_strategy = side * side, n = strategies * per_strategy;
   Eigen::MatrixX3f radiance(static_cast<Eigen::Index>(v_count), 3);
+  const float* pixels = environment.pixels().data();
+  const Eigen::Index width = environment.width(), height = environment.height();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, 16), [&](const auto& range) {
     std::vector<float> origins(3 * n), directions(3 * n);
-    std::vector<double> cosine_pdf(n), map_pdf(n, 0.0);
+    std::vector<double> cosine_pdf(n);
     // One map lookup per sample, for its density and its texel.
     std::vector<Eigen::Vector2d> uv(n, Eigen::Vector2d::Zero());
+    std::vector<Eigen::Index> texel(n, 0);
     std::vector<std::uint8_t> escaped(n);
     for (std::size_t v = range.begin(); v < range.end(); ++v) {
       // Seeded per vertex, so results do not depend on scheduling.
@@ -57,6 +60,9 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
       const Eigen::Vector3d nrm = mesh.normals[v].cast<double>();
       const CosineHemisphere hemisphere(nrm);
       const Eigen::Vector3f o = mesh.positions[v] + caster.offset() * mesh.normals[v];
+      // Every sample first, its texel's density and radiance requested from
+      // memory (random texels of a large map: the loads would stall one at
+      // a time); they arrive while the rays are traced.
       for (int k = 0; k < n; ++k) {
         // Stratified in [0,1)^2 within each strategy.
         const int stratum = k % per_strategy;
@@ -65,10 +71,15 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
         Eigen::Vector3d d;
         if (k < per_strategy) {  // cosine-weighted hemisphere
           d = hemisphere.sample(u1, u2);
-          if (use_map) uv[k] = environment.uv_of(d), map_pdf[k] = sampler->pdf_at(uv[k]);
+          if (use_map) uv[k] = environment.uv_of(d), texel[k] = sampler->texel_at(uv[k]);
         } else {
-          const EnvironmentSampler::Sample sample = sampler->sample(u1, u2);
-          d = sample.direction, uv[k] = sample.uv, map_pdf[k] = sample.pdf;
+          const EnvironmentSampler::Drawn drawn = sampler->draw(u1, u2);
+          d = drawn.direction, texel[k] = drawn.texel;
+          uv[k] = {(drawn.texel % width + 0.5) / width, (drawn.texel / width + 0.5) / height};
+        }
+        if (use_map) {
+          sampler->prefetch(texel[k]);
+          __builtin_prefetch(pixels + 3 * texel[k]);
         }
         cosine_pdf[k] = std::max(0.0, d.dot(nrm)) / M_PI;
         for (int c = 0; c < 3; ++c) origins[3 * k + c] = o[c], directions[3 * k + c] = float(d[c]);
@@ -78,9 +89,10 @@ Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& envi
       for (int k = 0; k < n; ++k) {
         if (!escaped[k] || cosine_pdf[k] <= 0) continue;
         const Eigen::Vector3d d(directions[3 * k], directions[3 * k + 1], directions[3 * k + 2]);
+        const double map_pdf = use_map ? sampler->density(texel[k]) : 0.0;
         // f = L V cos / pi = L cosine_pdf (albedo 1); balance heuristic:
         // f / (N (p_cosine + p_map)).
-        double weight = cosine_pdf[k] / (per_strategy * (cosine_pdf[k] + map_pdf[k]));
+        double weight = cosine_pdf[k] / (per_strategy * (cosine_pdf[k] + map_pdf));
         if (reflectance) weight *= reflectance(v, d);  // pi rho replaces albedo 1
         sum += weight * environment.texel_radiance_at(uv[k]).cast<double>();
       }

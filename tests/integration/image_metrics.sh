@@ -4,7 +4,8 @@
 # against scikit-image on fixed images; the files `render --compare` writes
 # (NAME.error.png with its colour bar, NAME.error.exr, NAME.truth.exr) read
 # back by the OpenEXR library (prt.Environment.load) and by read_exr.py; the
-# second --compare reuses the cached reference; an unknown extension is refused.
+# second --compare reuses the cached reference; an unknown extension is refused;
+# --ground-truth's default name leaves the scene's render alone.
 set -euo pipefail
 prt="$1"
 src="$2"
@@ -127,4 +128,12 @@ if out=$(cd "$work" && "$prt" -q render box.toml -b box.h5 -o box.tiff 2>&1); th
   echo "FAIL: -o box.tiff accepted"; exit 1
 fi
 grep -q "box.tiff" <<<"$out" || { echo "FAIL: the refusal does not name the file: $out"; exit 1; }
+# 4. --ground-truth without -o writes the name --compare gives the truth
+#    (NAME.truth.png), not over the scene's render.
+{ cat "$work/box.toml"; printf '[output]\nbake = "box.h5"\nimage = "named.png"\n'; } >"$work/named.toml"
+(cd "$work" && "$prt" -q render named.toml >/dev/null && cp named.png render.png &&
+  "$prt" -q render named.toml --ground-truth >/dev/null)
+cmp -s "$work/named.png" "$work/render.png" ||
+  { echo "FAIL: --ground-truth replaced the scene's render"; exit 1; }
+[ -s "$work/named.truth.png" ] || { echo "FAIL: --ground-truth wrote no named.truth.png"; exit 1; }
 echo "image metrics and outputs: ok"

@@ -91,3 +91,60 @@ TEST_CASE("importance sampling integrates the map exactly in expectation", "[env
     }
   CHECK(sum / (side * side) == Approx(exact).epsilon(2e-3));
 }
+
+TEST_CASE("the sampler inverts its CDF: each texel takes its probability of [0, 1)^2",
+          "[environment]") {
+  // The sun's rows and columns take most of [0, 1); the dim ones a sliver
+  // each: a search that stops short of the right interval (the guide
+  // tables' ranges) moves whole slivers to a neighbour.
+  const int width = 64, height = 32;
+  const Environment map = sunny_map(width, height);
+  const EnvironmentSampler sampler(map);
+  auto probability = [&](Eigen::Index texel) {
+    const Eigen::Index y = texel / width;
+    return sampler.density(texel) * 2.0 * M_PI / width *
+           (std::cos(M_PI * y / height) - std::cos(M_PI * (y + 1) / height));
+  };
+  // Rows: u1 on a fine grid (u2 fixed); the drawn row never goes back and
+  // each row's share of the grid is its probability.
+  const int steps = 200000;
+  std::vector<double> row_share(height, 0.0), row_probability(height, 0.0);
+  for (Eigen::Index t = 0; t < width * height; ++t) row_probability[t / width] += probability(t);
+  Eigen::Index previous = 0;
+  for (int i = 0; i < steps; ++i) {
+    const EnvironmentSampler::Drawn drawn = sampler.draw((i + 0.5) / steps, 0.5);
+    const Eigen::Index row = drawn.texel / width;
+    REQUIRE(row >= previous);
+    previous = row;
+    row_share[std::size_t(row)] += 1.0 / steps;
+  }
+  for (int y = 0; y < height; ++y) CHECK(row_share[y] == Approx(row_probability[y]).margin(2e-5));
+  // Columns of the sun's row (u1 inside it) and of a dim row.
+  for (const int y : {3, 20}) {
+    double below = 0;
+    for (int r = 0; r < y; ++r) below += row_probability[r];
+    const double u1 = below + 0.5 * row_probability[y];
+    double row_total = 0;
+    for (int x = 0; x < width; ++x) row_total += probability(Eigen::Index(y) * width + x);
+    std::vector<double> share(width, 0.0);
+    Eigen::Index last = 0;
+    for (int i = 0; i < steps; ++i) {
+      const EnvironmentSampler::Drawn drawn = sampler.draw(u1, (i + 0.5) / steps);
+      REQUIRE(drawn.texel / width == y);
+      REQUIRE(drawn.texel % width >= last);
+      last = drawn.texel % width;
+      share[std::size_t(last)] += 1.0 / steps;
+    }
+    for (int x = 0; x < width; ++x)
+      CHECK(share[x] == Approx(probability(Eigen::Index(y) * width + x) / row_total).margin(2e-5));
+  }
+  // The ends and the guide cells' own boundaries k / count.
+  for (const double u : {0.0, std::nextafter(1.0, 0.0), 1.0 / height, 17.0 / height, 0.5}) {
+    const EnvironmentSampler::Drawn drawn = sampler.draw(u, u);
+    CHECK(drawn.texel >= 0);
+    CHECK(drawn.texel < width * height);
+    const EnvironmentSampler::Sample sample = sampler.sample(u, u);
+    CHECK((sample.direction - drawn.direction).norm() == 0.0);
+    CHECK(sample.pdf == sampler.density(drawn.texel));
+  }
+}

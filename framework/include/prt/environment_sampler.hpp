@@ -20,6 +20,23 @@ class EnvironmentSampler {
   };
   // Maps two uniform numbers in [0, 1) to a direction.
   Sample sample(double u1, double u2) const;
+  // The same without its density, which density(texel) reads later (a
+  // caller that draws many samples first and prefetches their texels).
+  struct Drawn {
+    Eigen::Vector3d direction;
+    Eigen::Index texel;  // y width + x
+  };
+  Drawn draw(double u1, double u2) const;
+  // The texel of map coordinates, and the density of sample() in a texel
+  // (per unit solid angle: pdf_at of any point in it).
+  Eigen::Index texel_at(const Eigen::Vector2d& uv) const;
+  double density(Eigen::Index texel) const {
+    return texel_probability_[std::size_t(texel)] / texel_solid_angle_[std::size_t(texel / width_)];
+  }
+  // Asks the memory for a texel's density, to be read soon.
+  void prefetch(Eigen::Index texel) const {
+    __builtin_prefetch(&texel_probability_[std::size_t(texel)]);
+  }
   // Density of sample() at a world direction.
   double pdf(const Eigen::Vector3d& direction) const;
   // The same at map coordinates (Environment::uv_of of the direction).
@@ -28,8 +45,13 @@ class EnvironmentSampler {
  private:
   int width_, height_;
   Eigen::Matrix3d rotation_;
-  std::vector<double> row_cdf_;            // height + 1
-  std::vector<double> column_cdf_;         // height x (width + 1)
+  std::vector<double> row_cdf_;     // height + 1
+  std::vector<double> column_cdf_;  // height x (width + 1)
+  // Guide tables (Chen and Asau's indexed search): the first interval
+  // whose cdf passes k / count, so that a search for u looks at a few
+  // entries instead of log2(count); the interval found is the same.
+  std::vector<int> row_guide_;             // height + 1
+  std::vector<int> column_guide_;          // height x (width + 1)
   std::vector<double> texel_probability_;  // height x width
   // Per row, computed once (sample() and pdf() ran four cosines a call):
   std::vector<double> row_z_;              // cos(pi y / height), height + 1

@@ -2,7 +2,7 @@
 //
 // A glossy relight with per-cluster constants (RelightKernel) costs each
 // vertex (n'_k + 1) x N_r x 3 multiply-adds a frame, whatever changed: more
-// than streaming its bytes takes (docs/performance.md, "Glossy relight").
+// than streaming its bytes takes (docs/performance.md, "Glossy CPU relight").
 // While the camera stays put, the exit basis's values toward it y(v_p) do
 // not change, so neither does the vertex's light-space vector
 //
