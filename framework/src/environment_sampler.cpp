@@ -8,30 +8,11 @@
 namespace prt {
 
 namespace {
-
-// guide[k] = the first i with cdf[i] > k / count (count + 1 when none), for
-// k = 0..count.
-void make_guide(const double* cdf, int count, int* guide) {
-  int i = 0;
-  for (int k = 0; k <= count; ++k) {
-    const double u = double(k) / count;
-    while (i <= count && cdf[i] <= u) ++i;
-    guide[k] = i;
-  }
-}
-
-// Index i with cdf[i] <= u < cdf[i + 1], skipping empty intervals: the last
-// i with cdf[i] <= u. For k = floor(u count), k / count <= u < (k + 1) /
-// count but for the product's rounding, so the first cdf entry above u lies
-// between guide[k - 1] and guide[k + 2] (a cell of margin each side): the
-// search is over those.
-int find_interval(const double* cdf, const int* guide, int count, double u) {
-  const int k = std::clamp(static_cast<int>(u * count), 0, count);
-  const int first = guide[std::max(k - 1, 0)], last = guide[std::min(k + 2, count)];
-  const double* it = std::upper_bound(cdf + first, cdf + last, u);
+// Index i with cdf[i] <= u < cdf[i + 1], skipping empty intervals.
+int find_interval(const double* cdf, int count, double u) {
+  const double* it = std::upper_bound(cdf, cdf + count + 1, u);
   return std::clamp(static_cast<int>(it - cdf) - 1, 0, count - 1);
 }
-
 }  // namespace
 
 EnvironmentSampler::EnvironmentSampler(const Environment& env)
@@ -70,20 +51,15 @@ EnvironmentSampler::EnvironmentSampler(const Environment& env)
     for (int x = 0; x <= width_; ++x)
       cdf[x] = row_total > 0 ? cdf[x] / row_total : double(x) / width_;
   }
-  row_guide_.resize(std::size_t(height_) + 1);
-  make_guide(row_cdf_.data(), height_, row_guide_.data());
-  column_guide_.resize(column_cdf_.size());
-  for (std::size_t y = 0; y < std::size_t(height_); ++y)
-    make_guide(&column_cdf_[y * (width_ + 1)], width_, &column_guide_[y * (width_ + 1)]);
 }
 
 EnvironmentSampler::Drawn EnvironmentSampler::draw(double u1, double u2) const {
-  const int y = find_interval(row_cdf_.data(), row_guide_.data(), height_, u1);
+  const int y = find_interval(row_cdf_.data(), height_, u1);
   const double row_width = row_cdf_[y + 1] - row_cdf_[y];
   const double fy = row_width > 0 ? (u1 - row_cdf_[y]) / row_width : 0.5;
   const std::size_t row = static_cast<std::size_t>(y) * (width_ + 1);
   const double* cdf = &column_cdf_[row];
-  const int x = find_interval(cdf, &column_guide_[row], width_, u2);
+  const int x = find_interval(cdf, width_, u2);
   const double column_width = cdf[x + 1] - cdf[x];
   const double fx = column_width > 0 ? (u2 - cdf[x]) / column_width : 0.5;
   // Uniform in solid angle inside the texel, so pdf() is exact: z = cos

@@ -95,8 +95,8 @@ TEST_CASE("importance sampling integrates the map exactly in expectation", "[env
 TEST_CASE("the sampler inverts its CDF: each texel takes its probability of [0, 1)^2",
           "[environment]") {
   // The sun's rows and columns take most of [0, 1); the dim ones a sliver
-  // each: a search that stops short of the right interval (the guide
-  // tables' ranges) moves whole slivers to a neighbour.
+  // each: a search that stops short of the right interval moves whole
+  // slivers to a neighbour.
   const int width = 64, height = 32;
   const Environment map = sunny_map(width, height);
   const EnvironmentSampler sampler(map);
@@ -138,7 +138,7 @@ TEST_CASE("the sampler inverts its CDF: each texel takes its probability of [0, 
     for (int x = 0; x < width; ++x)
       CHECK(share[x] == Approx(probability(Eigen::Index(y) * width + x) / row_total).margin(2e-5));
   }
-  // The ends and the guide cells' own boundaries k / count.
+  // The ends and the cells' boundaries k / count.
   for (const double u : {0.0, std::nextafter(1.0, 0.0), 1.0 / height, 17.0 / height, 0.5}) {
     const EnvironmentSampler::Drawn drawn = sampler.draw(u, u);
     CHECK(drawn.texel >= 0);

@@ -45,13 +45,8 @@ class EnvironmentSampler {
  private:
   int width_, height_;
   Eigen::Matrix3d rotation_;
-  std::vector<double> row_cdf_;     // height + 1
-  std::vector<double> column_cdf_;  // height x (width + 1)
-  // Guide tables (Chen and Asau's indexed search): the first interval
-  // whose cdf passes k / count, so that a search for u looks at a few
-  // entries instead of log2(count); the interval found is the same.
-  std::vector<int> row_guide_;             // height + 1
-  std::vector<int> column_guide_;          // height x (width + 1)
+  std::vector<double> row_cdf_;            // height + 1
+  std::vector<double> column_cdf_;         // height x (width + 1)
   std::vector<double> texel_probability_;  // height x width
   // Per row, computed once (sample() and pdf() ran four cosines a call):
   std::vector<double> row_z_;              // cos(pi y / height), height + 1
