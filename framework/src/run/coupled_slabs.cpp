@@ -89,6 +89,32 @@ TransportResult trace_slab(const BakePlan& plan, const Mesh& mesh, const Directi
              : diffuse_transfer(mesh, set, *plan.basis, transport, progress);
 }
 
+namespace {
+
+// A slab just traced: kept in the store (its rays' count last, which marks
+// it kept) and moved into `out`, whose rows are the whole mesh's.
+void keep_traced_slab(const CheckpointStore& store, const SlabRange& slab, bool keep_visibility,
+                      bool hits, std::size_t words, TransportResult& traced, TransportResult& out) {
+  if (keep_visibility) {
+    keep_bits(store, kBits, slab, traced.visibility);
+    if (slab.size() > 0)
+      std::memcpy(out.visibility.words(slab.first), traced.visibility.words(0),
+                  slab.size() * words * sizeof(std::uint64_t));
+  } else {
+    store.save(rows_name(kRows, slab), traced.transfer.coefficients);
+    out.transfer.coefficients.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) =
+        traced.transfer.coefficients;
+  }
+  if (hits) {
+    keep_hits(store, slab, traced.hits);
+    std::move(traced.hits.begin(), traced.hits.end(), out.hits.begin() + long(slab.first));
+  }
+  keep_count(store, kRays, slab, traced.rays_cast);
+  out.rays_cast += traced.rays_cast;
+}
+
+}  // namespace
+
 TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                               const RunOptions& options) {
   const CheckpointStore& store = *options.checkpoint;
@@ -116,22 +142,7 @@ TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const Dire
     if (plan.shadowed && !caster) caster.emplace(mesh);
     TransportResult traced = trace_slab(plan, mesh, set, caster ? &*caster : nullptr, slab.first,
                                         slab.last, plan.keep_visibility, hits, &progress);
-    if (plan.keep_visibility) {
-      keep_bits(store, kBits, slab, traced.visibility);
-      if (slab.size() > 0)
-        std::memcpy(out.visibility.words(slab.first), traced.visibility.words(0),
-                    slab.size() * words * sizeof(std::uint64_t));
-    } else {
-      store.save(rows_name(kRows, slab), traced.transfer.coefficients);
-      out.transfer.coefficients.middleRows(Eigen::Index(slab.first), Eigen::Index(slab.size())) =
-          traced.transfer.coefficients;
-    }
-    if (hits) {
-      keep_hits(store, slab, traced.hits);
-      std::move(traced.hits.begin(), traced.hits.end(), out.hits.begin() + long(slab.first));
-    }
-    keep_count(store, kRays, slab, traced.rays_cast);  // last: marks the slab kept
-    out.rays_cast += traced.rays_cast;
+    keep_traced_slab(store, slab, plan.keep_visibility, hits, words, traced, out);
     here[i] = true;
   }
   caster.reset();
