@@ -92,7 +92,7 @@ TEST_CASE("importance sampling integrates the map exactly in expectation", "[env
   CHECK(sum / (side * side) == Approx(exact).epsilon(2e-3));
 }
 
-TEST_CASE("the sampler inverts its CDF: each texel takes its probability of [0, 1)^2",
+TEST_CASE("the sampler inverts its CDF: each texel takes its share of the unit square",
           "[environment]") {
   // The sun's rows and columns take most of [0, 1); the dim ones a sliver
   // each: a search that stops short of the right interval moves whole
