@@ -304,7 +304,7 @@ SceneSpec glossy_box(PluginRegistry& registry, const std::string& brdf, double c
 
 }  // namespace
 
-TEST_CASE("glossy radiance follows the camera; Lambertian radiance does not", "[glossy]") {
+TEST_CASE("glossy radiance follows the camera, and Lambertian radiance does not", "[glossy]") {
   PluginRegistry registry({PRT_BUILD_PLUGIN_DIR});
   Progress::set_enabled(false);
   for (const char* brdf : {"phong", "lambert"}) {

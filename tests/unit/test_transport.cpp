@@ -44,7 +44,7 @@ TEST_CASE("shadowed transfer of a convex sphere is the clamped cosine rotated to
   CHECK(worst < 2e-3);  // quadrature error of the clamped cosine's kink
 }
 
-TEST_CASE("all rays blocked gives zero transfer; unshadowed ignores occluders",
+TEST_CASE("all rays blocked gives zero transfer, and unshadowed transfer ignores occluders",
           "[transport][extremes]") {
   Mesh inside_out = make_box();
   for (auto& n : inside_out.normals) n = -n;  // every ray heads into the box
