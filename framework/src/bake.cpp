@@ -141,11 +141,12 @@ void require_distributable(const SceneSpec& scene, const BakePlan& plan,
 TransferOutcome transfer_of(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                             const RunOptions& options, const Shard& shard, bool on_disk) {
   const Communicator& comm = options.comm ? *options.comm : solo();
-  if (comm.size() > 1 && !per_vertex_transfer_after_fit(plan))
-    return coupled_shard_transfer(plan, mesh, set, options, shard);
-  if (comm.size() > 1)
+  if (comm.size() > 1) {
+    if (!per_vertex_transfer_after_fit(plan))  // bounces, subsurface light
+      return coupled_shard_transfer(plan, mesh, set, options, shard);
     return plan.fit ? fitted_shard_transfer(plan, mesh, set, options, shard, comm, on_disk)
                     : shard_transfer(plan, mesh, set, options, shard, comm, on_disk);
+  }
   return checkpointed_transfer(plan, mesh, set, options, plan.bounces > 0, on_disk);
 }
 

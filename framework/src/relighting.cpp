@@ -138,6 +138,7 @@ Eigen::MatrixX3f Relighting::relight(const ViewTransfer& view,
                                      const Eigen::MatrixX3d& light_coefficients) const {
   if (sums_here())
     throw Error("relight: a view's sums leave out point lights and per-channel transfers");
+  view.check_light(light_coefficients);  // before the metric's product reads it
   Eigen::MatrixX3f radiance = view.radiance(seen_by_transfer(light_coefficients));
   for (int c = 0; c < 3; ++c) radiance.col(c) *= data_.albedo[c];
   return radiance;

@@ -111,10 +111,14 @@ MatrixXfRow ViewTransfer::light_space() const {
   return out;
 }
 
-void ViewTransfer::radiance(const Eigen::MatrixX3d& light, Eigen::MatrixX3f& out) const {
+void ViewTransfer::check_light(const Eigen::MatrixX3d& light) const {
   if (light.rows() != light_size_ || !light.allFinite())
     throw Error("view transfer: the light must be a finite " + std::to_string(light_size_) +
                 " x 3 array, not " + std::to_string(light.rows()) + " x 3");
+}
+
+void ViewTransfer::radiance(const Eigen::MatrixX3d& light, Eigen::MatrixX3f& out) const {
+  check_light(light);
   const Eigen::MatrixX3f l = light.cast<float>();
   out.resize(vertices_, 3);
   const Eigen::Index n_l = light_size_;

@@ -35,6 +35,8 @@ class ViewTransfer {
   // v x n_L: row p is t_p (a copy, unpacked: for tests and tools).
   MatrixXfRow light_space() const;
 
+  // Throws prt::Error unless `light` is a finite n_L x 3 array.
+  void check_light(const Eigen::MatrixX3d& light) const;
   // v x 3 radiance toward the camera for a light vector (n_L x 3) into `out`
   // (resized; its storage reused frame after frame).
   void radiance(const Eigen::MatrixX3d& light, Eigen::MatrixX3f& out) const;

@@ -240,7 +240,11 @@ TransferOutcome coupled_shard_transfer(const BakePlan& plan, const Mesh& mesh,
   if (!options.checkpoint) throw Error("a distributed bake needs a checkpoint folder");
   SlabSharing{options.comm}.barrier();  // every rank sees the same kept stages
   TransferOutcome out = whole_transfer(plan, mesh, set, options, plan.bounces > 0);
-  auto whole = std::make_shared<TransferSignal>(out.transfer);
+  // The whole transfer moves (not copied: each rank would hold it twice);
+  // the shard's rows are copied out of it with the plan's shape.
+  auto whole = std::make_shared<TransferSignal>(std::move(out.transfer));
+  out.transfer = TransferSignal();
+  set_shape(plan, out.transfer);
   out.transfer.coefficients = whole->coefficients.middleRows(shard.first, shard.rows());
   out.whole = std::move(whole);
   return out;
