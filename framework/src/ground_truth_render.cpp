@@ -174,7 +174,9 @@ std::uint64_t batch_seed(std::uint64_t seed, int batch) {
 std::string reference_key(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
                           const Camera& camera, int samples) {
   ReferenceKey key;
-  key.add("prt reference v2: batches " + std::to_string(kReferenceBatches));
+  // v3: sample sets shared by blocks of kSharedBlock vertices (issue 42).
+  key.add("prt reference v3: batches " + std::to_string(kReferenceBatches) + ", blocks of " +
+          std::to_string(kSharedBlock));
   key.add(mesh.positions.data(), mesh.positions.size() * sizeof(mesh.positions[0]));
   key.add(mesh.normals.data(), mesh.normals.size() * sizeof(mesh.normals[0]));
   key.add(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));

@@ -4,17 +4,19 @@
 //   bench_truth [mesh.off] [map.exr] [samples] [repeats]
 //     defaults: bunny00.off, courtyard.exr turned 90 degrees, 256, 3
 //
-// "ground truth": ground_truth_radiance (stratified cosine and map samples
-// combined by MIS, one occlusion ray each), rays per second; "anchor": the
+// "ground truth": ground_truth_estimate (stratified sphere and map samples
+// shared by blocks of nearby vertices, combined by MIS, one occlusion ray per
+// sample above a vertex's tangent plane), rays traced per second; "anchor": the
 // shared/anchors settings (raw_embree.hpp) on the bake's 1,024 directions,
-// rays per second; "its rays alone": the ground truth's own kind of rays
-// (random per vertex, 2 x side^2 a call) traced without the sampling and
-// shading around them, the trace's share of its time. Limit: seconds per ray
+// rays per second; "its rays alone": the ground truth's own rays traced
+// without the sampling and shading around them, the trace's share of its
+// time. Limit: seconds per ray
 // of the ground truth <= 1.5x the anchor's.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -36,51 +38,44 @@
 
 namespace {
 
-// Rays of the ground truth's two strategies, stratified and jittered as it
-// draws them, stored per vertex, and traced as it traces them (one
-// occluded() call per vertex, vertices in parallel blocks of 16).
+// The ground truth's own rays: each block of kSharedBlock vertices along the
+// Morton curve shares one sample set (draw_shared_samples), and each vertex
+// traces the set's directions above its tangent plane through the bake's
+// trace_visibility, as ground_truth_estimate does. Drawn before timing.
 class GroundTruthRays {
  public:
-  GroundTruthRays(const prt::Mesh& mesh, const prt::Environment& environment, int per_vertex,
-                  int cosine)
-      : caster_(mesh), per_vertex_(per_vertex), vertices_(mesh.vertex_count()) {
+  GroundTruthRays(const prt::Mesh& mesh, const prt::Environment& environment, int side)
+      : mesh_(mesh), caster_(mesh), order_(prt::morton_order(mesh)) {
     const prt::EnvironmentSampler sampler(environment);
-    const int side = int(std::lround(std::sqrt(cosine)));
-    origins_.resize(vertices_ * per_vertex * 3);
-    directions_.resize(origins_.size());
-    std::mt19937_64 rng(1);
-    std::uniform_real_distribution<double> jitter(0.0, 1.0);
-    for (std::size_t v = 0; v < vertices_; ++v) {
-      const prt::CosineHemisphere hemisphere(mesh.normals[v].cast<double>());
-      const Eigen::Vector3f o = mesh.positions[v] + caster_.offset() * mesh.normals[v];
-      for (int k = 0; k < per_vertex; ++k) {
-        const int stratum = k % cosine;
-        const double u1 = (stratum / side + jitter(rng)) / side;
-        const double u2 = (stratum % side + jitter(rng)) / side;
-        const Eigen::Vector3d d =
-            k < cosine ? hemisphere.sample(u1, u2) : sampler.draw(u1, u2).direction;
-        for (int c = 0; c < 3; ++c) {
-          origins_[(v * per_vertex + k) * 3 + c] = o[c];
-          directions_[(v * per_vertex + k) * 3 + c] = float(d[c]);
-        }
-      }
+    for (std::size_t b = 0; b * prt::kSharedBlock < mesh.vertex_count(); ++b) {
+      const prt::SharedSamples shared = prt::draw_shared_samples(environment, &sampler, side, 1, b);
+      std::vector<float> flat;
+      for (const Eigen::Vector3f& d : shared.directions)
+        flat.insert(flat.end(), {d.x(), d.y(), d.z()});
+      sets_.push_back(std::move(flat));
     }
   }
-  void trace() const {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices_, 16), [&](const auto& range) {
-      std::vector<std::uint8_t> escaped(static_cast<std::size_t>(per_vertex_), 0);
-      for (std::size_t v = range.begin(); v < range.end(); ++v) {
-        const std::size_t at = v * per_vertex_ * 3;
-        caster_.occluded(&origins_[at], &directions_[at], std::size_t(per_vertex_), escaped.data());
+  // The rays traced.
+  std::uint64_t trace() const {
+    std::atomic<std::uint64_t> rays{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sets_.size(), 1), [&](const auto& range) {
+      std::vector<std::uint64_t> bits;
+      for (std::size_t b = range.begin(); b < range.end(); ++b) {
+        const std::size_t first = b * prt::kSharedBlock, s = sets_[b].size() / 3;
+        const std::size_t count = std::min(mesh_.vertex_count() - first, prt::kSharedBlock);
+        bits.resize(count * prt::VisibilityBits::words_for(s));
+        rays += caster_.trace_visibility(mesh_, order_.data() + first, count, sets_[b].data(), s,
+                                         bits.data());
       }
     });
+    return rays;
   }
 
  private:
+  const prt::Mesh& mesh_;
   prt::RayCaster caster_;
-  int per_vertex_;
-  std::size_t vertices_;
-  std::vector<float> origins_, directions_;
+  std::vector<std::uint32_t> order_;
+  std::vector<std::vector<float>> sets_;  // each block's directions, xyz
 };
 
 }  // namespace
@@ -101,17 +96,24 @@ int main(int argc, char** argv) {
   const std::vector<std::uint32_t> order = morton_order(mesh);
   const bench::RawSettings anchor = bench::anchor_settings(set.size());
 
-  // Every sample is one ray (both strategies; samples rounds to whole strata).
+  // Per vertex side^2 sphere and side^2 map samples (samples rounds to whole
+  // strata); those above the tangent plane are traced.
   const int side = std::max(1, int(std::lround(std::sqrt(samples / 2))));
-  const double truth_rays = double(mesh.vertex_count()) * 2 * side * side;
-  // The ground truth's kind of rays alone (the trace share of its time):
-  // per vertex side^2 cosine and side^2 map samples, drawn before timing.
-  const GroundTruthRays rays(mesh, environment, 2 * side * side, side * side);
-  std::uint64_t anchor_rays = 0;
+  // The ground truth's kind of rays alone (the trace share of its time).
+  const GroundTruthRays rays(mesh, environment, side);
+  std::uint64_t anchor_rays = 0, estimate_rays = 0, replica_rays = 0;
   const std::vector<double> seconds = bench::alternating_medians(
-      repeats, {[&] { anchor_rays = bench::raw_trace(mesh, set, order, anchor).rays; },
-                [&] { ground_truth_radiance(mesh, environment, samples, 1, nullptr); },
-                [&] { rays.trace(); }});
+      repeats,
+      {[&] { anchor_rays = bench::raw_trace(mesh, set, order, anchor).rays; },
+       [&] { estimate_rays = ground_truth_estimate(mesh, environment, samples, 1, nullptr).rays; },
+       [&] { replica_rays = rays.trace(); }});
+  if (estimate_rays != replica_rays) {
+    std::fprintf(stderr, "bench_truth: the ground truth traced %llu rays, its replica %llu\n",
+                 static_cast<unsigned long long>(estimate_rays),
+                 static_cast<unsigned long long>(replica_rays));
+    return 2;
+  }
+  const double truth_rays = double(estimate_rays);
   const double anchor_rate = anchor_rays / seconds[0], truth_rate = truth_rays / seconds[1];
   const double ratio = anchor_rate / truth_rate;
   std::printf("mesh %s: %zu vertices; map %s; %d samples per vertex\n", mesh_file.c_str(),

@@ -110,6 +110,102 @@ TEST_CASE("ground truth handles radiance from 1e-6 to 1e6 linearly", "[ground-tr
 
 namespace {
 
+// A small HDR map: a sky whose radiance rises toward +y and a sun four
+// texels wide, 10^4 times brighter, off the poles and the seam.
+Environment sun_and_sky() {
+  const int width = 64, height = 32;
+  std::vector<float> rgb(std::size_t(3 * width * height));
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const bool sun = (x == 40 || x == 41) && (y == 9 || y == 10);
+      const float sky = 0.2f + 0.8f * float(height - y) / height;
+      for (int c = 0; c < 3; ++c)
+        rgb[std::size_t(3 * (y * width + x) + c)] =
+            sun ? 2000.0f * float(c + 1) : sky * float(3 - c);
+    }
+  return Environment::from_pixels(width, height, std::move(rgb));
+}
+
+// Unshadowed radiance / pi of a unit normal under a map, by quadrature over
+// every texel split 16 x 16 (each part weighted by its solid angle).
+Eigen::Vector3d map_quadrature(const Environment& map, const Eigen::Vector3d& normal) {
+  const int width = map.width(), height = map.height(), split = 16;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int y = 0; y < height; ++y)
+    for (int sy = 0; sy < split; ++sy) {
+      const double v0 = (y + double(sy) / split) / height, v1 = v0 + 1.0 / (split * height);
+      const double part = (std::cos(M_PI * v0) - std::cos(M_PI * v1)) * 2 * M_PI / (width * split);
+      for (int x = 0; x < width; ++x) {
+        const Eigen::Vector2d uv((x + 0.5) / width, (y + 0.5) / height);
+        const Eigen::Vector3d radiance = map.texel_radiance_at(uv).cast<double>();
+        for (int sx = 0; sx < split; ++sx) {
+          const double u = (x + (sx + 0.5) / split) / width;
+          const double cosine = equirect_direction(u, (v0 + v1) / 2).dot(normal);
+          if (cosine > 0) sum += part * cosine / M_PI * radiance;
+        }
+      }
+    }
+  return sum;
+}
+
+}  // namespace
+
+TEST_CASE("ground truth under an HDR sun converges to the map's quadrature, unbiased",
+          "[transport][ground-truth]") {
+  // On a convex object nothing is occluded: each vertex's radiance is the
+  // map's cosine-weighted integral. The shared sphere and map samples,
+  // combined by the balance heuristic, must agree on average (a wrong
+  // density or weight biases every vertex the same way) and per vertex.
+  const Mesh sphere = make_sphere(2);
+  const Environment map = sun_and_sky();
+  std::vector<Eigen::Vector3d> exact;
+  for (const Eigen::Vector3f& normal : sphere.normals)
+    exact.push_back(map_quadrature(map, normal.cast<double>()));
+  // One seed's vertices share a sample set (the sphere is one block), so
+  // their errors move together: the bias is measured over seeds.
+  const int seeds = 16;
+  const double entries = 3.0 * double(sphere.vertex_count());
+  std::vector<double> biases;
+  double mean_exact = 0, squares = 0;
+  for (const Eigen::Vector3d& e : exact) mean_exact += e.sum() / entries;
+  GroundTruthEstimate estimate;
+  for (int seed = 0; seed < seeds; ++seed) {
+    estimate = ground_truth_estimate(sphere, map, 1024, std::uint64_t(seed), nullptr);
+    double signed_sum = 0;
+    for (std::size_t v = 0; v < sphere.vertex_count(); ++v) {
+      const Eigen::Vector3d error =
+          estimate.radiance.row(Eigen::Index(v)).transpose().cast<double>() - exact[v];
+      signed_sum += error.sum(), squares += error.squaredNorm();
+    }
+    biases.push_back(signed_sum / entries / mean_exact);
+  }
+  double bias = 0, spread = 0;
+  for (double b : biases) bias += b / seeds;
+  for (double b : biases) spread += (b - bias) * (b - bias) / (seeds - 1);
+  const double standard_error = std::sqrt(spread / seeds);
+  const double rms = std::sqrt(squares / entries / seeds) / mean_exact;
+  INFO("relative bias " << bias << " +- " << standard_error << ", relative RMS " << rms);
+  CHECK(std::abs(bias) < 4 * standard_error + 1e-3);
+  CHECK(standard_error < 0.005);
+  CHECK(rms < 0.05);
+  // Only directions above each vertex's tangent plane are traced.
+  CHECK(estimate.rays < sphere.vertex_count() * 1024 * 3 / 4);
+  CHECK(estimate.rays > sphere.vertex_count() * 1024 / 4);
+}
+
+TEST_CASE("ground truth does not depend on the thread count", "[transport][ground-truth]") {
+  // Occlusion, and more vertices than one block shares a sample set.
+  const Mesh scene = test::sphere_over_plane(3, 24);
+  REQUIRE(scene.vertex_count() > 2 * kSharedBlock);
+  const Environment map = sun_and_sky();
+  const Eigen::MatrixX3f all = ground_truth_radiance(scene, map, 256, 9, nullptr);
+  tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+  CHECK(ground_truth_radiance(scene, map, 256, 9, nullptr) == all);
+  CHECK(ground_truth_radiance(scene, map, 256, 10, nullptr) != all);
+}
+
+namespace {
+
 // A closed cube [-1, 1]^3 with each face split along a diagonal.
 Mesh closed_cube() {
   Mesh cube;
