@@ -39,7 +39,7 @@ run rotation "$bin/bench_rotation" 10
 run light "$bin/bench_light" 10
 run bake_1024 "$bin/bench_bake" "$root/data/meshes/bunny00.off" 1024 10 5
 run bake_4096 "$bin/bench_bake" "$root/data/meshes/bunny00.off" 4096 10 5
-run truth "$bin/bench_truth" "$root/data/meshes/bunny00.off" "$root/data/hdri/courtyard.exr" 256 3
+run truth "$bin/bench_truth" "$root/data/meshes/bunny00.off" "$root/data/hdri/courtyard.exr" 1024 3
 run compress_diffuse "$bin/bench_compress" "$out/bunny.h5" 256 8 iterative
 run compress_glossy "$bin/bench_compress" "$out/bunny_glossy_24x25.h5" 256 8 iterative 40
 run eigen "$bin/bench_eigen"

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <optional>
 #include <random>
@@ -33,167 +34,172 @@ Eigen::Vector3d CosineHemisphere::sample(double u1, double u2) const {
 
 namespace {
 
-// Interleaves 16-bit x and y into a 32-bit Morton code.
-std::uint32_t interleave(std::uint32_t x, std::uint32_t y) {
-  auto spread = [](std::uint32_t a) {
-    a = (a | (a << 8)) & 0x00FF00FFu;
-    a = (a | (a << 4)) & 0x0F0F0F0Fu;
-    a = (a | (a << 2)) & 0x33333333u;
-    return (a | (a << 1)) & 0x55555555u;
-  };
-  return spread(x) | (spread(y) << 1);
+std::uint64_t mix(std::uint64_t z) {  // splitmix64's finaliser
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
 }
 
-// Orders a set's directions along a Morton curve of their octahedral map, so
-// that a vertex's consecutive rays leave in nearby directions and meet the
-// same parts of the BVH (as the bake's Fibonacci spiral does).
-void sort_along_sphere(SharedSamples& samples) {
-  const std::size_t s = samples.directions.size();
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed(s);
-  for (std::size_t k = 0; k < s; ++k) {
-    const Eigen::Vector3f& d = samples.directions[k];
-    const float norm = std::abs(d.x()) + std::abs(d.y()) + std::abs(d.z());
-    float x = d.x() / norm, y = d.y() / norm;
-    if (d.z() < 0) {  // fold the lower half over the diagonals
-      const float fx = (1 - std::abs(y)) * (x >= 0 ? 1.f : -1.f);
-      y = (1 - std::abs(x)) * (y >= 0 ? 1.f : -1.f), x = fx;
-    }
-    const auto cell = [](float t) {
-      return std::uint32_t(std::clamp((t + 1.f) * 32767.5f, 0.f, 65535.f));
-    };
-    keyed[k] = {interleave(cell(x), cell(y)), std::uint32_t(k)};
-  }
-  std::sort(keyed.begin(), keyed.end());
-  SharedSamples sorted{samples.local, {}, {}};
-  sorted.directions.reserve(s), sorted.weighted.reserve(s);
-  for (const auto& [key, k] : keyed)
-    sorted.directions.push_back(samples.directions[k]),
-        sorted.weighted.push_back(samples.weighted[k]);
-  samples = std::move(sorted);
-}
+// Pool entries are bounded (8 MB of directions and weights at most): very
+// large sample counts get fewer candidates per stratum.
+constexpr int kMaxCandidates = 16;
+constexpr std::size_t kMaxPoolEntries = std::size_t(1) << 18;
 
 }  // namespace
 
-SharedSamples draw_shared_samples(const Environment& environment, const EnvironmentSampler* sampler,
-                                  int side, std::uint64_t seed, std::size_t block) {
-  // Seeded per block, so results do not depend on scheduling.
-  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + block);
+void SamplePool::pick(std::uint64_t seed, std::size_t vertex, std::size_t* entries) const {
+  // A 64-bit LCG per vertex (Knuth's MMIX constants), seeded by a hash: its
+  // top bits choose each candidate (candidates is a power of two).
+  std::uint64_t state = mix(seed * 0x9E3779B97F4A7C15ull + mix(vertex + 0xD1B54A32D192ED03ull));
+  const int shift = 64 - std::countr_zero(unsigned(candidates));
+  for (int j = 0; j < strata; ++j) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const std::size_t c = candidates > 1 ? std::size_t(state >> shift) : 0;
+    entries[j] = std::size_t(j) * std::size_t(candidates) + c;
+  }
+}
+
+SamplePool draw_sample_pool(const Environment& environment, const EnvironmentSampler* sampler,
+                            int side, std::uint64_t seed) {
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 0x5851F42D4C957F2Dull);
   std::uniform_real_distribution<double> jitter(0.0, 1.0);
   const int per_strategy = side * side, strategies = sampler ? 2 : 1;
-  SharedSamples out;
+  SamplePool out;
   out.local = !sampler;
-  out.directions.reserve(std::size_t(strategies * per_strategy));
-  out.weighted.reserve(out.directions.capacity());
+  out.strata = strategies * per_strategy;
+  out.candidates = 1;  // a power of two, for pick()'s mask
+  while (out.candidates < kMaxCandidates &&
+         std::size_t(2 * out.candidates) * std::size_t(out.strata) <= kMaxPoolEntries)
+    out.candidates *= 2;
+  const std::size_t entries = std::size_t(out.strata) * std::size_t(out.candidates);
+  out.entries.reserve(entries);
   const Eigen::Index width = environment.width(), height = environment.height();
   // Balance heuristic over both strategies: f / (N p_sphere + N p_map).
   const double sphere_pdf = 1.0 / (4.0 * M_PI);
-  for (int k = 0; k < strategies * per_strategy; ++k) {
-    // Stratified in [0,1)^2 within each strategy.
-    const int stratum = k % per_strategy;
-    const double u1 = (stratum / side + jitter(rng)) / side;
-    const double u2 = (stratum % side + jitter(rng)) / side;
-    if (!sampler) {  // cosine-weighted about z, the constant map's radiance
-      const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
-      out.directions.emplace_back(float(r * std::cos(phi)), float(r * std::sin(phi)),
-                                  float(std::sqrt(1.0 - u1)));
-      out.weighted.push_back(environment.texel_radiance_at({0.5, 0.5}).cast<double>() /
-                             per_strategy);
-      continue;
+  for (int stratum = 0; stratum < out.strata; ++stratum) {
+    const int cell = stratum % per_strategy;  // its cell of [0,1)^2 in its strategy
+    for (int c = 0; c < out.candidates; ++c) {
+      const double u1 = (cell / side + jitter(rng)) / side;
+      const double u2 = (cell % side + jitter(rng)) / side;
+      if (!sampler) {  // cosine-weighted about z, the constant map's radiance
+        const double r = std::sqrt(u1), phi = 2.0 * M_PI * u2;
+        out.entries.push_back({Eigen::Vector3f(float(r * std::cos(phi)), float(r * std::sin(phi)),
+                                               float(std::sqrt(1.0 - u1))),
+                               environment.texel_radiance_at({0.5, 0.5}) / float(per_strategy)});
+        continue;
+      }
+      Eigen::Vector3d d;
+      Eigen::Index texel;
+      if (stratum < per_strategy) {  // uniform over the sphere (area-preserving map)
+        const double z = 1.0 - 2.0 * u1, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = 2.0 * M_PI * u2;
+        d = {r * std::cos(phi), r * std::sin(phi), z};
+        texel = sampler->texel_at(environment.uv_of(d));
+      } else {
+        const EnvironmentSampler::Drawn drawn = sampler->draw(u1, u2);
+        d = drawn.direction, texel = drawn.texel;
+      }
+      const Eigen::Vector2d uv((texel % width + 0.5) / width, (texel / width + 0.5) / height);
+      const double mixture = per_strategy * (sphere_pdf + sampler->density(texel));
+      out.entries.push_back(
+          {d.cast<float>(),
+           (environment.texel_radiance_at(uv).cast<double>() / (M_PI * mixture)).cast<float>()});
     }
-    Eigen::Vector3d d;
-    Eigen::Index texel;
-    if (k < per_strategy) {  // uniform over the sphere (area-preserving map)
-      const double z = 1.0 - 2.0 * u1, r = std::sqrt(std::max(0.0, 1.0 - z * z));
-      const double phi = 2.0 * M_PI * u2;
-      d = {r * std::cos(phi), r * std::sin(phi), z};
-      texel = sampler->texel_at(environment.uv_of(d));
-    } else {
-      const EnvironmentSampler::Drawn drawn = sampler->draw(u1, u2);
-      d = drawn.direction, texel = drawn.texel;
-    }
-    const Eigen::Vector2d uv((texel % width + 0.5) / width, (texel / width + 0.5) / height);
-    const double mixture = per_strategy * (sphere_pdf + sampler->density(texel));
-    out.directions.push_back(d.cast<float>());
-    out.weighted.push_back(environment.texel_radiance_at(uv).cast<double>() / (M_PI * mixture));
   }
-  if (sampler) sort_along_sphere(out);
   return out;
 }
 
 namespace {
 
-// One task's estimator of the reference at a block's vertices: each vertex
-// traces the block's shared directions above its tangent plane and sums
-// what escapes. Its buffers are reused block after block.
-class BlockEstimator {
+// One task's estimator of the reference at its vertices, kBatch at a time:
+// each vertex picks a candidate per stratum of every seed's pool, and the
+// vertices trace those above their tangent planes in one call (the bake's
+// trace, straight into Embree's stream); each seed's rays that escape are
+// summed into its own estimate. Its buffers are reused.
+class VertexEstimator {
  public:
-  BlockEstimator(const Mesh& mesh, const RayCaster& caster, const Reflectance& reflectance)
-      : mesh_(mesh), caster_(caster), reflectance_(reflectance) {}
+  static constexpr std::size_t kBatch = 16;
 
-  // Radiance of `count` vertices (rows of `out`).
-  void estimate(const std::uint32_t* vertices, std::size_t count, const SharedSamples& samples,
-                Eigen::MatrixX3f& out) {
-    if (samples.local) {
-      for (std::size_t i = 0; i < count; ++i)
-        out.row(Eigen::Index(vertices[i])) = local_radiance(vertices[i], samples).transpose();
-      return;
-    }
-    // World directions: the bake's own trace, straight into Embree's stream.
-    const std::size_t s = samples.directions.size(), words = VisibilityBits::words_for(s);
-    flat_.resize(3 * s);
-    for (std::size_t k = 0; k < s; ++k)
-      for (int c = 0; c < 3; ++c) flat_[3 * k + c] = samples.directions[k][c];
-    bits_.resize(count * words);
-    rays_ += caster_.trace_visibility(mesh_, vertices, count, flat_.data(), s, bits_.data());
-    for (std::size_t i = 0; i < count; ++i) {
-      const std::size_t v = vertices[i];
-      const Eigen::Vector3f n = mesh_.normals[v];
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (std::size_t w = 0; w < words; ++w)
-        for (std::uint64_t word = bits_[i * words + w]; word; word &= word - 1) {
-          const std::size_t k = 64 * w + std::size_t(__builtin_ctzll(word));
-          double weight = samples.directions[k].dot(n);  // escaped: above the plane
-          if (reflectance_) weight *= reflectance_(v, samples.directions[k].cast<double>());
-          sum += weight * samples.weighted[k];
-        }
-      out.row(Eigen::Index(v)) = sum.cast<float>().transpose();
-    }
+  VertexEstimator(const Mesh& mesh, const RayCaster& caster, const std::vector<SamplePool>& pools,
+                  const std::vector<std::uint64_t>& seeds, const Reflectance& reflectance)
+      : mesh_(mesh),
+        caster_(caster),
+        pools_(pools),
+        seeds_(seeds),
+        reflectance_(reflectance),
+        strata_(std::size_t(pools.front().strata)),
+        per_vertex_(strata_ * pools.size()),
+        words_(VisibilityBits::words_for(per_vertex_)),
+        picked_(kBatch * per_vertex_),
+        flat_(3 * picked_.size()),
+        bits_(kBatch * words_) {}
+
+  // Radiance of `count` <= kBatch vertices into their rows of each batch.
+  void estimate(const std::uint32_t* vertices, std::size_t count,
+                std::vector<Eigen::MatrixX3f>& out) {
+    for (std::size_t i = 0; i < count; ++i) pick(i, vertices[i]);
+    rays_ += caster_.trace_visibility(mesh_, vertices, count, flat_.data(), per_vertex_,
+                                      bits_.data(), nullptr, 3 * per_vertex_);
+    for (std::size_t i = 0; i < count; ++i) sum(i, vertices[i], out);
   }
   std::uint64_t rays() const { return rays_; }
 
  private:
-  // Cosine-weighted directions in the vertex's own frame: every one traced.
-  Eigen::Vector3f local_radiance(std::size_t v, const SharedSamples& samples) {
+  // Slot i's directions: its candidate of each stratum of each pool, in
+  // its own frame for local samples.
+  void pick(std::size_t i, std::uint32_t v) {
     const Eigen::Vector3f n = mesh_.normals[v];
-    const Eigen::Vector3f o = mesh_.positions[v] + caster_.offset() * n;
-    const CosineHemisphere hemisphere(n.cast<double>());
-    Eigen::Matrix3f frame;
-    frame << hemisphere.tangent().cast<float>(), hemisphere.bitangent().cast<float>(), n;
-    const std::size_t s = samples.directions.size();
-    origins_.resize(3 * s), flat_.resize(3 * s), escaped_.resize(s);
-    for (std::size_t k = 0; k < s; ++k) {
-      const Eigen::Vector3f d = frame * samples.directions[k];
-      for (int c = 0; c < 3; ++c) origins_[3 * k + c] = o[c], flat_[3 * k + c] = d[c];
+    Eigen::Matrix3f frame = Eigen::Matrix3f::Identity();
+    if (pools_.front().local) {
+      const CosineHemisphere hemisphere(n.cast<double>());
+      frame << hemisphere.tangent().cast<float>(), hemisphere.bitangent().cast<float>(), n;
     }
-    caster_.occluded(origins_.data(), flat_.data(), s, escaped_.data());
-    rays_ += s;
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (std::size_t k = 0; k < s; ++k) {
-      if (!escaped_[k]) continue;
-      double weight = 1.0;  // the cosine cancels its density
-      if (reflectance_)
-        weight = reflectance_(
-            v, Eigen::Vector3f(flat_[3 * k], flat_[3 * k + 1], flat_[3 * k + 2]).cast<double>());
-      sum += weight * samples.weighted[k];
+    for (std::size_t b = 0; b < pools_.size(); ++b) {
+      const std::size_t first = i * per_vertex_ + b * strata_;
+      pools_[b].pick(seeds_[b], v, &picked_[first]);
+      for (std::size_t j = 0; j < strata_; ++j) {
+        const Eigen::Vector3f& drawn = pools_[b].entries[picked_[first + j]].direction;
+        const Eigen::Vector3f d = pools_[b].local ? Eigen::Vector3f(frame * drawn) : drawn;
+        float* to = &flat_[3 * (first + j)];
+        to[0] = d.x(), to[1] = d.y(), to[2] = d.z();
+      }
     }
-    return sum.cast<float>();
+  }
+
+  // Slot i's estimate of each batch: the rays that escaped, batch b's bits
+  // from b * strata on.
+  void sum(std::size_t i, std::uint32_t v, std::vector<Eigen::MatrixX3f>& out) const {
+    const Eigen::Vector3f n = mesh_.normals[v];
+    const std::uint64_t* bits = &bits_[i * words_];
+    const std::size_t* picked = &picked_[i * per_vertex_];
+    const float* flat = &flat_[3 * i * per_vertex_];
+    std::size_t b = 0;
+    Eigen::Vector3d total = Eigen::Vector3d::Zero();
+    auto close_batches_before = [&](std::size_t k) {
+      for (; k >= (b + 1) * strata_; ++b, total.setZero())
+        out[b].row(Eigen::Index(v)) = total.cast<float>().transpose();
+    };
+    for (std::size_t w = 0; w < words_; ++w)
+      for (std::uint64_t word = bits[w]; word; word &= word - 1) {
+        const std::size_t k = 64 * w + std::size_t(std::countr_zero(word));
+        close_batches_before(k);
+        const Eigen::Vector3f d(flat[3 * k], flat[3 * k + 1], flat[3 * k + 2]);
+        // Escaped rays lie above the plane; local samples' cosine cancels their density.
+        double weight = pools_[b].local ? 1.0 : double(d.dot(n));
+        if (reflectance_) weight *= reflectance_(v, d.cast<double>());  // pi rho replaces albedo 1
+        total += weight * pools_[b].entries[picked[k]].weighted.cast<double>();
+      }
+    close_batches_before(per_vertex_);
   }
 
   const Mesh& mesh_;
   const RayCaster& caster_;
+  const std::vector<SamplePool>& pools_;
+  const std::vector<std::uint64_t>& seeds_;
   const Reflectance& reflectance_;
-  std::vector<float> origins_, flat_;
-  std::vector<std::uint8_t> escaped_;
+  std::size_t strata_, per_vertex_, words_;
+  std::vector<std::size_t> picked_;
+  std::vector<float> flat_;
   std::vector<std::uint64_t> bits_;
   std::uint64_t rays_ = 0;
 };
@@ -201,8 +207,9 @@ class BlockEstimator {
 }  // namespace
 
 GroundTruthEstimate ground_truth_estimate(const Mesh& mesh, const Environment& environment,
-                                          int samples, std::uint64_t seed, Progress* progress,
-                                          const Reflectance& reflectance) {
+                                          int samples, const std::vector<std::uint64_t>& seeds,
+                                          Progress* progress, const Reflectance& reflectance) {
+  if (seeds.empty()) throw Error("ground_truth_estimate: no seeds");
   RayCaster caster(mesh);
   const std::size_t v_count = mesh.vertex_count();
   // A constant map is sampled best by the cosine alone (zero variance); a real
@@ -212,23 +219,20 @@ GroundTruthEstimate ground_truth_estimate(const Mesh& mesh, const Environment& e
   if (use_map) sampler.emplace(environment);
   const int strategies = use_map ? 2 : 1;
   const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(samples / strategies))));
+  std::vector<SamplePool> pools;
+  for (const std::uint64_t seed : seeds)
+    pools.push_back(draw_sample_pool(environment, sampler ? &*sampler : nullptr, side, seed));
   const std::vector<std::uint32_t> order = morton_order(mesh);
-  const std::size_t blocks = (v_count + kSharedBlock - 1) / kSharedBlock;
   GroundTruthEstimate out;
-  out.radiance.resize(static_cast<Eigen::Index>(v_count), 3);
+  out.batches.assign(seeds.size(), Eigen::MatrixX3f(static_cast<Eigen::Index>(v_count), 3));
   std::atomic<std::uint64_t> rays{0};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& range) {
-    BlockEstimator estimator(mesh, caster, reflectance);
-    std::size_t done = 0;
-    for (std::size_t b = range.begin(); b < range.end(); ++b) {
-      const SharedSamples shared =
-          draw_shared_samples(environment, sampler ? &*sampler : nullptr, side, seed, b);
-      const std::size_t first = b * kSharedBlock, count = std::min(v_count - first, kSharedBlock);
-      estimator.estimate(order.data() + first, count, shared, out.radiance);
-      done += count;
-    }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, v_count, 64), [&](const auto& range) {
+    VertexEstimator estimator(mesh, caster, pools, seeds, reflectance);
+    for (std::size_t i = range.begin(); i < range.end(); i += VertexEstimator::kBatch)
+      estimator.estimate(order.data() + i, std::min(VertexEstimator::kBatch, range.end() - i),
+                         out.batches);
     rays += estimator.rays();
-    if (progress) progress->add(double(done), double(estimator.rays()));
+    if (progress) progress->add(double(range.size()), double(estimator.rays()));
   });
   out.rays = rays;
   return out;
@@ -237,7 +241,8 @@ GroundTruthEstimate ground_truth_estimate(const Mesh& mesh, const Environment& e
 Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
                                        int samples, std::uint64_t seed, Progress* progress,
                                        const Reflectance& reflectance) {
-  return ground_truth_estimate(mesh, environment, samples, seed, progress, reflectance).radiance;
+  return std::move(
+      ground_truth_estimate(mesh, environment, samples, {seed}, progress, reflectance).batches[0]);
 }
 
 }  // namespace prt

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "prt/environment.hpp"
 #include "prt/glossy.hpp"
@@ -20,12 +21,57 @@ namespace prt {
 
 namespace {
 
-// One batch's estimate: `samples` per vertex drawn with `seed`.
+// One batch's estimate: `samples` per vertex drawn with `seed`; its direct
+// light from the map (each channel material's, albedo 1) traced already.
 struct Batch {
   int samples = 0;
   std::uint64_t seed = 0;
-  std::string label;  // after each progress bar's name: " (batch 2 of 4)"
+  std::string label;                            // after each progress bar's name: " (batch 2 of 4)"
+  std::vector<const Eigen::MatrixX3f*> direct;  // per channel material
 };
+
+// Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1; the
+// frames and the views toward the camera (for the bounces too).
+struct GlossyViews {
+  std::vector<Frame> frames;
+  Eigen::MatrixXd views;
+};
+GlossyViews glossy_views(const Mesh& mesh, const Camera& camera) {
+  GlossyViews out;
+  out.frames = tangent_frames(mesh);
+  out.views = local_view_directions(mesh, out.frames, camera.position);
+  return out;
+}
+Reflectance glossy_reflectance(const Brdf& brdf, const GlossyViews& glossy) {
+  return [&brdf, &glossy](std::size_t v, const Eigen::Vector3d& light) {
+    return M_PI *
+           brdf.evaluate(glossy.frames[v] * light, glossy.views.row(Eigen::Index(v)).transpose());
+  };
+}
+
+// Every channel material's direct light from the map for every batch, in one
+// pass per material: [material][batch].
+std::vector<std::vector<Eigen::MatrixX3f>> direct_light(const SceneSpec& scene, const Mesh& mesh,
+                                                        const Environment& lighting,
+                                                        const Camera& camera,
+                                                        const RunOptions& options, int samples,
+                                                        const std::vector<std::uint64_t>& seeds) {
+  std::vector<std::vector<Eigen::MatrixX3f>> out;
+  std::optional<GlossyViews> glossy;
+  for (const ChannelMaterial& material : scene.channels().groups) {
+    Reflectance reflectance;
+    if (material.brdf.glossy()) {
+      if (!glossy) glossy = glossy_views(mesh, camera);
+      reflectance = glossy_reflectance(material.brdf, *glossy);
+    }
+    const std::string batches =
+        seeds.size() == 1 ? std::string() : " (" + std::to_string(seeds.size()) + " batches)";
+    Progress progress("ground truth" + batches, double(mesh.vertex_count()), "rays", options.quiet);
+    out.push_back(
+        ground_truth_estimate(mesh, lighting, samples, seeds, &progress, reflectance).batches);
+  }
+  return out;
+}
 
 // The irradiance the dipole scatters (E / pi): the channel's own Monte Carlo
 // radiance, or for a glossy material (whose radiance is not irradiance) a
@@ -55,33 +101,21 @@ struct ChannelEstimate {
 ChannelEstimate channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
                                      const Environment& lighting, const Camera& camera,
                                      const RunOptions& options, const ChannelMaterial& material,
-                                     const Batch& batch) {
+                                     std::size_t group, const Batch& batch) {
   const int samples = batch.samples;
   const std::uint64_t seed = batch.seed;
-  // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1.
-  Reflectance reflectance;
-  std::vector<Frame> frames;
-  Eigen::MatrixXd views;
   const Brdf& brdf = material.brdf;
-  if (brdf.glossy()) {
-    frames = tangent_frames(mesh);
-    views = local_view_directions(mesh, frames, camera.position);
-    reflectance = [&](std::size_t v, const Eigen::Vector3d& light) {
-      return M_PI * brdf.evaluate(frames[v] * light, views.row(Eigen::Index(v)).transpose());
-    };
-  }
-  Eigen::MatrixX3f radiance;
-  {
-    Progress progress("ground truth" + batch.label, double(mesh.vertex_count()), "rays",
-                      options.quiet);
-    radiance = ground_truth_radiance(mesh, lighting, samples, seed, &progress, reflectance);
-  }
+  std::optional<GlossyViews> glossy;
+  Reflectance reflectance;
+  if (brdf.glossy())
+    glossy = glossy_views(mesh, camera), reflectance = glossy_reflectance(brdf, *glossy);
+  Eigen::MatrixX3f radiance = *batch.direct[group];
   if (const int bounces = static_cast<int>(keys::transport::bounces(scene.transport));
       bounces > 0) {
     if (brdf.glossy()) {  // view-dependent: paths from each vertex
       Progress progress("ground truth glossy bounces" + batch.label, double(mesh.vertex_count()),
                         "rays", options.quiet);
-      radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, views, bounces,
+      radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, glossy->views, bounces,
                                               material.bounce_albedo, samples, seed, &progress);
     } else {
       Progress progress("ground truth bounces" + batch.label, double(mesh.vertex_count()) * bounces,
@@ -117,7 +151,7 @@ SceneEstimate scene_estimate(const SceneSpec& scene, const Mesh& mesh, const Env
   out.radiance.resize(static_cast<Eigen::Index>(mesh.vertex_count()), 3);
   for (std::size_t g = 0; g < channels.groups.size(); ++g) {
     ChannelEstimate truth =
-        channel_ground_truth(scene, mesh, lighting, camera, options, channels.groups[g], batch);
+        channel_ground_truth(scene, mesh, lighting, camera, options, channels.groups[g], g, batch);
     for (int c = 0; c < 3; ++c)
       if (channels.group_of_channel[std::size_t(c)] == static_cast<int>(g))
         out.radiance.col(c) = truth.radiance.col(c);
@@ -174,9 +208,8 @@ std::uint64_t batch_seed(std::uint64_t seed, int batch) {
 std::string reference_key(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
                           const Camera& camera, int samples) {
   ReferenceKey key;
-  // v3: sample sets shared by blocks of kSharedBlock vertices (issue 42).
-  key.add("prt reference v3: batches " + std::to_string(kReferenceBatches) + ", blocks of " +
-          std::to_string(kSharedBlock));
+  // v3: each stratum's sample picked from a pool drawn once (issue 42).
+  key.add("prt reference v3: batches " + std::to_string(kReferenceBatches) + ", sample pools");
   key.add(mesh.positions.data(), mesh.positions.size() * sizeof(mesh.positions[0]));
   key.add(mesh.normals.data(), mesh.normals.size() * sizeof(mesh.normals[0]));
   key.add(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
@@ -206,13 +239,18 @@ Reference traced_reference(const SceneSpec& scene, const Mesh& mesh, const Envir
   out.samples = samples;
   out.batches = std::min(kReferenceBatches, samples);
   const auto rows = static_cast<Eigen::Index>(mesh.vertex_count());
+  std::vector<std::uint64_t> seeds;
+  for (int b = 0; b < out.batches; ++b) seeds.push_back(batch_seed(seed, b));
+  const std::vector<std::vector<Eigen::MatrixX3f>> direct =
+      direct_light(scene, mesh, lighting, camera, options, samples / out.batches, seeds);
   std::vector<SceneEstimate> estimates;
   for (int b = 0; b < out.batches; ++b) {
     const std::string label = out.batches == 1 ? std::string()
                                                : " (batch " + std::to_string(b + 1) + " of " +
                                                      std::to_string(out.batches) + ")";
-    estimates.push_back(scene_estimate(scene, mesh, lighting, camera, options,
-                                       {samples / out.batches, batch_seed(seed, b), label}));
+    Batch batch{samples / out.batches, seeds[std::size_t(b)], label, {}};
+    for (const auto& material : direct) batch.direct.push_back(&material[std::size_t(b)]);
+    estimates.push_back(scene_estimate(scene, mesh, lighting, camera, options, batch));
   }
   add_dipole_terms(scene, mesh, options, estimates);
   Eigen::MatrixX3d sum = Eigen::MatrixX3d::Zero(rows, 3), squares = sum;

@@ -147,8 +147,8 @@ void RayCaster::intersect(const Mesh& mesh, const float* origins, const float* d
 
 std::uint64_t RayCaster::trace_visibility(const Mesh& mesh, const std::uint32_t* vertices,
                                           std::size_t count, const float* directions, std::size_t s,
-                                          std::uint64_t* bits,
-                                          std::vector<SurfaceHit>* hits) const {
+                                          std::uint64_t* bits, std::vector<SurfaceHit>* hits,
+                                          std::size_t direction_stride) const {
   const FlushDenormals flush_denormals;
   constexpr unsigned kChunk = 1024;
   const std::size_t words = VisibilityBits::words_for(s);
@@ -186,8 +186,9 @@ std::uint64_t RayCaster::trace_visibility(const Mesh& mesh, const std::uint32_t*
   for (std::size_t slot = 0; slot < count; ++slot) {
     const Eigen::Vector3f n = mesh.normals[vertices[slot]];
     const Eigen::Vector3f o = mesh.positions[vertices[slot]] + offset_ * n;
+    const float* own = directions + slot * direction_stride;
     for (std::size_t k = 0; k < s; ++k) {
-      const float* d = directions + 3 * k;
+      const float* d = own + 3 * k;
       if (n.x() * d[0] + n.y() * d[1] + n.z() * d[2] <= 0.f) continue;
       if (hits)
         fill_ray_hit(ray_hits[filled], o.data(), d);

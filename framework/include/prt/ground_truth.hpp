@@ -28,49 +28,58 @@ class CosineHemisphere {
 
 // Ground truth: per-vertex exit radiance (v x 3) for albedo 1, by Monte Carlo
 // over the environment with ray-cast visibility; no basis involved.
-// Vertices are taken in blocks of kSharedBlock along a Morton curve, and a
-// block shares one stratified sample set (SharedSamples): under a constant
-// map cosine-weighted directions in each vertex's frame (exact on a convex
-// object), under a real map uniform-sphere and map-importance directions
-// combined by the balance heuristic, drawn and looked up in the map once per
-// block. Each vertex traces those above its tangent plane: nearby origins
-// along the same directions, coherent rays as the bake's. A block's error is
-// correlated; batches with other seeds are independent.
+// Samples are stratified, and each stratum's sample is one of a pool of
+// candidates drawn (and looked up in the map) once per call (SamplePool):
+// under a constant map cosine-weighted directions in each vertex's frame
+// (exact on a convex object), under a real map uniform-sphere and
+// map-importance directions combined by the balance heuristic. Each vertex
+// picks a candidate per stratum from a random stream seeded by the seed and
+// the vertex, and traces those above its tangent plane; vertices go along a
+// Morton curve, so consecutive ones send rays from nearby origins into the
+// same strata. Two vertices share a stratum's sample with probability
+// 1 / candidates: their errors are nearly independent and show no pattern.
 // For glossy materials `reflectance` (optional) gives pi * rho(in, out) at a
 // vertex for a world light direction, which replaces albedo 1.
 class Environment;
 class EnvironmentSampler;
 using Reflectance = std::function<double(std::size_t vertex, const Eigen::Vector3d& light)>;
 
+// Independent estimates, one per seed, traced together: each vertex's rays
+// of every batch in one call, so each origin's walk down the BVH serves them
+// all, over one BVH (built here).
 struct GroundTruthEstimate {
-  Eigen::MatrixX3f radiance;  // v x 3
-  std::uint64_t rays = 0;     // occlusion rays traced
+  std::vector<Eigen::MatrixX3f> batches;  // v x 3 per seed
+  std::uint64_t rays = 0;                 // occlusion rays traced
 };
 GroundTruthEstimate ground_truth_estimate(const Mesh& mesh, const Environment& environment,
-                                          int samples, std::uint64_t seed, Progress* progress,
+                                          int samples, const std::vector<std::uint64_t>& seeds,
+                                          Progress* progress,
                                           const Reflectance& reflectance = nullptr);
-// Its radiance alone.
+// One batch's radiance.
 Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
                                        int samples, std::uint64_t seed, Progress* progress,
                                        const Reflectance& reflectance = nullptr);
 
-// Vertices that share one sample set.
-constexpr std::size_t kSharedBlock = 256;
-
-// One block's samples. `local`: directions in each vertex's frame (x, y
-// tangent, z normal), each carrying `weighted` = L / N (the cosine cancels
-// its density); otherwise world directions, each carrying
+// The candidates of every stratum. `local`: directions in each vertex's frame
+// (x, y tangent, z normal), each carrying `weighted` = L / N (the cosine
+// cancels its density); otherwise world directions, each carrying
 // L / (pi (N_sphere p_sphere + N_map p_map)), to be multiplied by the
-// vertex's cosine.
-struct SharedSamples {
+// vertex's cosine. Entry (stratum, candidate) is at stratum * candidates +
+// candidate.
+struct SamplePool {
   bool local = false;
-  std::vector<Eigen::Vector3f> directions;
-  std::vector<Eigen::Vector3d> weighted;
+  int strata = 0, candidates = 0;
+  struct Entry {
+    Eigen::Vector3f direction, weighted;  // together: one load from the pool
+  };
+  std::vector<Entry> entries;
+  // The entries vertex v uses, one per stratum, into entries[0, strata).
+  void pick(std::uint64_t seed, std::size_t vertex, std::size_t* entries) const;
 };
-// The set of block `block` of a run with `seed`: side^2 strata per strategy
-// (a null sampler: the cosine strategy alone, for a constant map).
-SharedSamples draw_shared_samples(const Environment& environment, const EnvironmentSampler* sampler,
-                                  int side, std::uint64_t seed, std::size_t block);
+// The pool of a run with `seed`: side^2 strata per strategy (a null sampler:
+// the cosine strategy alone, for a constant map), up to 64 candidates each.
+SamplePool draw_sample_pool(const Environment& environment, const EnvironmentSampler* sampler,
+                            int side, std::uint64_t seed);
 
 }  // namespace prt
 

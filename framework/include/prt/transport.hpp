@@ -80,9 +80,13 @@ class RayCaster {
   // Embree's stream, with no intermediate arrays. With `hits` (one list per
   // vertex slot), blocked rays are intersected instead and their front-face
   // hits recorded, for inter-reflection. Returns the rays cast.
+  // `direction_stride` > 0: each vertex slot has its own s directions, slot
+  // i's from directions + i * direction_stride floats (the ground truth's
+  // per-vertex samples); 0: all share one set.
   std::uint64_t trace_visibility(const Mesh& mesh, const std::uint32_t* vertices, std::size_t count,
                                  const float* directions, std::size_t s, std::uint64_t* bits,
-                                 std::vector<SurfaceHit>* hits = nullptr) const;
+                                 std::vector<SurfaceHit>* hits = nullptr,
+                                 std::size_t direction_stride = 0) const;
 
  private:
   struct Impl;
