@@ -6,6 +6,7 @@
 
 #include "../common/scenes.hpp"
 #include "prt/environment.hpp"
+#include "prt/environment_sampler.hpp"
 #include "prt/ground_truth.hpp"
 #include "prt/mesh.hpp"
 #include "prt/sh.hpp"
@@ -196,6 +197,26 @@ TEST_CASE("ground truth under an HDR sun converges to the map's quadrature, unbi
   CHECK(estimate.rays > sphere.vertex_count() * 1024 * seeds / 4);
   // A batch is the same traced alone or beside others.
   CHECK(ground_truth_radiance(sphere, map, 1024, 3, nullptr) == estimate.batches[3]);
+}
+
+TEST_CASE("ground truth at 1 and 400,000 samples per vertex stays finite and bounded",
+          "[transport][ground-truth][extremes]") {
+  const Mesh sphere = make_sphere(0);
+  const Environment map = sun_and_sky();
+  const EnvironmentSampler sampler(map);
+  for (int samples : {1, 400000}) {
+    const Eigen::MatrixX3f radiance = ground_truth_radiance(sphere, map, samples, 2, nullptr);
+    CHECK(radiance.allFinite());
+    CHECK(radiance.minCoeff() >= 0.0f);
+    // Large counts get fewer candidates (down to one), so a pool stays a
+    // few MB beyond its strata.
+    const SamplePool pool = draw_sample_pool(map, &sampler, int(std::sqrt(samples / 2)) + 1, 2);
+    CHECK(pool.candidates == (samples == 1 ? 16 : 1));
+    CHECK(pool.entries.size() == std::size_t(pool.strata) * std::size_t(pool.candidates));
+  }
+  const Eigen::Vector3d exact = map_quadrature(map, sphere.normals[0].cast<double>());
+  const Eigen::Vector3f many = ground_truth_radiance(sphere, map, 400000, 2, nullptr).row(0);
+  CHECK((many.cast<double>() - exact).norm() < 0.01 * exact.norm());
 }
 
 TEST_CASE("ground truth does not depend on the thread count", "[transport][ground-truth]") {

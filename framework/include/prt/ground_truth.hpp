@@ -77,7 +77,7 @@ struct SamplePool {
   void pick(std::uint64_t seed, std::size_t vertex, std::size_t* entries) const;
 };
 // The pool of a run with `seed`: side^2 strata per strategy (a null sampler:
-// the cosine strategy alone, for a constant map), up to 64 candidates each.
+// the cosine strategy alone, for a constant map), up to 16 candidates each.
 SamplePool draw_sample_pool(const Environment& environment, const EnvironmentSampler* sampler,
                             int side, std::uint64_t seed);
 
