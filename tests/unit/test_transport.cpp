@@ -98,6 +98,14 @@ TEST_CASE("ground truth under constant unit light is exactly 1 on a convex objec
   Mesh inside_out = make_box();
   for (auto& n : inside_out.normals) n = -n;
   CHECK(ground_truth_radiance(inside_out, white, 64, 1, nullptr).cwiseAbs().maxCoeff() == 0.0f);
+  // A vertex without a normal (a degenerate mesh) gets zero, not NaN, under
+  // either kind of map.
+  Mesh degenerate = make_sphere(0);
+  degenerate.normals[0] = Eigen::Vector3f::Zero();
+  const Eigen::MatrixX3f local = ground_truth_radiance(degenerate, white, 64, 1, nullptr);
+  CHECK(local.allFinite());
+  CHECK(local.row(0).isZero());
+  CHECK(local.row(1).minCoeff() > 0.99f);
 }
 
 TEST_CASE("ground truth handles radiance from 1e-6 to 1e6 linearly", "[ground-truth][extremes]") {
