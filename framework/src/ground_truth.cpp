@@ -42,8 +42,9 @@ std::uint64_t mix(std::uint64_t z) {  // splitmix64's finaliser
 
 // 16 candidates: two vertices share a stratum's sample with probability
 // 1/16, and a batch's pool (93 KB at 256 samples) stays in cache while
-// vertices pick from it (64 measured 10% slower). Entries are bounded (6 MB
-// a pool): very large sample counts get fewer candidates per stratum.
+// vertices pick from it (64 measured 10% slower). Large sample counts get
+// fewer candidates, down to one per stratum once strata pass 2^17 (a pool
+// then holds its strata alone: 6 MB at the scene key's 1,048,576 samples).
 constexpr int kMaxCandidates = 16;
 constexpr std::size_t kMaxPoolEntries = std::size_t(1) << 18;
 
@@ -120,8 +121,9 @@ namespace {
 // summed into its own estimate. Its buffers are reused.
 class VertexEstimator {
  public:
-  // Vertices a call: 16, fewer where their rays would pass 65,536 (the
-  // buffers stay ~1 MB a thread at any sample count).
+  // Vertices a call: 16, fewer where their rays would pass 65,536, so the
+  // buffers stay ~1 MB a task up to that many rays a vertex (one vertex's
+  // own beyond: 21 MB at 1,048,576 samples).
   static std::size_t vertices_per_call(std::size_t rays_per_vertex) {
     return std::clamp<std::size_t>(65536 / std::max<std::size_t>(1, rays_per_vertex), 1, 16);
   }

@@ -104,6 +104,10 @@ int main(int argc, char** argv) {
 
   const Mesh mesh = load_mesh(mesh_file);
   Environment environment = Environment::load(map_file);
+  if (environment.width() * environment.height() <= 1) {  // its replica draws map pools
+    std::fprintf(stderr, "bench_truth: %s: needs a map of more than one texel\n", map_file.c_str());
+    return 2;
+  }
   environment.set_rotation(rotation_about_up(90.0));  // as scenes/bunny.toml
   const DirectionSet set = DirectionSet::fibonacci(1024);
   const std::vector<std::uint32_t> order = morton_order(mesh);
