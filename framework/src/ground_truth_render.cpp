@@ -21,15 +21,6 @@ namespace prt {
 
 namespace {
 
-// One batch's estimate: `samples` per vertex drawn with `seed`; its direct
-// light from the map (each channel material's, albedo 1) traced already.
-struct Batch {
-  int samples = 0;
-  std::uint64_t seed = 0;
-  std::string label;                            // after each progress bar's name: " (batch 2 of 4)"
-  std::vector<const Eigen::MatrixX3f*> direct;  // per channel material
-};
-
 // Glossy: pi rho(light, view) in each vertex's frame replaces albedo 1; the
 // frames and the views toward the camera (for the bounces too).
 struct GlossyViews {
@@ -49,21 +40,27 @@ Reflectance glossy_reflectance(const Brdf& brdf, const GlossyViews& glossy) {
   };
 }
 
+// One batch's estimate: `samples` per vertex drawn with `seed`; its direct
+// light from the map (each channel material's, albedo 1) traced already.
+struct Batch {
+  int samples = 0;
+  std::uint64_t seed = 0;
+  std::string label;                            // after each progress bar's name: " (batch 2 of 4)"
+  std::vector<const Eigen::MatrixX3f*> direct;  // per channel material
+  const GlossyViews* glossy = nullptr;          // where a material is glossy
+};
+
 // Every channel material's direct light from the map for every batch, in one
 // pass per material: [material][batch].
 std::vector<std::vector<Eigen::MatrixX3f>> direct_light(const SceneSpec& scene, const Mesh& mesh,
                                                         const Environment& lighting,
-                                                        const Camera& camera,
                                                         const RunOptions& options, int samples,
-                                                        const std::vector<std::uint64_t>& seeds) {
+                                                        const std::vector<std::uint64_t>& seeds,
+                                                        const GlossyViews* glossy) {
   std::vector<std::vector<Eigen::MatrixX3f>> out;
-  std::optional<GlossyViews> glossy;
   for (const ChannelMaterial& material : scene.channels().groups) {
     Reflectance reflectance;
-    if (material.brdf.glossy()) {
-      if (!glossy) glossy = glossy_views(mesh, camera);
-      reflectance = glossy_reflectance(material.brdf, *glossy);
-    }
+    if (material.brdf.glossy()) reflectance = glossy_reflectance(material.brdf, *glossy);
     const std::string batches =
         seeds.size() == 1 ? std::string() : " (" + std::to_string(seeds.size()) + " batches)";
     Progress progress("ground truth" + batches, double(mesh.vertex_count()), "rays", options.quiet);
@@ -99,23 +96,21 @@ struct ChannelEstimate {
 
 // The ground truth (albedo 1) of one colour channel's material, one batch.
 ChannelEstimate channel_ground_truth(const SceneSpec& scene, const Mesh& mesh,
-                                     const Environment& lighting, const Camera& camera,
-                                     const RunOptions& options, const ChannelMaterial& material,
-                                     std::size_t group, const Batch& batch) {
+                                     const Environment& lighting, const RunOptions& options,
+                                     const ChannelMaterial& material, std::size_t group,
+                                     const Batch& batch) {
   const int samples = batch.samples;
   const std::uint64_t seed = batch.seed;
   const Brdf& brdf = material.brdf;
-  std::optional<GlossyViews> glossy;
-  Reflectance reflectance;
-  if (brdf.glossy())
-    glossy = glossy_views(mesh, camera), reflectance = glossy_reflectance(brdf, *glossy);
+  const Reflectance reflectance =
+      brdf.glossy() ? glossy_reflectance(brdf, *batch.glossy) : Reflectance();
   Eigen::MatrixX3f radiance = *batch.direct[group];
   if (const int bounces = static_cast<int>(keys::transport::bounces(scene.transport));
       bounces > 0) {
     if (brdf.glossy()) {  // view-dependent: paths from each vertex
       Progress progress("ground truth glossy bounces" + batch.label, double(mesh.vertex_count()),
                         "rays", options.quiet);
-      radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, glossy->views, bounces,
+      radiance += ground_truth_glossy_bounces(mesh, lighting, brdf, batch.glossy->views, bounces,
                                               material.bounce_albedo, samples, seed, &progress);
     } else {
       Progress progress("ground truth bounces" + batch.label, double(mesh.vertex_count()) * bounces,
@@ -144,14 +139,14 @@ struct SceneEstimate {
 };
 
 SceneEstimate scene_estimate(const SceneSpec& scene, const Mesh& mesh, const Environment& lighting,
-                             const Camera& camera, const RunOptions& options, const Batch& batch) {
+                             const RunOptions& options, const Batch& batch) {
   // One Monte Carlo run per distinct channel material; each channel takes its own.
   const MaterialChannels channels = scene.channels();
   SceneEstimate out;
   out.radiance.resize(static_cast<Eigen::Index>(mesh.vertex_count()), 3);
   for (std::size_t g = 0; g < channels.groups.size(); ++g) {
     ChannelEstimate truth =
-        channel_ground_truth(scene, mesh, lighting, camera, options, channels.groups[g], g, batch);
+        channel_ground_truth(scene, mesh, lighting, options, channels.groups[g], g, batch);
     for (int c = 0; c < 3; ++c)
       if (channels.group_of_channel[std::size_t(c)] == static_cast<int>(g))
         out.radiance.col(c) = truth.radiance.col(c);
@@ -241,16 +236,21 @@ Reference traced_reference(const SceneSpec& scene, const Mesh& mesh, const Envir
   const auto rows = static_cast<Eigen::Index>(mesh.vertex_count());
   std::vector<std::uint64_t> seeds;
   for (int b = 0; b < out.batches; ++b) seeds.push_back(batch_seed(seed, b));
+  // Frames and views once, for every glossy material and batch.
+  std::optional<GlossyViews> glossy;
+  for (const ChannelMaterial& material : scene.channels().groups)
+    if (material.brdf.glossy() && !glossy) glossy = glossy_views(mesh, camera);
+  const GlossyViews* views = glossy ? &*glossy : nullptr;
   const std::vector<std::vector<Eigen::MatrixX3f>> direct =
-      direct_light(scene, mesh, lighting, camera, options, samples / out.batches, seeds);
+      direct_light(scene, mesh, lighting, options, samples / out.batches, seeds, views);
   std::vector<SceneEstimate> estimates;
   for (int b = 0; b < out.batches; ++b) {
     const std::string label = out.batches == 1 ? std::string()
                                                : " (batch " + std::to_string(b + 1) + " of " +
                                                      std::to_string(out.batches) + ")";
-    Batch batch{samples / out.batches, seeds[std::size_t(b)], label, {}};
+    Batch batch{samples / out.batches, seeds[std::size_t(b)], label, {}, views};
     for (const auto& material : direct) batch.direct.push_back(&material[std::size_t(b)]);
-    estimates.push_back(scene_estimate(scene, mesh, lighting, camera, options, batch));
+    estimates.push_back(scene_estimate(scene, mesh, lighting, options, batch));
   }
   add_dipole_terms(scene, mesh, options, estimates);
   Eigen::MatrixX3d sum = Eigen::MatrixX3d::Zero(rows, 3), squares = sum;

@@ -21,7 +21,7 @@ class EnvironmentSampler {
   // Maps two uniform numbers in [0, 1) to a direction.
   Sample sample(double u1, double u2) const;
   // The same without its density, which density(texel) reads later (a
-  // caller that draws many samples first and prefetches their texels).
+  // caller that draws many samples first).
   struct Drawn {
     Eigen::Vector3d direction;
     Eigen::Index texel;  // y width + x
@@ -32,10 +32,6 @@ class EnvironmentSampler {
   Eigen::Index texel_at(const Eigen::Vector2d& uv) const;
   double density(Eigen::Index texel) const {
     return texel_probability_[std::size_t(texel)] / texel_solid_angle_[std::size_t(texel / width_)];
-  }
-  // Asks the memory for a texel's density, to be read soon.
-  void prefetch(Eigen::Index texel) const {
-    __builtin_prefetch(&texel_probability_[std::size_t(texel)]);
   }
   // Density of sample() at a world direction.
   double pdf(const Eigen::Vector3d& direction) const;
