@@ -9,6 +9,7 @@
 
 #include "image_outputs.hpp"
 #include "prt/bake_file.hpp"
+#include "prt/mesh_compose.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/image_metrics.hpp"
@@ -171,7 +172,8 @@ int render(Context& context, const RenderArgs& args) {
 
   Rendered result;
   if (args.ground_truth) {
-    const Mesh mesh = scene.load_mesh();
+    Mesh mesh = scene.load_mesh();
+    if (scene.has_moving()) append(mesh, scene.load_moving());  // a probe scene's object
     result = render_ground_truth(scene, mesh, context.registry, {context.quiet}, times, nullptr,
                                  reference_cache(args.reference).get());
   } else {
@@ -179,6 +181,10 @@ int render(Context& context, const RenderArgs& args) {
     const BakeData data = read_bake(bake_file);
     check_bake_records(bake_file.string(), data, context.registry);
     times.add("read bake file", clock.seconds());
+    if (args.compare && data.receivers.probes())
+      throw Error(bake_file.string() + ": --compare measures transfer at vertices; for probes, "
+                                       "`prt probes " + args.scene + "` measures the moving object "
+                                       "against its ground truth");
     result = render(scene, data, context.registry, times, {context.quiet});
     if (args.compare) compare_with_truth(context, args, scene, data, result, times, output);
   }

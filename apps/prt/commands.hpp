@@ -37,6 +37,14 @@ struct RenderArgs {
 };
 int render(Context& context, const RenderArgs& args);
 
+// prt probes: probes.cpp.
+struct ProbesArgs {
+  std::string scene, bake, out;
+  std::vector<std::string> at;  // x,y,z positions of the moving object
+  ReferenceArgs reference;
+};
+int probes(Context& context, const ProbesArgs& args);
+
 struct CompressArgs {
   std::string bake, output, compressor;  // no default: the one default is the scene's ("none")
   std::vector<std::string> parameters;   // key=value

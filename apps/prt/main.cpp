@@ -181,6 +181,24 @@ Command compare_command(CLI::App& app) {
           [args](prt::cli::Context& context) { return prt::cli::compare_bases(context, *args); }};
 }
 
+// prt probes
+Command probes_command(CLI::App& app) {
+  auto args = std::make_shared<prt::cli::ProbesArgs>();
+  auto* command = app.add_subcommand(
+      "probes", "shade a probe scene's moving object from its probes, with and without the leak "
+                "control, against the ground truth");
+  command->add_option("scene", args->scene, "scene description with [receivers] kind = \"probes\"")
+      ->required();
+  command->add_option("-b,--bake", args->bake, "bake file (default: from the scene)");
+  command->add_option("--at", args->at,
+                      "x,y,z: where the moving object's bottom centre goes (repeatable; default: "
+                      "the scene's [moving] position)");
+  command->add_option("--out", args->out,
+                      "folder for images of each position: leak control, trilinear, truth");
+  add_reference_options(command, args->reference);
+  return {command, [args](prt::cli::Context& context) { return prt::cli::probes(context, *args); }};
+}
+
 // prt subdivide
 Command subdivide_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::SubdivideArgs>();
@@ -264,7 +282,8 @@ int main(int argc, char** argv) {
   const std::vector<Command> commands{
       bake_command(app),  render_command(app),    compress_command(app),   analyze_command(app),
       bench_command(app), stability_command(app), image_diff_command(app), compare_command(app),
-      info_command(app),  plugins_command(app),   subdivide_command(app),  demo_command(app)};
+      info_command(app),  plugins_command(app),   subdivide_command(app),  demo_command(app),
+      probes_command(app)};
   CLI11_PARSE(app, argc, argv);
   prt::Progress::set_enabled(!quiet);
   try {

@@ -11,6 +11,7 @@
 #include "prt/communicator_parts.hpp"
 #include "prt/compressor.hpp"
 #include "prt/memory.hpp"
+#include "prt/probe_transfer.hpp"
 #include "prt/progress.hpp"
 #include "prt/rendered_metric.hpp"
 #include "prt/transport.hpp"
@@ -187,6 +188,89 @@ void describe(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& 
   }
 }
 
+// Stage 3 and the file's record of it: the transfer compressed (or kept
+// exact), measured, reported. `receivers`: the compressor's mesh, one vertex
+// per row (clustering may use their positions and triangles).
+void compress_into(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
+                   const TransferSignal& transfer, const Mesh& receivers,
+                   const Distribution& where, StageTimes& times, BakeData& data) {
+  Stopwatch clock;
+  // Compression minimises the error of what is rendered (after a fit: the
+  // fitted basis's metric; at probes, the incident light's coefficients).
+  const RenderedMetric metric = data.receivers.probes() ? RenderedMetric{} : rendered_metric(plan);
+  data.compressed = options.compress || plan.sparse_terms > 0
+                        ? compress_stage(plan, transfer, receivers, scene.compressor.where, metric,
+                                         where)
+                        : exact_form(transfer);
+  const double encode_seconds = clock.seconds();
+  times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
+  const CompressionReport report =
+      measure(transfer, data.compressed, &receivers, encode_seconds, where, &metric);
+  record(report, data.metrics);
+  std::string text = report.text();
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  options.message(text);
+  data.metrics["squared_error"] = report.squared_error;
+  data.metrics["stored_floats"] = data.compressed.stored_floats();
+}
+
+// Probes: the grid over the scene's bounds traced over the whole sphere
+// (docs/receivers.md). One process, no checkpoint: a grid traces in seconds.
+BakeData bake_probes(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
+                     StageTimes& times) {
+  const SourceLocation where = scene.receivers.location(keys::receivers::kind.name());
+  if (options.comm && options.comm->size() > 1)
+    throw Error(where, "section [receivers]: a distributed bake of probes is not built yet; bake "
+                       "it with prt bake");
+  if (plan.fit)
+    throw Error(scene.basis.where, "basis \"" + plan.basis_record.name +
+                                       "\" is fitted to the visibility at vertices; probes take "
+                                       "a basis that needs no fit");
+  Stopwatch clock;
+  BakeData data;
+  data.mesh = scene.load_mesh();
+  times.add("load mesh", clock.seconds());
+  clock = Stopwatch();
+  const DirectionSet set = scene.directions();
+  ProbeGrid grid;
+  try {
+    grid = probe_grid_over(data.mesh.bounds_min(), data.mesh.bounds_max(),
+                           float(keys::receivers::spacing(scene.receivers)));
+  } catch (const Error& e) {
+    throw Error(scene.receivers.location(keys::receivers::spacing.name()), e.what());
+  }
+  const RayCaster caster(data.mesh);
+  times.add("directions + ray structure", clock.seconds());
+  clock = Stopwatch();
+  Progress progress("bake probes", double(grid.count()), plan.shadowed ? "rays" : "",
+                    options.quiet);
+  ProbeTransfer traced =
+      probe_transfer(caster, data.mesh, grid, set, *plan.basis,
+                     keys::receivers::invalid_fraction(scene.receivers), plan.shadowed, &progress);
+  progress.finish();
+  times.add("trace probes", clock.seconds());
+  data.receivers.kind = "probes";
+  data.receivers.grid = grid;
+  data.receivers.valid = traced.valid;
+  const std::size_t invalid =
+      std::size_t(std::count(traced.valid.begin(), traced.valid.end(), std::uint8_t(0)));
+  options.message(std::to_string(grid.count()) + " probes (" + std::to_string(grid.counts[0]) +
+                  " x " + std::to_string(grid.counts[1]) + " x " +
+                  std::to_string(grid.counts[2]) + ", spacing " +
+                  std::to_string(grid.spacing) + "), " + std::to_string(invalid) +
+                  " inside geometry");
+  Mesh points;  // the probes as the compressor's receivers: positions, no triangles
+  for (std::size_t p = 0; p < grid.count(); ++p) points.positions.push_back(grid.position(p));
+  points.normals.assign(points.positions.size(), Eigen::Vector3f::Zero());
+  compress_into(scene, plan, options, traced.transfer, points,
+                Distribution::whole_signal(traced.transfer.vertices()), times, data);
+  data.transfer = std::move(traced.transfer);
+  describe(scene, plan, set, options, data);
+  data.metrics["rays_cast"] = double(traced.rays_cast);
+  data.metrics["probes_invalid"] = double(invalid);
+  return data;
+}
+
 }  // namespace
 
 BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions& options,
@@ -199,6 +283,7 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
 
 BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
               StageTimes& times) {
+  if (scene.probes()) return bake_probes(scene, plan, options, times);
   Stopwatch clock;
   BakeData data;
   data.mesh = scene.load_mesh();

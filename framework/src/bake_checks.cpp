@@ -39,6 +39,11 @@ void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
                     material + "\" with " + std::to_string(bounces) + " bounces; bake again");
   check_plugin_matches(data.basis, scene.basis, "basis");
   if (scene.glossy()) check_plugin_matches(data.exit, scene.exit, "exit basis");
+  if (data.receivers.probes() != scene.probes())
+    throw Error(scene.receivers.location(),
+                "the bake file holds transfer at " + data.receivers.kind +
+                    ", but the scene asks for " + keys::receivers::kind(scene.receivers) +
+                    "; bake again");
 }
 
 void check_bake_dimension(const BakeData& data, const Basis& basis) {

@@ -32,14 +32,20 @@ void write_bake_to(const fs::path& temporary, const fs::path& file, const BakeDa
 void write_bake(const fs::path& file, const BakeData& data) {
   H5::Exception::dontPrint();
   data.mesh.validate("bake data");
-  data.compressed.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
+  const auto rows = static_cast<Eigen::Index>(data.receiver_count());
+  if (data.receivers.probes()) {
+    check_probe_grid(data.receivers.grid, data.receivers.valid.size(), file.string());
+    check_probe_grid(data.receivers.grid, std::size_t(rows), file.string());
+  }
+  data.compressed.validate(rows);
   const bool streamed = data.streamed_transfer.rows > 0;
   const Eigen::Index transfer_rows =
       streamed ? data.streamed_transfer.rows : data.transfer.vertices();
   const Eigen::Index transfer_cols =
       streamed ? data.streamed_transfer.cols : data.transfer.dimension();
-  if (transfer_rows != static_cast<Eigen::Index>(data.mesh.vertex_count()))
-    throw Error(file.string() + ": transfer rows do not match the mesh's vertices");
+  if (transfer_rows != rows)
+    throw Error(file.string() + ": transfer rows do not match the " +
+                (data.receivers.probes() ? "probes" : "mesh's vertices"));
   const TransferSignal& t = data.transfer;
   bool channels_ok = t.channel_groups >= 1 && t.channel_groups <= 3 && t.exit_rows >= 1 &&
                      transfer_cols % (Eigen::Index(t.exit_rows) * t.channel_groups) == 0;
@@ -57,7 +63,7 @@ void write_bake(const fs::path& file, const BakeData& data) {
   write_atomically(file, [&](const fs::path& temporary) {
     run_in_child_process(file.string() + ": writing the bake file",
                          [&] { write_bake_to(temporary, file, data, streamed); });
-    seal_bake_file(temporary, kBakeFormatVersion, file);
+    seal_bake_file(temporary, data.format_version(), file);
   });
 }
 
@@ -67,7 +73,7 @@ namespace {
 void write_header(H5::H5File& h5, const BakeData& data) {
   H5::Group root = open_group(h5, "/");
   write_text(root, "format", kFormatName);
-  write_number(root, "format_version", kBakeFormatVersion);
+  write_number(root, "format_version", data.format_version());
   write_text(root, "scene_file", data.scene_file);
   write_bytes(root, "scene_text", data.scene_text);
   write_text(root, "transport", data.transport);
@@ -83,6 +89,19 @@ void write_mesh(H5::H5File& h5, const Mesh& m) {
   write_vectors<Eigen::Vector3f, float>(mesh, "positions", m.positions);
   write_vectors<Eigen::Vector3f, float>(mesh, "normals", m.normals);
   write_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles", m.triangles);
+}
+
+// Where the transfer's rows are, when not at the mesh's vertices.
+void write_receivers(H5::H5File& h5, const Receivers& r) {
+  H5::Group receivers = create_group(h5, "receivers");
+  write_text(receivers, "kind", r.kind);
+  write_number(receivers, "spacing", r.grid.spacing);
+  for (int a = 0; a < 3; ++a) {
+    const std::string axis(1, "xyz"[a]);
+    write_number(receivers, "origin_" + axis, r.grid.origin[a]);
+    write_number(receivers, "count_" + axis, r.grid.counts[std::size_t(a)]);
+  }
+  write_array(receivers, "valid", r.valid.data(), r.valid.size(), 1);
 }
 
 // The transfer: from memory, from its row file, or streamed from the ranks' slabs.
@@ -158,6 +177,7 @@ void write_bake_to(const fs::path& temporary, const fs::path& file, const BakeDa
     {  // every object closed before the file, so its close reports the flush
       write_header(h5, data);
       write_mesh(h5, data.mesh);
+      if (data.receivers.probes()) write_receivers(h5, data.receivers);
       write_transfer(h5, data, streamed);
       write_compressed(h5, data.compressed);
       write_states_and_metrics(h5, data);

@@ -29,8 +29,11 @@ void read_header(const H5::H5File& h5, BakeData& data) {
   H5::Group root = open_group(h5, "/");
   if (!root.attrExists("format") || read_text(root, "format") != kFormatName)
     throw Error("it is an HDF5 file but not a PRT bake");
-  if (read_number(root, "format_version") != kBakeFormatVersion)
+  const double version = read_number(root, "format_version");
+  if (version != kBakeFormatVersion && version != kReceiversFormatVersion)
     throw Error("its header and its format_version attribute disagree");
+  // Version 5 says the rows are at receivers (/receivers); 4 at the vertices.
+  data.receivers.kind = version == kReceiversFormatVersion ? "probes" : "vertices";
   data.scene_file = read_text(root, "scene_file");
   data.scene_text = read_bytes(root, "scene_text");
   data.transport = read_text(root, "transport");
@@ -46,6 +49,25 @@ void read_mesh(const H5::H5File& h5, BakeData& data) {
   data.mesh.normals = read_vectors<Eigen::Vector3f, float>(mesh, "normals");
   data.mesh.triangles =
       read_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles");
+}
+
+// The probe grid of a version 5 file (checked in bake_values.cpp).
+void read_receivers(const H5::H5File& h5, BakeData& data) {
+  if (!data.receivers.probes()) return;
+  H5::Group receivers = open_group(h5, "receivers");
+  if (read_text(receivers, "kind") != "probes")
+    throw Error("/receivers names a kind of receiver other than probes");
+  ProbeGrid& grid = data.receivers.grid;
+  grid.spacing = float(read_number(receivers, "spacing"));
+  for (int a = 0; a < 3; ++a) {
+    const std::string axis(1, "xyz"[a]);
+    grid.origin[a] = float(read_number(receivers, "origin_" + axis));
+    const double count = read_number(receivers, "count_" + axis);
+    if (!(count >= 1 && count <= 4096)) throw Error("/receivers count_" + axis + " out of range");
+    grid.counts[std::size_t(a)] = int(count);
+  }
+  hsize_t rows, cols;
+  data.receivers.valid = read_array<std::uint8_t>(receivers, "valid", rows, cols);
 }
 
 // Colour materials: how many channel transfers, and which one each colour
@@ -139,6 +161,7 @@ void parse_and_send(const fs::path& file, int fd) {
     BakeData data;
     read_header(h5, data);
     read_mesh(h5, data);
+    read_receivers(h5, data);
     read_transfer(h5, data, out);
     read_compressed(h5, data);
     read_states_and_metrics(h5, data);
@@ -159,10 +182,10 @@ void parse_and_send(const fs::path& file, int fd) {
 BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   // Length and checksum first: a damaged file never reaches libhdf5's parser.
   const int version = verify_bake_file(file);
-  if (version != kBakeFormatVersion)
+  if (version != kBakeFormatVersion && version != kReceiversFormatVersion)
     throw Error(file.string() + ": bake format version " + std::to_string(version) +
-                ", but this build reads version " + std::to_string(kBakeFormatVersion) +
-                "; re-bake the scene");
+                ", but this build reads versions " + std::to_string(kBakeFormatVersion) +
+                " and " + std::to_string(kReceiversFormatVersion) + "; re-bake the scene");
   // A crafted file with a valid checksum still reaches libhdf5, whose
   // defects (heap overflows, huge allocations, endless loops) it may
   // trigger: the file is parsed in a child process with bounded memory
@@ -174,7 +197,7 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   exchange_with_child(
       file.string(), limits, [&](int fd) { parse_and_send(file, fd); },
       [&](int fd) {
-        bake_stream::In in(fd, bytes, options, data.mesh, limits.idle_seconds);
+        bake_stream::In in(fd, bytes, options, data, limits.idle_seconds);
         try {
           bake_stream::bake_fields(in, data);
           check_bake_values(data);

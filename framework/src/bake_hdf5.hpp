@@ -112,6 +112,8 @@ inline const H5::PredType& h5_type() {
     return H5::PredType::NATIVE_DOUBLE;
   else if constexpr (std::is_same_v<T, std::int32_t>)
     return H5::PredType::NATIVE_INT32;
+  else if constexpr (std::is_same_v<T, std::uint8_t>)
+    return H5::PredType::NATIVE_UINT8;
   else
     return H5::PredType::NATIVE_UINT32;
 }

@@ -183,12 +183,13 @@ void In::operator()(std::map<std::string, Eigen::MatrixXd>& values) {
 void In::rows(TransferSignal& signal, bool direct) {
   const Shape shape = header(4, 'r');
   const auto rows = Eigen::Index(shape.rows), cols = Eigen::Index(shape.cols);
-  // Known before any row is read: one row per vertex (a direct part may be absent).
-  if (rows != Eigen::Index(mesh_.vertex_count()) && !(direct && rows == 0 && cols == 0))
+  // Known before any row is read: one row per receiver (a direct part may be absent).
+  const auto receivers = Eigen::Index(data_.receiver_count());
+  if (rows != receivers && !(direct && rows == 0 && cols == 0))
     throw Error("the " + std::string(direct ? "direct transfer" : "transfer") + " has " +
-                std::to_string(rows) + " rows for " + std::to_string(mesh_.vertex_count()) +
-                " vertices");
-  const double beside = kMeshBytesPerVertex * double(mesh_.vertex_count());
+                std::to_string(rows) + " rows for " + std::to_string(receivers) +
+                (data_.receivers.probes() ? " probes" : " vertices"));
+  const double beside = kMeshBytesPerVertex * double(data_.mesh.vertex_count());
   std::shared_ptr<RowFile> file;
   if (!direct && reading_.memory_budget > 0 && shape.bytes() + beside > reading_.memory_budget)
     file = RowFile::create(reading_.rows_folder, rows, cols);

@@ -79,14 +79,16 @@ class In {
   // a file yields no more values than the file stores). `reading`: where a
   // transfer too large for the memory budget goes (prt::ReadOptions).
   // `idle_seconds` (> 0): the longest wait for the sender's next bytes.
-  In(int fd, double byte_limit, const ReadOptions& reading, const Mesh& mesh,
+  // `data`: the bake being read, whose receivers (read before the rows) say
+  // how many rows the transfer has.
+  In(int fd, double byte_limit, const ReadOptions& reading, const BakeData& data,
      double idle_seconds = 0)
       : fd_(fd),
         left_(byte_limit),
         entries_left_(byte_limit / 4),
         idle_seconds_(idle_seconds),
         reading_(reading),
-        mesh_(mesh) {}
+        data_(data) {}
 
   void operator()(std::string& text);
   template <class T>
@@ -149,7 +151,7 @@ class In {
   double entries_left_;
   double idle_seconds_;
   const ReadOptions reading_;  // a copy: callers may pass a temporary
-  const Mesh& mesh_;
+  const BakeData& data_;
 };
 
 // Every field of a bake, in stream order, for Out and In alike.
@@ -159,6 +161,8 @@ void bake_fields(Io& io, Data& d) {
   for (auto* plugin : {&d.basis, &d.compressor, &d.exit})
     io(plugin->name), io(plugin->version), io(plugin->parameters);
   io(d.mesh.positions), io(d.mesh.normals), io(d.mesh.triangles);
+  io(d.receivers.kind), io(d.receivers.grid.origin), io(d.receivers.grid.spacing);
+  io(d.receivers.grid.counts), io(d.receivers.valid);
   io(d.albedo), io(d.material), io(d.bounces), io(d.subsurface);
   io(d.transfer.kind), io(d.transfer.exit_rows), io(d.transfer.channel_groups);
   io(d.transfer.group_of_channel);

@@ -60,9 +60,9 @@ void check_mesh(const Mesh& mesh) {
 }
 
 void check_layout(const TransferSignal& transfer, int bounces) {
-  if (transfer.kind != "diffuse" && transfer.kind != "glossy")
+  if (transfer.kind != "diffuse" && transfer.kind != "glossy" && transfer.kind != "incident")
     throw Error("unknown transfer kind \"" + transfer.kind + "\"");
-  if (transfer.glossy() ? transfer.exit_rows < 1 : transfer.exit_rows != 1)
+  if (transfer.kind != "diffuse" ? transfer.exit_rows < 1 : transfer.exit_rows != 1)
     throw Error("transfer kind \"" + transfer.kind + "\" with " +
                 std::to_string(transfer.exit_rows) + " exit rows");
   if (bounces < 0 || bounces > 1000)
@@ -80,9 +80,16 @@ void check_layout(const TransferSignal& transfer, int bounces) {
 
 void check_transfer(BakeData& data) {
   const TransferSignal& transfer = data.transfer;
-  if (transfer.vertices() != static_cast<Eigen::Index>(data.mesh.vertex_count()))
+  if (transfer.vertices() != static_cast<Eigen::Index>(data.receiver_count()))
     throw Error("the transfer has " + std::to_string(transfer.vertices()) + " rows for " +
-                std::to_string(data.mesh.vertex_count()) + " vertices");
+                std::to_string(data.receiver_count()) +
+                (data.receivers.probes() ? " probes" : " vertices"));
+  if ((transfer.kind == "incident") != data.receivers.probes())
+    throw Error("transfer kind \"" + transfer.kind + "\" at " + data.receivers.kind);
+  if (transfer.kind == "incident" &&
+      transfer.dimension() != Eigen::Index(transfer.exit_rows) * transfer.exit_rows)
+    throw Error("probe transfer of " + std::to_string(transfer.dimension()) +
+                " coefficients is not " + std::to_string(transfer.exit_rows) + " squared");
   const Eigen::Index columns = transfer.dimension();
   if (columns % (Eigen::Index(transfer.exit_rows) * transfer.channel_groups) != 0)
     throw Error("the transfer's " + std::to_string(columns) +
@@ -106,7 +113,7 @@ void check_compressed(const BakeData& data) {
     throw Error("the transfer has " + std::to_string(data.transfer.dimension()) +
                 " columns but the compressed dimension is " + std::to_string(c.dimension));
   if (c.components < 0) throw Error("a negative number of components");
-  c.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()));
+  c.validate(static_cast<Eigen::Index>(data.receiver_count()));
 }
 
 void check_finite(const BasisState& state, const char* group) {
@@ -120,6 +127,14 @@ void check_finite(const BasisState& state, const char* group) {
 void check_bake_values(BakeData& data) {
   check_texts(data);
   check_mesh(data.mesh);
+  if (data.receivers.probes()) {
+    check_probe_grid(data.receivers.grid, data.receivers.valid.size(), "/receivers");
+    check_probe_grid(data.receivers.grid, data.receiver_count(), "/receivers");
+    for (std::uint8_t flag : data.receivers.valid)
+      if (flag > 1) throw Error("/receivers/valid holds a value other than 0 or 1");
+  } else if (data.receivers.kind != "vertices") {
+    throw Error("unknown receivers \"" + data.receivers.kind + "\"");
+  }
   if (!data.albedo.allFinite()) throw Error("the albedo is NaN or infinite");
   check_layout(data.transfer, data.bounces);
   check_transfer(data);

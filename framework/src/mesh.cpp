@@ -395,7 +395,8 @@ Mesh make_generated(const std::string& name, int detail) {
   if (name == "plane") return make_plane(std::max(detail, 1));
   if (name == "box") return make_box();
   if (name == "open-box") return make_open_box(4 << std::min(detail, 4));
-  throw Error("unknown generated mesh \"" + name + "\"; valid: sphere, plane, box, open-box");
+  if (name == "room") return make_room(detail);
+  throw Error("unknown generated mesh \"" + name + "\"; valid: sphere, plane, box, open-box, room");
 }
 
 }  // namespace prt

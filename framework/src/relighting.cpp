@@ -17,6 +17,10 @@ namespace prt {
 
 Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry)
     : scene_(scene), data_(data) {
+  if (data.receivers.probes())  // rows are probes, not vertices: ProbeRelighting views them
+    throw Error(scene.receivers.location(),
+                "this bake holds transfer at probes, which prt render and prt probes view "
+                "(docs/receivers.md); this view draws transfer at vertices");
   check_bake_matches(data, scene);
   PluginChoice basis = scene.basis;
   basis_ = registry.create<Basis>(basis.name, basis.params, basis.where);

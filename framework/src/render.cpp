@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "prt/environment.hpp"
+#include "prt/probe_render.hpp"
 #include "prt/progress.hpp"
 #include "prt/relighting.hpp"
 #include "prt/renderer.hpp"
@@ -31,6 +32,7 @@ std::string under_resolved_light(const Eigen::MatrixX3d& light, const std::vecto
 
 Rendered render(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry,
                 StageTimes& times, const RunOptions& options) {
+  if (data.receivers.probes()) return render_probes(scene, data, registry, times, options);
   Stopwatch clock;
   const Relighting relighting(scene, data, registry);
   PluginChoice renderer_choice = scene.renderer;

@@ -29,6 +29,18 @@ const ParamSchema& mesh_schema() {
                              {keys::mesh::file, keys::mesh::generate, keys::mesh::detail}};
   return s;
 }
+ParamSchema place_schema(const char* owner) {
+  return ParamSchema{owner,
+                     {keys::place::file, keys::place::generate, keys::place::detail,
+                      keys::place::position, keys::place::size}};
+}
+const ParamSchema& receivers_schema() {
+  static const ParamSchema s{
+      "section [receivers]",
+      {keys::receivers::kind, keys::receivers::spacing, keys::receivers::interpolation,
+       keys::receivers::normal_bias, keys::receivers::invalid_fraction}};
+  return s;
+}
 const ParamSchema& material_schema() {
   static const ParamSchema s{
       "section [material]",
@@ -77,9 +89,9 @@ const ParamSchema& ground_truth_schema() {
   return s;
 }
 
-const std::array<std::string, 11> kSections = {"mesh",   "material",   "transport",   "basis",
-                                               "exit",   "compressor", "lighting",    "renderer",
-                                               "camera", "output",     "ground_truth"};
+const std::array<std::string, 13> kSections = {
+    "mesh",     "material", "transport", "basis",  "exit",         "compressor", "lighting",
+    "renderer", "camera",   "output",    "ground_truth", "receivers", "moving"};
 
 SourceLocation location_of(const toml::source_region& region, const fs::path& file) {
   return {file.string(), static_cast<int>(region.begin.line),
@@ -249,6 +261,25 @@ std::vector<PointLight> read_point_lights(const toml::table* lighting, const fs:
   return lights;
 }
 
+// [[mesh.add]]: meshes placed in the scene, each validated like a section.
+std::vector<Params> read_mesh_parts(const toml::table* mesh, const SceneSpec& scene) {
+  std::vector<Params> parts;
+  const toml::node* node = mesh ? mesh->get("add") : nullptr;
+  if (!node) return parts;
+  const toml::array* array = node->as_array();
+  if (!array || !array->is_array_of_tables())
+    throw Error(location_of(node->source(), scene.file),
+                "section [mesh]: \"add\" must be an array of tables, written [[mesh.add]] with "
+                "file = \"...\", position = [x, y, z] and size under it");
+  for (const toml::node& item : *array) {
+    const toml::table& table = *item.as_table();
+    Params params = read_table(&table, location_of(table.source(), scene.file), scene.file);
+    params.validate(place_schema("[[mesh.add]]"));
+    parts.push_back(std::move(params));
+  }
+  return parts;
+}
+
 }  // namespace
 
 namespace {
@@ -271,8 +302,8 @@ void check_sections(const toml::table& root, const fs::path& file) {
     const SourceLocation where = location_of(key.source(), file);
     if (std::find(valid.begin(), valid.end(), name) == valid.end()) {
       std::string message = "unknown section [" + elide(name) +
-                            "]; valid: mesh, material, transport, "
-                            "basis, compressor, lighting, renderer, camera, output, ground_truth";
+                            "]; valid: mesh, material, transport, basis, exit, compressor, "
+                            "lighting, renderer, camera, output, ground_truth, receivers, moving";
       const std::string suggestion = closest_match(name, valid);
       if (!suggestion.empty()) message += " (did you mean [" + suggestion + "]?)";
       throw Error(where, message);
@@ -302,7 +333,12 @@ Params read_section(const toml::table& root, const std::string& name, const Para
 }
 
 void read_sections(const toml::table& root, SceneSpec& scene) {
-  scene.mesh = read_section(root, "mesh", mesh_schema(), scene);
+  scene.mesh = read_section(root, "mesh", mesh_schema(), scene, "add");
+  scene.mesh_parts = read_mesh_parts(root["mesh"].as_table(), scene);
+  for (Params& part : scene.mesh_parts) resolve_paths(part, place_schema("[[mesh.add]]"), scene);
+  scene.receivers = read_section(root, "receivers", receivers_schema(), scene);
+  scene.moving = read_section(root, "moving", place_schema("section [moving]"), scene);
+  scene.moving_given = root["moving"].as_table() != nullptr;
   scene.material = read_section(root, "material", material_schema(), scene);
   if (!keys::material::preset(scene.material).empty()) {  // measured coefficients replace the keys
     const toml::table* table = root["material"].as_table();
@@ -319,6 +355,38 @@ void read_sections(const toml::table& root, SceneSpec& scene) {
   scene.camera = read_section(root, "camera", camera_schema(), scene);
   scene.output = read_section(root, "output", output_schema(), scene);
   scene.ground_truth = read_section(root, "ground_truth", ground_truth_schema(), scene);
+}
+
+// A placed mesh names exactly one of a file or a generated mesh.
+void check_placed(const Params& params, const char* where) {
+  if (keys::place::file(params).empty() == keys::place::generate(params).empty())
+    throw Error(params.location(), std::string(where) + ": give exactly one of \"file\" or \"generate\"");
+}
+
+// What probes receive: distant light over the sphere, shadowed by the scene
+// (docs/receivers.md); what they do not yet, refused before any ray.
+void check_receivers(const SceneSpec& scene) {
+  for (const Params& part : scene.mesh_parts) check_placed(part, "[[mesh.add]]");
+  if (!scene.probes()) {
+    if (scene.has_moving())
+      throw Error(scene.moving.location(),
+                  "section [moving]: a moving object is shaded from probes; set [receivers] kind "
+                  "= \"probes\"");
+    return;
+  }
+  if (scene.has_moving()) check_placed(scene.moving, "section [moving]");
+  const SourceLocation where = scene.receivers.location(keys::receivers::kind.name());
+  auto refuse = [&](const std::string& what) {
+    throw Error(where, "section [receivers]: probes receive distant light, shadowed by the "
+                       "scene; " + what);
+  };
+  if (scene.glossy()) refuse("a glossy material is a surface's, not a probe's: use lambert");
+  if (keys::transport::bounces(scene.transport) > 0)
+    refuse("inter-reflected light at probes is not built yet: use bounces = 0");
+  if (keys::material::subsurface(scene.material)) refuse("subsurface light needs a surface");
+  if (!scene.point_lights.empty()) refuse("point lights at probes are not built yet");
+  if (scene.channels().groups.size() > 1)
+    refuse("one transfer serves every colour channel: use a grey diffuse");
 }
 
 // Keys that are each valid but not together.
@@ -347,6 +415,7 @@ void check_combinations(const SceneSpec& scene) {
                 "section [material]: point lights need one transfer for all colour channels; this "
                 "material's channels differ (coloured diffuse/specular with glossy or bounces, or "
                 "coloured subsurface): use grey coefficients with [[lighting.point]]");
+  check_receivers(scene);
   if (bounces > 0 && !keys::transport::shadowed(scene.transport))
     throw Error(scene.transport.location(keys::transport::bounces.name()),
                 "section [transport]: bounces gather light from the shadow rays' hits; they need "

@@ -12,6 +12,7 @@
 #include "prt/glossy.hpp"
 #include "prt/lattice_lighting.hpp"
 #include "prt/mesh.hpp"
+#include "prt/mesh_compose.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
 #include "prt/scene.hpp"
@@ -39,13 +40,49 @@ std::vector<fs::path> SceneSpec::input_files() const {
   std::vector<fs::path> files{file};
   for (const std::string& name : {keys::mesh::file(mesh), keys::lighting::environment(lighting)})
     if (!name.empty()) files.emplace_back(name);
+  for (const Params& part : mesh_parts)
+    if (const std::string name = keys::place::file(part); !name.empty()) files.emplace_back(name);
+  if (has_moving())
+    if (const std::string name = keys::place::file(moving); !name.empty()) files.emplace_back(name);
   return files;
 }
 
+namespace {
+
+// A [[mesh.add]] or [moving] mesh, placed.
+Mesh load_placed(const Params& params, const Eigen::Vector3f& position) {
+  const std::string file_name = keys::place::file(params);
+  const Mesh mesh =
+      !file_name.empty()
+          ? prt::load_mesh(file_name)
+          : make_generated(keys::place::generate(params), int(keys::place::detail(params)));
+  return placed(mesh, position, float(keys::place::size(params)));
+}
+
+Eigen::Vector3f position_of(const Params& params) {
+  return Eigen::Vector3d(keys::place::position(params).data()).cast<float>();
+}
+
+}  // namespace
+
 Mesh SceneSpec::load_mesh() const {
   const std::string file_name = keys::mesh::file(mesh);
-  if (!file_name.empty()) return prt::load_mesh(file_name);
-  return make_generated(keys::mesh::generate(mesh), static_cast<int>(keys::mesh::detail(mesh)));
+  Mesh loaded = !file_name.empty() ? prt::load_mesh(file_name)
+                                   : make_generated(keys::mesh::generate(mesh),
+                                                    static_cast<int>(keys::mesh::detail(mesh)));
+  for (const Params& part : mesh_parts) append(loaded, load_placed(part, position_of(part)));
+  return loaded;
+}
+
+bool SceneSpec::probes() const { return keys::receivers::kind(receivers) == "probes"; }
+
+bool SceneSpec::has_moving() const { return moving_given; }
+
+Mesh SceneSpec::load_moving() const { return load_moving(position_of(moving)); }
+
+Mesh SceneSpec::load_moving(const Eigen::Vector3f& position) const {
+  if (!has_moving()) throw Error(file.string() + ": the scene has no [moving] object");
+  return load_placed(moving, position);
 }
 
 DirectionSet SceneSpec::directions() const {

@@ -371,6 +371,38 @@ void bind_types(py::module_& m) {
       .def_readonly("parameters", &PluginRecord::parameters)
       .def("__repr__", &one_line);
 
+  py::class_<Receivers>(m, "Receivers",
+                        "Where a bake's transfer rows are: the mesh's vertices, or probes on a "
+                        "grid (docs/receivers.md).")
+      .def_readonly("kind", &Receivers::kind, "\"vertices\" or \"probes\"")
+      .def_property_readonly(
+          "origin", [](const Receivers& r) { return Eigen::Vector3f(r.grid.origin); },
+          "probes: position of probe (0, 0, 0)")
+      .def_property_readonly(
+          "spacing", [](const Receivers& r) { return r.grid.spacing; },
+          "probes: distance between neighbouring probes")
+      .def_property_readonly(
+          "counts", [](const Receivers& r) { return r.grid.counts; },
+          "probes: (x, y, z) probe counts; probe index x + nx (y + ny z)")
+      .def_property_readonly(
+          "positions",
+          [](const Receivers& r) {
+            py::array_t<float> out({py::ssize_t(r.grid.count()), py::ssize_t(3)});
+            auto view = out.mutable_unchecked<2>();
+            for (std::size_t p = 0; p < r.grid.count(); ++p)
+              for (int a = 0; a < 3; ++a) view(py::ssize_t(p), a) = r.grid.position(p)[a];
+            return out;
+          },
+          "probes: (count, 3) probe positions, in transfer row order")
+      .def_property_readonly(
+          "valid",
+          [](const Receivers& r) {
+            py::array_t<bool> out(py::ssize_t(r.valid.size()));
+            std::copy(r.valid.begin(), r.valid.end(), out.mutable_data());
+            return out;
+          },
+          "probes: False where a probe sits inside geometry (its row is zero)");
+
   py::class_<BakeData>(m, "BakeData", "A bake: the contents of one bake file.")
       .def_static(
           "read", [](const std::filesystem::path& file) { return read_bake(file); },
@@ -395,6 +427,7 @@ void bind_types(py::module_& m) {
       .def_readonly("material", &BakeData::material)
       .def_readonly("bounces", &BakeData::bounces)
       .def_readonly("mesh", &BakeData::mesh)
+      .def_readonly("receivers", &BakeData::receivers)
       .def_readonly("transfer", &BakeData::transfer)
       .def_property(
           "compressed", [](const BakeData& d) { return d.compressed; },

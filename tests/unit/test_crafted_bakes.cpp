@@ -63,7 +63,7 @@ BakeData received(
   ::close(ends[1]);
   BakeData data;
   try {
-    bake_stream::In in(ends[0], byte_limit, {}, data.mesh);
+    bake_stream::In in(ends[0], byte_limit, {}, data);
     take(in, data);
   } catch (...) {
     ::close(ends[0]);

@@ -9,6 +9,7 @@
 
 #include "prt/basis.hpp"
 #include "prt/mesh.hpp"
+#include "prt/receivers.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt {
@@ -17,7 +18,10 @@ namespace prt {
 // 3: a checksummed PRT-BAKE user block; scene text as a dataset; UTF-8 text attributes.
 // 4: the exit basis of glossy transfer is a plug-in: /exit_basis record and
 //    /exit_state group replace exit_order / exit_kept; /transfer exit_rows.
+// 5: receivers other than the mesh's vertices (a /receivers group: probes).
+//    A bake at vertices is still written as version 4, byte for byte as before.
 constexpr int kBakeFormatVersion = 4;
+constexpr int kReceiversFormatVersion = 5;
 
 struct PluginRecord {
   std::string name, version, parameters;
@@ -32,7 +36,8 @@ struct BakeData {
   PluginRecord basis, compressor;
   PluginRecord exit;      // glossy only: the hemisphere basis of exit radiance
   std::string transport;  // e.g. "fibonacci 1024 shadowed seed=1"
-  Mesh mesh;
+  Mesh mesh;  // the scene's geometry; at vertex receivers, one row per vertex
+  Receivers receivers;  // where the transfer's rows are (default: the mesh's vertices)
   Eigen::Vector3f albedo{1, 1, 1};
   std::string material = "lambert kd=1";  // the BRDF the transfer was baked for
   int bounces = 0;                        // inter-reflection bounces included
@@ -52,6 +57,14 @@ struct BakeData {
   BasisState basis_state;
   BasisState exit_state;                  // glossy only
   std::map<std::string, double> metrics;  // timings (s), squared error, ...
+
+  // The transfer's rows: one per receiver.
+  std::size_t receiver_count() const {
+    return receivers.probes() ? receivers.grid.count() : mesh.vertex_count();
+  }
+  int format_version() const {
+    return receivers.probes() ? kReceiversFormatVersion : kBakeFormatVersion;
+  }
 };
 
 // A transfer whose rows are in a file (TransferSignal::on_disk) is written

@@ -38,8 +38,12 @@ Mesh make_box(float size = 2.0f);                         // closed cube, outwar
 // A box without its top (+y) face, seen from inside: inward normals, each
 // face a grid of cells x cells squares. The concave test scene of inter-reflection.
 Mesh make_open_box(int cells, float size = 2.0f);
+// A 4 x 2.5 x 4 room with walls 0.2 thick, a ceiling and a window, on an
+// 8 x 8 ground (framework/src/mesh_room.cpp): the probe scenes' room. Faces
+// are grids of cells 0.8 / 2^detail wide.
+Mesh make_room(int detail);
 
-// Builds one of the generated meshes by name ("sphere", "plane", "box", "open-box").
+// Builds one of the generated meshes by name ("sphere", "plane", "box", "open-box", "room").
 Mesh make_generated(const std::string& name, int detail);
 
 }  // namespace prt

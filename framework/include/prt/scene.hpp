@@ -48,6 +48,10 @@ struct SceneSpec {
   std::string text;            // the file's text, stored in bake files
 
   Params mesh, material, transport, lighting, camera, output, ground_truth;
+  Params receivers;                // [receivers]: vertices (default) or probes
+  Params moving;                   // [moving]: probe scenes' object shaded from the probes
+  bool moving_given = false;       // the scene has a [moving] section
+  std::vector<Params> mesh_parts;  // [[mesh.add]]: meshes placed and joined to [mesh]
   PluginChoice basis, compressor, renderer;
   PluginChoice exit;  // [exit]: the hemisphere basis of glossy exit radiance (glossy only)
   std::vector<PointLight> point_lights;  // [[lighting.point]]
@@ -67,7 +71,13 @@ struct SceneSpec {
   // may be written over them.
   std::vector<std::filesystem::path> input_files() const;
 
+  // The scene's mesh with every [[mesh.add]] joined to it.
   Mesh load_mesh() const;
+  bool probes() const;      // [receivers] kind = "probes"
+  bool has_moving() const;  // a [moving] section
+  // The [moving] object placed at `position` (default: the scene's).
+  Mesh load_moving() const;
+  Mesh load_moving(const Eigen::Vector3f& position) const;
   DirectionSet directions() const;  // [transport] directions, rays, seed
   Environment load_environment() const;
   // The environment projected into the basis, with [lighting] window applied.

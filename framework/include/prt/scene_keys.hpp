@@ -13,11 +13,44 @@ inline constexpr double kBig = schema::kHuge;
 namespace mesh {
 inline constexpr auto file =
     param::path("file", false, "mesh file (OFF, OBJ, PLY, STL), relative to the scene");
-inline constexpr auto generate = param::choice("generate", "", "sphere|plane|box|open-box",
+inline constexpr auto generate = param::choice("generate", "", "sphere|plane|box|open-box|room",
                                                "a generated mesh instead of a file");
 inline constexpr auto detail =
     param::integer("detail", "3", 0, 8, "subdivision level of a generated mesh");
 }  // namespace mesh
+
+// A mesh the scene places: each [[mesh.add]] (joined to the scene's mesh)
+// and [moving] (the object shaded from probes).
+namespace place {
+inline constexpr auto file =
+    param::path("file", false, "mesh file (OFF, OBJ, PLY, STL), relative to the scene");
+inline constexpr auto generate = param::choice("generate", "", "sphere|plane|box|open-box|room",
+                                               "a generated mesh instead of a file");
+inline constexpr auto detail =
+    param::integer("detail", "3", 0, 8, "subdivision level of a generated mesh");
+inline constexpr auto position = param::reals(
+    "position", "0,0,0", 3, -kBig, kBig, "where the bottom centre of the mesh's bounds goes");
+inline constexpr auto size =
+    param::real("size", "1", 1e-9, kBig, "the longest side of the mesh's bounds, scene units");
+}  // namespace place
+
+namespace receivers {
+inline constexpr auto kind =
+    param::choice("kind", "vertices", "vertices|probes",
+                  "where transfer is computed: the mesh's vertices, or probes on a grid");
+inline constexpr auto spacing =
+    param::real("spacing", "0.5", 1e-6, kBig, "probes: distance between neighbouring probes");
+inline constexpr auto interpolation = param::choice(
+    "interpolation", "visibility", "visibility|trilinear",
+    "probes: trilinear weights of the 8 probes around a point, with (visibility) or without "
+    "(trilinear) the leak control: invalid probes and probes the point cannot see drop out");
+inline constexpr auto normal_bias = param::real(
+    "normal_bias", "0.25", 0, 2,
+    "probes, visibility: the shaded point moves this many spacings along its normal first");
+inline constexpr auto invalid_fraction = param::real(
+    "invalid_fraction", "0.25", 0, 1,
+    "probes: a probe whose rays hit back faces more often than this is inside geometry");
+}  // namespace receivers
 
 namespace material {
 inline constexpr auto albedo =

@@ -530,6 +530,8 @@ std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {
     digest.add(one_line(*record));
   const std::string mesh_file = keys::mesh::file(scene.mesh);
   if (!mesh_file.empty()) digest.add_file(mesh_file);  // else generated: the text says all
+  for (const Params& part : scene.mesh_parts)
+    if (const std::string file = keys::place::file(part); !file.empty()) digest.add_file(file);
   return digest.hex();
 }
 

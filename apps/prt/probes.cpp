@@ -1,0 +1,176 @@
+// prt probes: a probe scene's moving object at several positions, shaded
+// from the probes with and without the leak control, against the Monte
+// Carlo ground truth that shades it directly (docs/receivers.md).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "commands.hpp"
+#include "prt/bake_checks.hpp"
+#include "prt/ground_truth.hpp"
+#include "prt/mesh_compose.hpp"
+#include "prt/output_file.hpp"
+#include "prt/probe_render.hpp"
+#include "prt/progress.hpp"
+#include "reference_options.hpp"
+
+namespace prt::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+Eigen::Vector3f parse_position(const std::string& text) {
+  std::istringstream in(text);
+  Eigen::Vector3f p;
+  char comma1 = 0, comma2 = 0;
+  in >> p.x() >> comma1 >> p.y() >> comma2 >> p.z();
+  if (!in || comma1 != ',' || comma2 != ',' || !p.allFinite() || in.peek() != EOF)
+    throw Error("--at \"" + text + "\": give a position as x,y,z (e.g. --at 1.5,0,0.2)");
+  return p;
+}
+
+// Relative RMS of `estimate` against `truth` over their rows, all channels.
+double relative_rms(const Eigen::MatrixX3f& estimate, const Eigen::MatrixX3f& truth) {
+  const double norm = truth.cast<double>().norm();
+  return norm > 0 ? (estimate - truth).cast<double>().norm() / norm : 0.0;
+}
+
+// Share of rows whose error exceeds a quarter of the truth's RMS per row.
+double far_off(const Eigen::MatrixX3f& estimate, const Eigen::MatrixX3f& truth) {
+  const double limit = 0.25 * truth.cast<double>().norm() / std::sqrt(double(truth.rows()));
+  Eigen::Index count = 0;
+  for (Eigen::Index v = 0; v < truth.rows(); ++v)
+    count += (estimate.row(v) - truth.row(v)).cast<double>().norm() > limit;
+  return truth.rows() ? double(count) / double(truth.rows()) : 0.0;
+}
+
+struct Row {
+  Eigen::Vector3f at;
+  double control = 0, trilinear = 0, floor = 0, far_control = 0, far_trilinear = 0;
+  std::size_t unseen = 0;
+};
+
+void write_images(const SceneSpec& scene, PluginRegistry& registry, const Mesh& display,
+                  const Eigen::Vector3f& target, const Environment& environment,
+                  const std::vector<std::pair<std::string, Eigen::MatrixX3f>>& radiances,
+                  const fs::path& stem) {
+  PluginChoice choice = scene.renderer;
+  auto renderer = registry.create<Renderer>(choice.name, choice.params, choice.where);
+  RenderInput input;
+  input.mesh = &display;
+  input.camera = scene.make_camera(display);
+  input.camera.target = target;
+  input.background = &environment;
+  const Eigen::Vector3f albedo = scene.albedo();
+  for (const auto& [name, radiance] : radiances) {
+    Eigen::MatrixX3f shaded = radiance;
+    for (int c = 0; c < 3; ++c) shaded.col(c) *= albedo[c];
+    input.vertex_radiance = &shaded;
+    const fs::path file = stem.string() + "." + name + ".png";
+    write_image(renderer->render(input), file, float(keys::camera::exposure(scene.camera)));
+    std::cout << "wrote " << file.string() << "\n";
+  }
+}
+
+}  // namespace
+
+int probes(Context& context, const ProbesArgs& args) {
+  SceneSpec scene = SceneSpec::load(args.scene, context.registry);
+  if (!scene.probes() || !scene.has_moving())
+    throw Error(scene.file.string() +
+                ": prt probes measures the [moving] object of a scene with [receivers] kind = "
+                "\"probes\"; this scene has " +
+                (scene.probes() ? "no [moving] section" : "no probes"));
+  apply_samples(args.reference, scene);
+  std::vector<Eigen::Vector3f> positions;
+  for (const std::string& text : args.at) positions.push_back(parse_position(text));
+  if (positions.empty())
+    positions.push_back(Eigen::Vector3d(keys::place::position(scene.moving).data()).cast<float>());
+  if (!args.out.empty()) fs::create_directories(args.out);
+
+  const fs::path bake_file = args.bake.empty() ? scene.bake_path() : fs::path(args.bake);
+  const BakeData data = read_bake(bake_file);
+  check_bake_records(bake_file.string(), data, context.registry);
+  const ProbeRelighting relighting(scene, data, context.registry);
+  const Environment environment = scene.load_environment();
+  Stopwatch clock;
+  const std::vector<Eigen::MatrixX3d> incident =
+      relighting.incident(data.compressed, relighting.light(environment));
+  const double relight_seconds = clock.seconds();
+  ProbeLookup control = relighting.lookup(), plain = control;
+  control.interpolation = ProbeInterpolation::visibility;
+  plain.interpolation = ProbeInterpolation::trilinear;
+
+  const int samples = int(keys::ground_truth::samples(scene.ground_truth));
+  const auto seed = std::uint64_t(keys::ground_truth::seed(scene.ground_truth));
+  constexpr int kBatches = 4;  // as prt render --compare: its spread is the noise floor
+  std::vector<std::uint64_t> seeds;
+  for (int b = 0; b < kBatches; ++b) seeds.push_back(seed + std::uint64_t(b));
+  std::vector<Row> rows;
+  double shade_seconds = 0;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    Row row;
+    row.at = positions[i];
+    const Mesh moving = scene.load_moving(row.at);
+    Mesh display = data.mesh;
+    const auto first = Eigen::Index(display.vertex_count()), count = Eigen::Index(moving.vertex_count());
+    append(display, moving);
+    clock = Stopwatch();
+    const ProbeShading with = relighting.shade(display, incident, control);
+    shade_seconds += clock.seconds();
+    const ProbeShading without = relighting.shade(display, incident, plain);
+    Progress progress("ground truth at position " + std::to_string(i + 1), double(display.vertex_count()),
+                      "", context.quiet);
+    const GroundTruthEstimate truth = ground_truth_estimate(
+        display, environment, std::max(1, samples / kBatches), seeds, &progress);
+    progress.finish();
+    Eigen::MatrixX3f mean = Eigen::MatrixX3f::Zero(display.vertex_count(), 3);
+    for (const auto& batch : truth.batches) mean += batch / float(kBatches);
+    double spread = 0;  // variance of the mean, summed over the object's rows
+    for (const auto& batch : truth.batches)
+      spread += (batch - mean).middleRows(first, count).cast<double>().squaredNorm() /
+                (kBatches * (kBatches - 1));
+    const Eigen::MatrixX3f object_truth = mean.middleRows(first, count);
+    row.control = relative_rms(with.radiance.middleRows(first, count), object_truth);
+    row.trilinear = relative_rms(without.radiance.middleRows(first, count), object_truth);
+    row.floor = std::sqrt(spread) / std::max(1e-30, object_truth.cast<double>().norm());
+    row.far_control = far_off(with.radiance.middleRows(first, count), object_truth);
+    row.far_trilinear = far_off(without.radiance.middleRows(first, count), object_truth);
+    row.unseen = with.unseen;
+    rows.push_back(row);
+    if (!args.out.empty()) {
+      const Eigen::Vector3f centre = (moving.bounds_min() + moving.bounds_max()) / 2;
+      write_images(scene, context.registry, display, centre, environment,
+                   {{"leak_control", with.radiance}, {"trilinear", without.radiance},
+                    {"truth", mean}},
+                   fs::path(args.out) / ("position" + std::to_string(i + 1)));
+    }
+  }
+  std::printf("probe transfer: %zu probes (%d x %d x %d, spacing %g), %zu inside geometry; "
+              "basis %s, %.0f floats stored\n",
+              data.receiver_count(), data.receivers.grid.counts[0],
+              data.receivers.grid.counts[1], data.receivers.grid.counts[2],
+              double(data.receivers.grid.spacing),
+              std::size_t(std::count(data.receivers.valid.begin(), data.receivers.valid.end(), 0)),
+              one_line(data.basis).c_str(), data.compressed.stored_floats());
+  std::printf("relight probes: %.3f ms; shade the scene and object with leak control: %.1f ms "
+              "a position\n",
+              1e3 * relight_seconds, 1e3 * shade_seconds / double(positions.size()));
+  std::printf("\n| moving object at | RMS error, leak control | RMS error, trilinear | trilinear "
+              "/ control | far off (control / trilinear) | ground-truth noise |\n"
+              "|---|---|---|---|---|---|\n");
+  for (const Row& row : rows)
+    std::printf("| %g, %g, %g | %.4f | %.4f | %.2fx | %.1f%% / %.1f%% | %.4f |\n",
+                double(row.at.x()), double(row.at.y()), double(row.at.z()), row.control,
+                row.trilinear, row.trilinear / std::max(row.control, 1e-30),
+                100 * row.far_control, 100 * row.far_trilinear, row.floor);
+  std::printf("\nRMS errors are relative to the ground truth's RMS over the object's %zu "
+              "vertices (%d samples each); far off: a vertex's error above a quarter of that "
+              "RMS.\n",
+              scene.load_moving().vertex_count(), samples);
+  return 0;
+}
+
+}  // namespace prt::cli

@@ -1,0 +1,130 @@
+#include "prt/probe_shading.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+
+#include "prt/error.hpp"
+
+namespace prt {
+
+Eigen::MatrixXd cosine_lobes(const Basis& basis, const std::vector<Eigen::Vector3f>& normals,
+                             const DirectionSet& set) {
+  const Eigen::MatrixXd weighted =
+      set.weights.asDiagonal() * basis.evaluate(set.directions) / M_PI;  // s x n
+  const Eigen::Index v = Eigen::Index(normals.size());
+  Eigen::MatrixXd lobes(v, basis.size());
+  constexpr Eigen::Index kBlock = 512;
+  tbb::parallel_for(Eigen::Index(0), (v + kBlock - 1) / kBlock, [&](Eigen::Index block) {
+    const Eigen::Index first = block * kBlock, count = std::min(kBlock, v - first);
+    Eigen::MatrixXd cosines(count, set.size());
+    for (Eigen::Index i = 0; i < count; ++i) {
+      const Eigen::Vector3d n = normals[std::size_t(first + i)].cast<double>();
+      cosines.row(i) = (set.directions * n).cwiseMax(0.0).transpose();
+    }
+    lobes.middleRows(first, count) = cosines * weighted;
+  });
+  return lobes;
+}
+
+namespace {
+
+constexpr Eigen::Index kPointsPerTask = 256;
+
+// Visibility of each corner probe from each point of a task: rays from the
+// biased points to the probes, blocked by anything in between.
+std::vector<std::uint8_t> probes_seen(const RayCaster& caster, const ProbeGrid& grid,
+                                      const std::vector<Eigen::Vector3f>& from,
+                                      const std::vector<std::array<std::uint32_t, 8>>& corners) {
+  const std::size_t rays = 8 * from.size();
+  std::vector<float> origins(3 * rays), directions(3 * rays), far(rays);
+  for (std::size_t i = 0; i < from.size(); ++i)
+    for (std::size_t c = 0; c < 8; ++c) {
+      const std::size_t r = 8 * i + c;
+      const Eigen::Vector3f to = grid.position(corners[i][c]) - from[i];
+      const float length = to.norm();
+      const Eigen::Vector3f direction =
+          length > 0 ? Eigen::Vector3f(to / length) : Eigen::Vector3f::UnitY();
+      for (int a = 0; a < 3; ++a) {
+        origins[3 * r + a] = from[i][a];
+        directions[3 * r + a] = direction[a];
+      }
+      far[r] = length;
+    }
+  std::vector<std::uint8_t> seen(rays);
+  caster.occluded(origins.data(), directions.data(), rays, seen.data(), far.data());
+  return seen;
+}
+
+}  // namespace
+
+ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
+                               const std::vector<std::uint8_t>& valid,
+                               const std::vector<Eigen::MatrixX3d>& incident,
+                               const Eigen::MatrixXd& lobes, const RayCaster* caster,
+                               const ProbeLookup& lookup) {
+  const Eigen::Index v = Eigen::Index(points.vertex_count());
+  if (valid.size() != grid.count() || incident.size() != grid.count())
+    throw Error("probe shading: " + std::to_string(grid.count()) + " probes, " +
+                std::to_string(valid.size()) + " validity flags and " +
+                std::to_string(incident.size()) + " incident lights");
+  if (lobes.rows() != v)
+    throw Error("probe shading: " + std::to_string(lobes.rows()) + " lobes for " +
+                std::to_string(v) + " points");
+  const bool control = lookup.interpolation == ProbeInterpolation::visibility;
+  if (control && !caster) throw Error("probe shading with leak control needs the scene's rays");
+  ProbeShading out;
+  out.radiance.resize(v, 3);
+  std::atomic<std::size_t> unseen{0}, no_valid{0};
+  tbb::parallel_for(Eigen::Index(0), (v + kPointsPerTask - 1) / kPointsPerTask,
+                    [&](Eigen::Index task) {
+    const Eigen::Index first = task * kPointsPerTask;
+    const Eigen::Index count = std::min(kPointsPerTask, v - first);
+    const auto points_here = static_cast<std::size_t>(count);
+    std::vector<Eigen::Vector3f> at(points_here);
+    std::vector<std::array<std::uint32_t, 8>> corners(points_here);
+    std::vector<std::array<float, 8>> weights(points_here);
+    for (Eigen::Index i = 0; i < count; ++i) {
+      const std::size_t p = std::size_t(first + i);
+      at[std::size_t(i)] = points.positions[p];
+      if (control)
+        at[std::size_t(i)] += lookup.normal_bias * grid.spacing * points.normals[p];
+      grid.cell(at[std::size_t(i)], corners[std::size_t(i)], weights[std::size_t(i)]);
+    }
+    std::vector<std::uint8_t> seen;
+    if (control) seen = probes_seen(*caster, grid, at, corners);
+    for (Eigen::Index i = 0; i < count; ++i) {
+      const auto& corner = corners[std::size_t(i)];
+      std::array<double, 8> w{};
+      double total = 0;
+      for (std::size_t c = 0; c < 8; ++c) {
+        const bool usable = !control || (valid[corner[c]] && seen[8 * std::size_t(i) + c]);
+        w[c] = usable ? weights[std::size_t(i)][c] : 0.0;
+        total += w[c];
+      }
+      if (control && !(total > 0)) {  // no valid probe in sight: the valid ones
+        ++unseen;
+        for (std::size_t c = 0; c < 8; ++c) {
+          w[c] = valid[corner[c]] ? weights[std::size_t(i)][c] : 0.0;
+          total += w[c];
+        }
+      }
+      Eigen::RowVector3d radiance = Eigen::RowVector3d::Zero();
+      if (total > 0) {
+        Eigen::MatrixX3d light = Eigen::MatrixX3d::Zero(lobes.cols(), 3);
+        for (std::size_t c = 0; c < 8; ++c)
+          if (w[c] > 0) light += (w[c] / total) * incident[corner[c]];
+        radiance = lobes.row(first + i) * light;
+      } else {
+        ++no_valid;
+      }
+      out.radiance.row(first + i) = radiance.cast<float>();
+    }
+  });
+  out.unseen = unseen;
+  out.no_valid_probe = no_valid;
+  out.rays_cast = control ? std::uint64_t(8) * std::uint64_t(v) : 0;
+  return out;
+}
+
+}  // namespace prt
