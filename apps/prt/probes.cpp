@@ -46,22 +46,43 @@ double far_off(const Eigen::MatrixX3f& estimate, const Eigen::MatrixX3f& truth) 
   return truth.rows() ? double(count) / double(truth.rows()) : 0.0;
 }
 
+// One position's errors: against the truth (the object shadows itself, as
+// in the world) and against the light the scene alone lets through (what
+// probes can hold: they do not know the object).
 struct Row {
   Eigen::Vector3f at;
-  double control = 0, trilinear = 0, floor = 0, far_control = 0, far_trilinear = 0;
-  std::size_t unseen = 0;
+  double control = 0, trilinear = 0, scene_control = 0, scene_trilinear = 0;
+  double far_control = 0, far_trilinear = 0, floor = 0;
 };
 
+// The mean of the batches and its noise (RMS of the mean's standard error,
+// relative to the mean's RMS).
+std::pair<Eigen::MatrixX3f, double> mean_and_noise(const GroundTruthEstimate& truth) {
+  const auto batches = double(truth.batches.size());
+  Eigen::MatrixX3f mean = Eigen::MatrixX3f::Zero(truth.batches[0].rows(), 3);
+  for (const auto& batch : truth.batches) mean += batch / float(batches);
+  double spread = 0;
+  for (const auto& batch : truth.batches)
+    spread += (batch - mean).cast<double>().squaredNorm() / (batches * (batches - 1));
+  return {mean, std::sqrt(spread) / std::max(1e-30, mean.cast<double>().norm())};
+}
+
 void write_images(const SceneSpec& scene, PluginRegistry& registry, const Mesh& display,
-                  const Eigen::Vector3f& target, const Environment& environment,
+                  const Eigen::Vector3f& target, float size, const Environment& environment,
                   const std::vector<std::pair<std::string, Eigen::MatrixX3f>>& radiances,
                   const fs::path& stem) {
   PluginChoice choice = scene.renderer;
   auto renderer = registry.create<Renderer>(choice.name, choice.params, choice.where);
   RenderInput input;
   input.mesh = &display;
+  // Close to the object, from the room's side of it, a little above.
   input.camera = scene.make_camera(display);
+  const Eigen::Vector3f middle = (display.bounds_min() + display.bounds_max()) / 2;
+  Eigen::Vector3f away(middle.x() - target.x(), 0, middle.z() - target.z());
+  away = away.norm() > 1e-3f ? Eigen::Vector3f(away.normalized()) : Eigen::Vector3f::UnitZ();
   input.camera.target = target;
+  input.camera.position = target + size * (2.2f * away + Eigen::Vector3f(0, 1.2f, 0));
+  input.camera.fov_degrees = 50;
   input.background = &environment;
   const Eigen::Vector3f albedo = scene.albedo();
   for (const auto& [name, radiance] : radiances) {
@@ -110,41 +131,45 @@ int probes(Context& context, const ProbesArgs& args) {
   for (int b = 0; b < kBatches; ++b) seeds.push_back(seed + std::uint64_t(b));
   std::vector<Row> rows;
   double shade_seconds = 0;
+  const RayCaster scene_rays(data.mesh);
+  auto truth_of = [&](const Mesh& points, const RayCaster& occluders, const std::string& label) {
+    Progress progress(label, double(points.vertex_count()), "", context.quiet);
+    GroundTruthEstimate truth = ground_truth_estimate(
+        points, environment, std::max(1, samples / kBatches), seeds, &progress, nullptr, &occluders);
+    progress.finish();
+    return mean_and_noise(truth);
+  };
   for (std::size_t i = 0; i < positions.size(); ++i) {
     Row row;
     row.at = positions[i];
     const Mesh moving = scene.load_moving(row.at);
     Mesh display = data.mesh;
-    const auto first = Eigen::Index(display.vertex_count()), count = Eigen::Index(moving.vertex_count());
     append(display, moving);
+    const RayCaster display_rays(display);
     clock = Stopwatch();
-    const ProbeShading with = relighting.shade(display, incident, control);
+    const ProbeShading with = relighting.shade(moving, incident, control);
     shade_seconds += clock.seconds();
-    const ProbeShading without = relighting.shade(display, incident, plain);
-    Progress progress("ground truth at position " + std::to_string(i + 1), double(display.vertex_count()),
-                      "", context.quiet);
-    const GroundTruthEstimate truth = ground_truth_estimate(
-        display, environment, std::max(1, samples / kBatches), seeds, &progress);
-    progress.finish();
-    Eigen::MatrixX3f mean = Eigen::MatrixX3f::Zero(display.vertex_count(), 3);
-    for (const auto& batch : truth.batches) mean += batch / float(kBatches);
-    double spread = 0;  // variance of the mean, summed over the object's rows
-    for (const auto& batch : truth.batches)
-      spread += (batch - mean).middleRows(first, count).cast<double>().squaredNorm() /
-                (kBatches * (kBatches - 1));
-    const Eigen::MatrixX3f object_truth = mean.middleRows(first, count);
-    row.control = relative_rms(with.radiance.middleRows(first, count), object_truth);
-    row.trilinear = relative_rms(without.radiance.middleRows(first, count), object_truth);
-    row.floor = std::sqrt(spread) / std::max(1e-30, object_truth.cast<double>().norm());
-    row.far_control = far_off(with.radiance.middleRows(first, count), object_truth);
-    row.far_trilinear = far_off(without.radiance.middleRows(first, count), object_truth);
-    row.unseen = with.unseen;
+    const ProbeShading without = relighting.shade(moving, incident, plain);
+    const std::string where = " at position " + std::to_string(i + 1);
+    const auto [truth, noise] = truth_of(moving, display_rays, "ground truth" + where);
+    const auto [scene_truth, scene_noise] =
+        truth_of(moving, scene_rays, "ground truth without the object's own shadow" + where);
+    row.control = relative_rms(with.radiance, truth);
+    row.trilinear = relative_rms(without.radiance, truth);
+    row.scene_control = relative_rms(with.radiance, scene_truth);
+    row.scene_trilinear = relative_rms(without.radiance, scene_truth);
+    row.floor = std::max(noise, scene_noise);
+    row.far_control = far_off(with.radiance, truth);
+    row.far_trilinear = far_off(without.radiance, truth);
     rows.push_back(row);
-    if (!args.out.empty()) {
+    if (!args.out.empty()) {  // every displayed vertex, for the images
       const Eigen::Vector3f centre = (moving.bounds_min() + moving.bounds_max()) / 2;
-      write_images(scene, context.registry, display, centre, environment,
-                   {{"leak_control", with.radiance}, {"trilinear", without.radiance},
-                    {"truth", mean}},
+      const auto whole_truth = truth_of(display, display_rays, "ground truth of the image" + where);
+      write_images(scene, context.registry, display, centre,
+                   (moving.bounds_max() - moving.bounds_min()).maxCoeff(), environment,
+                   {{"leak_control", relighting.shade(display, incident, control).radiance},
+                    {"trilinear", relighting.shade(display, incident, plain).radiance},
+                    {"truth", whole_truth.first}},
                    fs::path(args.out) / ("position" + std::to_string(i + 1)));
     }
   }
@@ -158,17 +183,19 @@ int probes(Context& context, const ProbesArgs& args) {
   std::printf("relight probes: %.3f ms; shade the scene and object with leak control: %.1f ms "
               "a position\n",
               1e3 * relight_seconds, 1e3 * shade_seconds / double(positions.size()));
-  std::printf("\n| moving object at | RMS error, leak control | RMS error, trilinear | trilinear "
-              "/ control | far off (control / trilinear) | ground-truth noise |\n"
-              "|---|---|---|---|---|---|\n");
+  std::printf(
+      "\n| moving object at | leak control | trilinear | trilinear / leak control | without the "
+      "object's own shadow: leak control | trilinear | trilinear / leak control | far off "
+      "(leak control / trilinear) | ground-truth noise |\n|---|---|---|---|---|---|---|---|---|\n");
   for (const Row& row : rows)
-    std::printf("| %g, %g, %g | %.4f | %.4f | %.2fx | %.1f%% / %.1f%% | %.4f |\n",
+    std::printf("| %g, %g, %g | %.4f | %.4f | %.2fx | %.4f | %.4f | %.2fx | %.1f%% / %.1f%% | "
+                "%.4f |\n",
                 double(row.at.x()), double(row.at.y()), double(row.at.z()), row.control,
-                row.trilinear, row.trilinear / std::max(row.control, 1e-30),
+                row.trilinear, row.trilinear / std::max(row.control, 1e-30), row.scene_control,
+                row.scene_trilinear, row.scene_trilinear / std::max(row.scene_control, 1e-30),
                 100 * row.far_control, 100 * row.far_trilinear, row.floor);
-  std::printf("\nRMS errors are relative to the ground truth's RMS over the object's %zu "
-              "vertices (%d samples each); far off: a vertex's error above a quarter of that "
-              "RMS.\n",
+  std::printf("\nRMS error of the object's %zu vertices relative to the ground truth's RMS "
+              "(%d samples a vertex); far off: a vertex's error above a quarter of that RMS.\n",
               scene.load_moving().vertex_count(), samples);
   return 0;
 }

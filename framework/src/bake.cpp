@@ -182,7 +182,7 @@ void describe(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& 
   data.bounces = plan.bounces;
   data.subsurface = plan.subsurface;
   data.basis_state = plan.basis->save();
-  if (plan.glossy) {
+  if (plan.glossy || scene.probes()) {  // glossy: the hemisphere basis; probes: the incident one
     data.exit = plan.exit_record;
     data.exit_state = plan.exit->save();
   }
@@ -245,7 +245,7 @@ BakeData bake_probes(const SceneSpec& scene, const BakePlan& plan, const RunOpti
   Progress progress("bake probes", double(grid.count()), plan.shadowed ? "rays" : "",
                     options.quiet);
   ProbeTransfer traced =
-      probe_transfer(caster, data.mesh, grid, set, *plan.basis,
+      probe_transfer(caster, data.mesh, grid, set, *plan.basis, *plan.exit,
                      keys::receivers::invalid_fraction(scene.receivers), plan.shadowed, &progress);
   progress.finish();
   times.add("trace probes", clock.seconds());

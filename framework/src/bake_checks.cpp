@@ -38,7 +38,8 @@ void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
                     (data.subsurface ? " and subsurface" : "") + ", but the scene asks for \"" +
                     material + "\" with " + std::to_string(bounces) + " bounces; bake again");
   check_plugin_matches(data.basis, scene.basis, "basis");
-  if (scene.glossy()) check_plugin_matches(data.exit, scene.exit, "exit basis");
+  if (scene.glossy() || (scene.probes() && !scene.exit.name.empty()))
+    check_plugin_matches(data.exit, scene.exit, "exit basis");
   if (data.receivers.probes() != scene.probes())
     throw Error(scene.receivers.location(),
                 "the bake file holds transfer at " + data.receivers.kind +
@@ -141,7 +142,7 @@ std::vector<std::string> check_bake_records(const std::string& file, const BakeD
       check_bake_dimension(data, *basis_of_record(data.basis, data.basis_state, registry, "basis"));
     else
       unchecked.push_back("basis \"" + data.basis.name + "\"");
-    if (data.transfer.glossy()) {
+    if (data.transfer.glossy() || data.receivers.probes()) {
       if (installed(registry, PluginKind::basis, data.exit.name))
         check_exit_rows(data, *basis_of_record(data.exit, data.exit_state, registry, "exit basis"));
       else

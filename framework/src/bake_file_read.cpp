@@ -90,7 +90,8 @@ void read_transfer(const H5::H5File& h5, BakeData& data, bake_stream::Out& out) 
   data.bounces = static_cast<int>(read_count(transfer, "bounces", 1000));
   data.subsurface = read_count(transfer, "subsurface", 1) != 0;
   data.transfer.exit_rows = static_cast<int>(read_count(transfer, "exit_rows", 1 << 20));
-  if (data.transfer.glossy()) data.exit = read_plugin(root, "exit_basis");
+  if (data.transfer.glossy() || data.receivers.probes())
+    data.exit = read_plugin(root, "exit_basis");
   read_channel_groups(transfer, data.transfer);
   out.transfer_rows = dataset_rows(transfer, "coefficients");
   if (data.bounces > 0 && transfer.nameExists("direct_coefficients"))

@@ -105,6 +105,30 @@ void plan_glossy(const SceneSpec& scene, PluginRegistry& registry, BakePlan& pla
   }
 }
 
+// Probes: the basis of the light arriving at each probe ([exit], a sphere
+// basis; by default the light basis). A smaller incident basis than the
+// light's keeps what diffuse receivers need (irradiance is smooth) while
+// the light keeps the frequencies visibility cuts (docs/receivers.md).
+void plan_probes(const SceneSpec& scene, PluginRegistry& registry, BakePlan& plan) {
+  if (scene.exit.name.empty()) {
+    plan.exit = plan.basis;
+    plan.exit_record = plan.basis_record;
+    return;
+  }
+  PluginChoice exit = scene.exit;
+  plan.exit = registry.create<Basis>(exit.name, exit.params, exit.where);
+  plan.exit_record = record_of(scene.exit, registry, PluginKind::basis);
+  if (plan.exit->domain() != Domain::sphere)
+    throw Error(exit.where, "[exit] basis \"" + exit.name +
+                                "\" is a hemisphere basis; at probes [exit] carries the light "
+                                "arriving over the whole sphere: use a sphere basis");
+  check_orthonormal_claim(*plan.exit, exit);
+  if (plan.exit->can_fit())
+    throw Error(exit.where, "[exit] basis \"" + exit.name +
+                                "\" is data-driven (fits to traced visibility); at probes use a "
+                                "basis that needs no fit");
+}
+
 }  // namespace
 
 void refuse_budget_beyond_signal(const Params& params, Eigen::Index dimension,
@@ -165,13 +189,14 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   plan.shadowed = keys::transport::shadowed(scene.transport);
   plan.fit = plan.basis->can_fit();
   if (plan.glossy) plan_glossy(scene, registry, plan);
+  if (scene.probes()) plan_probes(scene, registry, plan);
   plan.subsurface_material = scene.subsurface();
   plan.channels = scene.channels();
   plan.keep_visibility = plan.fit || plan.glossy;
   if (plan.sparse_terms == 0)
     refuse_budget_beyond_signal(
         compressor.params,
-        Eigen::Index(plan.basis->size()) * (plan.glossy ? plan.exit->size() : 1) *
+        Eigen::Index(plan.basis->size()) * (plan.exit ? plan.exit->size() : 1) *
             Eigen::Index(std::max<std::size_t>(1, plan.channels.groups.size())),
         compressor.name);
   return plan;

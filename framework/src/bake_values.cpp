@@ -86,10 +86,7 @@ void check_transfer(BakeData& data) {
                 (data.receivers.probes() ? " probes" : " vertices"));
   if ((transfer.kind == "incident") != data.receivers.probes())
     throw Error("transfer kind \"" + transfer.kind + "\" at " + data.receivers.kind);
-  if (transfer.kind == "incident" &&
-      transfer.dimension() != Eigen::Index(transfer.exit_rows) * transfer.exit_rows)
-    throw Error("probe transfer of " + std::to_string(transfer.dimension()) +
-                " coefficients is not " + std::to_string(transfer.exit_rows) + " squared");
+
   const Eigen::Index columns = transfer.dimension();
   if (columns % (Eigen::Index(transfer.exit_rows) * transfer.channel_groups) != 0)
     throw Error("the transfer's " + std::to_string(columns) +

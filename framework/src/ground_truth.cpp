@@ -218,9 +218,12 @@ class VertexEstimator {
 
 GroundTruthEstimate ground_truth_estimate(const Mesh& mesh, const Environment& environment,
                                           int samples, const std::vector<std::uint64_t>& seeds,
-                                          Progress* progress, const Reflectance& reflectance) {
+                                          Progress* progress, const Reflectance& reflectance,
+                                          const RayCaster* occluders) {
   if (seeds.empty()) throw Error("ground_truth_estimate: no seeds");
-  RayCaster caster(mesh);
+  std::optional<RayCaster> own;
+  if (!occluders) own.emplace(mesh);
+  const RayCaster& caster = occluders ? *occluders : *own;
   const std::size_t v_count = mesh.vertex_count();
   // A constant map is sampled best by the cosine alone (zero variance); a real
   // map adds luminance-proportional samples, combined by the balance heuristic.

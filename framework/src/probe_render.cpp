@@ -25,6 +25,18 @@ ProbeRelighting::ProbeRelighting(const SceneSpec& scene, const BakeData& data,
   basis_ = registry.create<Basis>(basis.name, basis.params, basis.where);
   basis_->load(data.basis_state);
   check_bake_dimension(data, *basis_);
+  if (!scene.exit.name.empty()) {
+    PluginChoice exit = scene.exit;
+    incident_ = registry.create<Basis>(exit.name, exit.params, exit.where);
+    incident_->load(data.exit_state);
+  } else {
+    incident_ = basis_;
+  }
+  if (incident_->size() != data.transfer.exit_rows)
+    throw Error(scene.receivers.location(),
+                "the bake's probes hold " + std::to_string(data.transfer.exit_rows) +
+                    " incident coefficients, but the scene's incident basis has " +
+                    std::to_string(incident_->size()) + "; bake again");
   scene.check_window(*basis_);
   caster_ = std::make_unique<RayCaster>(data.mesh);
   lookup_.interpolation = keys::receivers::interpolation(scene.receivers) == "trilinear"
@@ -41,13 +53,13 @@ Eigen::MatrixX3d ProbeRelighting::light(const Environment& environment) const {
 
 std::vector<Eigen::MatrixX3d> ProbeRelighting::incident(const CompressedTransfer& transfer,
                                                         const Eigen::MatrixX3d& light) const {
-  return incident_light(transfer, basis_->size(), light);
+  return incident_light(transfer, incident_->size(), light);
 }
 
 ProbeShading ProbeRelighting::shade(const Mesh& points,
                                     const std::vector<Eigen::MatrixX3d>& incident,
                                     const ProbeLookup& lookup) const {
-  const Eigen::MatrixXd lobes = cosine_lobes(*basis_, points.normals, lobe_rule_);
+  const Eigen::MatrixXd lobes = cosine_lobes(*incident_, points.normals, lobe_rule_);
   return shade_from_probes(points, data_.receivers.grid, data_.receivers.valid, incident, lobes,
                            caster_.get(), lookup);
 }
@@ -76,10 +88,11 @@ Rendered render_probes(const SceneSpec& scene, const BakeData& data, PluginRegis
   clock = Stopwatch();
   const ProbeShading shading = relighting.shade(display, incident, relighting.lookup());
   times.add("shade vertices from probes", clock.seconds());
-  if (shading.no_valid_probe > 0)
-    options.warn(std::to_string(shading.no_valid_probe) +
-                 " vertices have no valid probe around them and are drawn black: lower [receivers] "
-                 "spacing");
+  if (shading.no_valid_probe > 0)  // usually faces hidden inside geometry, where all probes are
+    options.message(std::to_string(shading.no_valid_probe) + " of " +
+                    std::to_string(display.vertex_count()) +
+                    " vertices have only invalid probes (inside geometry) around them and are "
+                    "drawn black; where they show, lower [receivers] spacing");
   Rendered out;
   out.vertex_radiance = shading.radiance;
   const Eigen::Vector3f albedo = scene.albedo();

@@ -32,28 +32,67 @@ namespace {
 constexpr Eigen::Index kPointsPerTask = 256;
 
 // Visibility of each corner probe from each point of a task: rays from the
-// biased points to the probes, blocked by anything in between.
+// probes (in free space when valid) to the biased points, stopping just
+// short of them, so that a point lying on a surface, or where two meet (a
+// wall's foot on the floor), is not hidden by that surface at its own
+// ray's end.
 std::vector<std::uint8_t> probes_seen(const RayCaster& caster, const ProbeGrid& grid,
                                       const std::vector<Eigen::Vector3f>& from,
                                       const std::vector<std::array<std::uint32_t, 8>>& corners) {
   const std::size_t rays = 8 * from.size();
   std::vector<float> origins(3 * rays), directions(3 * rays), far(rays);
+  const float short_of = 4 * caster.offset();
   for (std::size_t i = 0; i < from.size(); ++i)
     for (std::size_t c = 0; c < 8; ++c) {
       const std::size_t r = 8 * i + c;
-      const Eigen::Vector3f to = grid.position(corners[i][c]) - from[i];
+      const Eigen::Vector3f probe = grid.position(corners[i][c]);
+      const Eigen::Vector3f to = from[i] - probe;
       const float length = to.norm();
       const Eigen::Vector3f direction =
           length > 0 ? Eigen::Vector3f(to / length) : Eigen::Vector3f::UnitY();
       for (int a = 0; a < 3; ++a) {
-        origins[3 * r + a] = from[i][a];
+        origins[3 * r + a] = probe[a];
         directions[3 * r + a] = direction[a];
       }
-      far[r] = length;
+      far[r] = std::max(0.f, length - short_of);
     }
   std::vector<std::uint8_t> seen(rays);
   caster.occluded(origins.data(), directions.data(), rays, seen.data(), far.data());
   return seen;
+}
+
+// The points moved along their normals by `bias` (world units), each no
+// further than the free space in front of it allows: a point whose move
+// would cross a surface (a thin wall, a nearby object) moves half as far,
+// then a quarter, else stays. A biased point inside a wall sees no probe.
+void move_along_normals(const RayCaster& caster, const Mesh& points, Eigen::Index first,
+                        float bias, std::vector<Eigen::Vector3f>& at) {
+  std::vector<float> origins(3 * at.size()), directions(3 * at.size()), far(at.size());
+  std::vector<std::uint8_t> free(at.size());
+  std::vector<float> moved(at.size(), 0.f);
+  std::vector<std::size_t> pending(at.size());
+  for (std::size_t i = 0; i < at.size(); ++i) pending[i] = i;
+  for (float step = bias; step > bias / 5 && !pending.empty(); step /= 2) {
+    for (std::size_t k = 0; k < pending.size(); ++k) {
+      const std::size_t i = pending[k];
+      const Eigen::Vector3f& n = points.normals[std::size_t(first) + i];
+      for (int a = 0; a < 3; ++a) {
+        origins[3 * k + a] = at[i][a];
+        directions[3 * k + a] = n[a];
+      }
+      far[k] = step;
+    }
+    caster.occluded(origins.data(), directions.data(), pending.size(), free.data(), far.data());
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < pending.size(); ++k)
+      if (free[k])
+        moved[pending[k]] = step;
+      else
+        pending[kept++] = pending[k];
+    pending.resize(kept);
+  }
+  for (std::size_t i = 0; i < at.size(); ++i)
+    at[i] += moved[i] * points.normals[std::size_t(first) + i];
 }
 
 }  // namespace
@@ -84,13 +123,11 @@ ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
     std::vector<Eigen::Vector3f> at(points_here);
     std::vector<std::array<std::uint32_t, 8>> corners(points_here);
     std::vector<std::array<float, 8>> weights(points_here);
-    for (Eigen::Index i = 0; i < count; ++i) {
-      const std::size_t p = std::size_t(first + i);
-      at[std::size_t(i)] = points.positions[p];
-      if (control)
-        at[std::size_t(i)] += lookup.normal_bias * grid.spacing * points.normals[p];
+    for (Eigen::Index i = 0; i < count; ++i) at[std::size_t(i)] = points.positions[std::size_t(first + i)];
+    if (control && lookup.normal_bias > 0)
+      move_along_normals(*caster, points, first, lookup.normal_bias * grid.spacing, at);
+    for (Eigen::Index i = 0; i < count; ++i)
       grid.cell(at[std::size_t(i)], corners[std::size_t(i)], weights[std::size_t(i)]);
-    }
     std::vector<std::uint8_t> seen;
     if (control) seen = probes_seen(*caster, grid, at, corners);
     for (Eigen::Index i = 0; i < count; ++i) {
@@ -102,12 +139,20 @@ ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
         w[c] = usable ? weights[std::size_t(i)][c] : 0.0;
         total += w[c];
       }
-      if (control && !(total > 0)) {  // no valid probe in sight: the valid ones
+      if (control && !(total > 0)) {
+        // No valid probe in sight (the point's rays start on another surface,
+        // e.g. a wall's foot on the floor): the valid probes in front of the
+        // surface, else the valid ones.
         ++unseen;
-        for (std::size_t c = 0; c < 8; ++c) {
-          w[c] = valid[corner[c]] ? weights[std::size_t(i)][c] : 0.0;
-          total += w[c];
-        }
+        const std::size_t p = std::size_t(first + i);
+        for (int pass = 0; pass < 2 && !(total > 0); ++pass)
+          for (std::size_t c = 0; c < 8; ++c) {
+            const bool in_front =
+                pass == 1 ||
+                points.normals[p].dot(grid.position(corner[c]) - points.positions[p]) > 0;
+            w[c] = valid[corner[c]] && in_front ? weights[std::size_t(i)][c] : 0.0;
+            total += w[c];
+          }
       }
       Eigen::RowVector3d radiance = Eigen::RowVector3d::Zero();
       if (total > 0) {

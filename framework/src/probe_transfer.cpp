@@ -46,16 +46,17 @@ ProbeRays trace_probe(const RayCaster& caster, const Mesh& scene, const Eigen::V
 }  // namespace
 
 ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const ProbeGrid& grid,
-                             const DirectionSet& set, const Basis& basis, double invalid_fraction,
-                             bool shadowed, Progress* progress) {
-  const Eigen::MatrixXd projection = basis.projection_matrix(set);  // s x n
-  const Eigen::MatrixXd values = basis.evaluate(set.directions);    // s x n
-  const Eigen::Index n = basis.size();
+                             const DirectionSet& set, const Basis& light_basis,
+                             const Basis& incident_basis, double invalid_fraction, bool shadowed,
+                             Progress* progress) {
+  const Eigen::MatrixXd projection = incident_basis.projection_matrix(set);  // s x n_E
+  const Eigen::MatrixXd values = light_basis.evaluate(set.directions);        // s x n_B
+  const Eigen::Index n = incident_basis.size(), m = light_basis.size();
   const std::size_t probes = grid.count();
   ProbeTransfer out;
   out.transfer.kind = "incident";
   out.transfer.exit_rows = int(n);
-  out.transfer.coefficients = MatrixXfRow::Zero(Eigen::Index(probes), n * n);
+  out.transfer.coefficients = MatrixXfRow::Zero(Eigen::Index(probes), n * m);
   out.valid.assign(probes, 1);
   const Eigen::MatrixXd unshadowed = projection.transpose() * values;
   tbb::parallel_for(std::size_t(0), (probes + kProbesPerTask - 1) / kProbesPerTask,
@@ -63,7 +64,7 @@ ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const P
                       const std::size_t first = task * kProbesPerTask;
                       const std::size_t last = std::min(probes, first + kProbesPerTask);
                       for (std::size_t p = first; p < last; ++p) {
-                        Eigen::MatrixXd t;  // n x n
+                        Eigen::MatrixXd t;  // n_E x n_B
                         if (shadowed) {
                           const ProbeRays rays = trace_probe(caster, scene, grid.position(p),
                                                              set, invalid_fraction);
@@ -77,7 +78,7 @@ ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const P
                                             Eigen::RowMajor>
                             row_major = t;
                         out.transfer.coefficients.row(Eigen::Index(p)) =
-                            Eigen::Map<const Eigen::RowVectorXd>(row_major.data(), n * n)
+                            Eigen::Map<const Eigen::RowVectorXd>(row_major.data(), n * m)
                                 .cast<float>();
                       }
                       if (progress)
@@ -88,19 +89,19 @@ ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const P
   return out;
 }
 
-std::vector<Eigen::MatrixX3d> incident_light(const CompressedTransfer& transfer, int basis_size,
-                                             const Eigen::MatrixX3d& light) {
-  const Eigen::Index n = basis_size;
-  if (transfer.dimension != n * n || light.rows() != n)
+std::vector<Eigen::MatrixX3d> incident_light(const CompressedTransfer& transfer,
+                                             int incident_size, const Eigen::MatrixX3d& light) {
+  const Eigen::Index n = incident_size, m = light.rows();
+  if (transfer.dimension != n * m)
     throw Error("probe transfer of " + std::to_string(transfer.dimension) +
-                " coefficients a probe and a light of " + std::to_string(light.rows()) +
-                " rows do not fit a basis of " + std::to_string(n) + " functions");
+                " coefficients a probe does not map a light of " + std::to_string(m) +
+                " coefficients to " + std::to_string(n) + " incident ones");
   std::vector<Eigen::MatrixX3d> incident(std::size_t(transfer.vertices()));
   tbb::parallel_for(Eigen::Index(0), transfer.vertices(), [&](Eigen::Index p) {
-    Eigen::RowVectorXf row(n * n);
+    Eigen::RowVectorXf row(n * m);
     transfer.decode_row(p, row);
     const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
-        t(row.data(), n, n);
+        t(row.data(), n, m);
     incident[std::size_t(p)] = t.cast<double>() * light;
   });
   return incident;

@@ -100,7 +100,7 @@ TEST_CASE("probe transfer: identity in open air, a hemisphere over a floor, zero
   grid.spacing = 1;
   grid.counts = {1, 2, 1};  // (0, -0.5, 0) inside the slab, (0, 0.5, 0) above it
   const RayCaster caster(floor);
-  const ProbeTransfer t = probe_transfer(caster, floor, grid, set, *basis, 0.25, true, nullptr);
+  const ProbeTransfer t = probe_transfer(caster, floor, grid, set, *basis, *basis, 0.25, true, nullptr);
   REQUIRE(t.transfer.vertices() == 2);
   CHECK(t.transfer.kind == "incident");
   CHECK(t.valid[0] == 0);
@@ -123,7 +123,7 @@ TEST_CASE("probe transfer: identity in open air, a hemisphere over a floor, zero
   CHECK((up * incident[1].col(0))(0) == Approx(1.25).epsilon(2e-3));
   CHECK((down * incident[1].col(0))(0) == Approx(-0.25).epsilon(1e-2));
   // Unshadowed: P^T B, the identity for an orthonormal basis (to quadrature).
-  const ProbeTransfer open = probe_transfer(caster, floor, grid, set, *basis, 0.25, false, nullptr);
+  const ProbeTransfer open = probe_transfer(caster, floor, grid, set, *basis, *basis, 0.25, false, nullptr);
   const Eigen::Map<const Eigen::Matrix<float, 9, 9, Eigen::RowMajor>> identity(
       open.transfer.coefficients.row(1).data());
   CHECK((identity.cast<double>() - Eigen::MatrixXd::Identity(9, 9)).cwiseAbs().maxCoeff() < 1e-3);
@@ -136,9 +136,9 @@ TEST_CASE("probe transfer does not depend on the thread count", "[probes]") {
   const Mesh scene = make_room(0);
   const ProbeGrid grid = probe_grid_over(scene.bounds_min(), scene.bounds_max(), 0.5f);
   const RayCaster caster(scene);
-  const ProbeTransfer all = probe_transfer(caster, scene, grid, set, *basis, 0.25, true, nullptr);
+  const ProbeTransfer all = probe_transfer(caster, scene, grid, set, *basis, *basis, 0.25, true, nullptr);
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  const ProbeTransfer single = probe_transfer(caster, scene, grid, set, *basis, 0.25, true, nullptr);
+  const ProbeTransfer single = probe_transfer(caster, scene, grid, set, *basis, *basis, 0.25, true, nullptr);
   CHECK(all.valid == single.valid);
   CHECK(all.transfer.coefficients == single.transfer.coefficients);
   // At this spacing the room's ceiling slab holds a layer of probes (y = 2.55).

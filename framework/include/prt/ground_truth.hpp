@@ -41,6 +41,7 @@ class CosineHemisphere {
 // For glossy materials `reflectance` (optional) gives pi * rho(in, out) at a
 // vertex for a world light direction, which replaces albedo 1.
 class Environment;
+class RayCaster;
 class EnvironmentSampler;
 using Reflectance = std::function<double(std::size_t vertex, const Eigen::Vector3d& light)>;
 
@@ -51,10 +52,13 @@ struct GroundTruthEstimate {
   std::vector<Eigen::MatrixX3f> batches;  // v x 3 per seed
   std::uint64_t rays = 0;                 // occlusion rays traced
 };
+// `occluders`: the scene the rays test, when it is not `mesh` itself (the
+// vertices of a moving object against a scene that holds it, or not).
 GroundTruthEstimate ground_truth_estimate(const Mesh& mesh, const Environment& environment,
                                           int samples, const std::vector<std::uint64_t>& seeds,
                                           Progress* progress,
-                                          const Reflectance& reflectance = nullptr);
+                                          const Reflectance& reflectance = nullptr,
+                                          const RayCaster* occluders = nullptr);
 // One batch's radiance.
 Eigen::MatrixX3f ground_truth_radiance(const Mesh& mesh, const Environment& environment,
                                        int samples, std::uint64_t seed, Progress* progress,

@@ -20,6 +20,8 @@ class ProbeRelighting {
   // Checks the bake against the scene and its plug-ins.
   ProbeRelighting(const SceneSpec& scene, const BakeData& data, PluginRegistry& registry);
   const Basis& basis() const { return *basis_; }
+  // The basis of the light arriving at probes ([exit]; the light basis by default).
+  const Basis& incident_basis() const { return *incident_; }
   Eigen::MatrixX3d light(const Environment& environment) const;
   // e_p = T_p l at every probe (n x 3 each), from `transfer` (the bake's
   // compressed form or another encoding of its rows).
@@ -35,7 +37,7 @@ class ProbeRelighting {
  private:
   const SceneSpec& scene_;
   const BakeData& data_;
-  std::shared_ptr<Basis> basis_;
+  std::shared_ptr<Basis> basis_, incident_;
   std::unique_ptr<RayCaster> caster_;
   DirectionSet lobe_rule_;
   ProbeLookup lookup_;
