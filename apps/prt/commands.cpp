@@ -264,13 +264,14 @@ int compress(Context& context, const CompressArgs& args) {
   std::optional<TransferSignal> loaded;
   const Distribution whole = Distribution::whole_signal(data.transfer.vertices());
   data.compressed = encode_in_metric(
-      *compressor, readable_signal(*compressor, args.compressor, data.transfer, loaded), &data.mesh,
+      *compressor, readable_signal(*compressor, args.compressor, data.transfer, loaded),
+      &data.row_mesh(),
       whole, metric);
   loaded.reset();
   const double seconds = clock.seconds();
   times.add("compress (" + args.compressor + ")", seconds);
   const CompressionReport report =
-      measure(data.transfer, data.compressed, &data.mesh, seconds, whole, &metric);
+      measure(data.transfer, data.compressed, &data.row_mesh(), seconds, whole, &metric);
   record(report, data.metrics);
   const auto& info = context.registry.find(PluginKind::compressor, args.compressor);
   data.compressor = {args.compressor, info.info.version, params.describe()};
@@ -292,13 +293,24 @@ int info(Context& context, const std::string& file) {
   const BakeData data = read_bake(file);
   const std::vector<std::string> unchecked = check_bake_records(file, data, context.registry);
   const CompressedTransfer& c = data.compressed;
-  std::cout << "bake file:    " << file << " (format version " << kBakeFormatVersion << ")\n"
+  const ProbeGrid& grid = data.receivers.grid;
+  std::cout << "bake file:    " << file << " (format version " << data.format_version() << ")\n"
             << "scene:        " << data.scene_file << "\n"
             << "mesh:         " << data.mesh.vertex_count() << " vertices, "
             << data.mesh.triangle_count() << " triangles\n"
             << "transport:    " << data.transport << "\n"
+            << (data.receivers.probes()
+                    ? "receivers:    probes, " + std::to_string(grid.counts[0]) + " x " +
+                          std::to_string(grid.counts[1]) + " x " + std::to_string(grid.counts[2]) +
+                          " every " + std::to_string(grid.spacing) + " from (" +
+                          std::to_string(grid.origin.x()) + ", " +
+                          std::to_string(grid.origin.y()) + ", " +
+                          std::to_string(grid.origin.z()) + ")\n"
+                    : std::string("receivers:    the mesh's vertices\n"))
             << "basis:        " << one_line(data.basis) << "\n"
-            << (data.transfer.glossy() ? "exit basis:   " + one_line(data.exit) + "\n" : "")
+            << (data.transfer.glossy()      ? "exit basis:   " + one_line(data.exit) + "\n"
+                : data.receivers.probes() ? "incident:     " + one_line(data.exit) + "\n"
+                                          : "")
             << "transfer:     " << data.transfer.kind << ", "
             << describe_shape(data.transfer.vertices(), data.transfer.dimension())
             << (data.transfer.channel_groups > 1

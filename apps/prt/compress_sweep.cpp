@@ -138,10 +138,12 @@ int compress_sweep(Context& context, const CompressArgs& args) {
     std::optional<TransferSignal> loaded;
     const CompressedTransfer encoded = encode_in_metric(
         *compressors[i],
-        readable_signal(*compressors[i], configurations[i].name, data.transfer, loaded), &data.mesh,
+        readable_signal(*compressors[i], configurations[i].name, data.transfer, loaded),
+        &data.row_mesh(),
         whole, metric);
     rows.push_back({configurations[i].text,
-                    measure(data.transfer, encoded, &data.mesh, clock.seconds(), whole, &metric)});
+                    measure(data.transfer, encoded, &data.row_mesh(), clock.seconds(), whole,
+                            &metric)});
     progress.add(1);
   }
   mark_front(rows);

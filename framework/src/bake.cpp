@@ -249,9 +249,7 @@ BakeData bake_probes(const SceneSpec& scene, const BakePlan& plan, const RunOpti
                      keys::receivers::invalid_fraction(scene.receivers), plan.shadowed, &progress);
   progress.finish();
   times.add("trace probes", clock.seconds());
-  data.receivers.kind = "probes";
-  data.receivers.grid = grid;
-  data.receivers.valid = traced.valid;
+  data.receivers = Receivers::probes_on(grid, traced.valid);
   const std::size_t invalid =
       std::size_t(std::count(traced.valid.begin(), traced.valid.end(), std::uint8_t(0)));
   options.message(std::to_string(grid.count()) + " probes (" + std::to_string(grid.counts[0]) +
@@ -259,10 +257,7 @@ BakeData bake_probes(const SceneSpec& scene, const BakePlan& plan, const RunOpti
                   std::to_string(grid.counts[2]) + ", spacing " +
                   std::to_string(grid.spacing) + "), " + std::to_string(invalid) +
                   " inside geometry");
-  Mesh points;  // the probes as the compressor's receivers: positions, no triangles
-  for (std::size_t p = 0; p < grid.count(); ++p) points.positions.push_back(grid.position(p));
-  points.normals.assign(points.positions.size(), Eigen::Vector3f::Zero());
-  compress_into(scene, plan, options, traced.transfer, points,
+  compress_into(scene, plan, options, traced.transfer, data.receivers.points,
                 Distribution::whole_signal(traced.transfer.vertices()), times, data);
   data.transfer = std::move(traced.transfer);
   describe(scene, plan, set, options, data);

@@ -129,6 +129,7 @@ void check_bake_values(BakeData& data) {
     check_probe_grid(data.receivers.grid, data.receiver_count(), "/receivers");
     for (std::uint8_t flag : data.receivers.valid)
       if (flag > 1) throw Error("/receivers/valid holds a value other than 0 or 1");
+    data.receivers = Receivers::probes_on(data.receivers.grid, std::move(data.receivers.valid));
   } else if (data.receivers.kind != "vertices") {
     throw Error("unknown receivers \"" + data.receivers.kind + "\"");
   }

@@ -58,6 +58,17 @@ ProbeGrid probe_grid_over(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, 
   return grid;
 }
 
+Receivers Receivers::probes_on(const ProbeGrid& grid, std::vector<std::uint8_t> valid) {
+  Receivers r;
+  r.kind = "probes";
+  r.grid = grid;
+  r.valid = std::move(valid);
+  r.points.positions.reserve(grid.count());
+  for (std::size_t p = 0; p < grid.count(); ++p) r.points.positions.push_back(grid.position(p));
+  r.points.normals.assign(grid.count(), Eigen::Vector3f::Zero());
+  return r;
+}
+
 void check_probe_grid(const ProbeGrid& grid, std::size_t expected, const std::string& source) {
   bool ok = grid.origin.allFinite() && std::isfinite(grid.spacing) && grid.spacing > 0;
   for (int c : grid.counts) ok = ok && c >= 1 && c <= 4096;

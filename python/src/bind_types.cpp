@@ -401,7 +401,10 @@ void bind_types(py::module_& m) {
             std::copy(r.valid.begin(), r.valid.end(), out.mutable_data());
             return out;
           },
-          "probes: False where a probe sits inside geometry (its row is zero)");
+          "probes: False where a probe sits inside geometry (its row is zero)")
+      .def_readonly("points", &Receivers::points,
+                    "probes: the probes as a point mesh (no triangles), one vertex per row: the "
+                    "mesh to give prt.compress and prt.measure for this transfer");
 
   py::class_<BakeData>(m, "BakeData", "A bake: the contents of one bake file.")
       .def_static(

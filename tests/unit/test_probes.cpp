@@ -1,10 +1,13 @@
 // Probes: the grid, the probe transfer, shading from probes with and without
 // the leak control, probe scenes and their bake files.
+#include <H5Cpp.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 #include <tbb/global_control.h>
 
+#include "../../framework/src/bake_userblock.hpp"
 #include "prt/bake.hpp"
 #include "prt/mesh_compose.hpp"
 #include "prt/probe_render.hpp"
@@ -265,6 +268,48 @@ TEST_CASE("a probe scene bakes, writes version 5, reads back its receivers and r
   CHECK(std::size_t(read.transfer.vertices()) == read.receivers.grid.count());
   CHECK(read.transfer.exit_rows == 9);
   CHECK(read.mesh.vertex_count() == joined.vertex_count());
+  // Compressors and reports get one point per row, never the scene's mesh.
+  CHECK(read.row_mesh().vertex_count() == read.receiver_count());
+  CHECK(read.row_mesh().triangle_count() == 0);
+  CHECK(read.row_mesh().positions[5] == read.receivers.grid.position(5));
+
+  // A crafted /receivers with a valid checksum: each inconsistency refused
+  // with a message that says what, and the file named.
+  auto crafted = [&](const char* name, const std::function<void(H5::Group&)>& change) {
+    const fs::path file = dir / name;
+    fs::copy_file(scene.bake_path(), file, fs::copy_options::overwrite_existing);
+    {
+      H5::H5File h5(file.string(), H5F_ACC_RDWR);
+      H5::Group receivers = h5.openGroup("receivers");
+      change(receivers);
+    }
+    seal_bake_file(file, kReceiversFormatVersion);
+    return file;
+  };
+  auto set_number = [](H5::Group& g, const char* attribute, double value) {
+    g.openAttribute(attribute).write(H5::PredType::NATIVE_DOUBLE, &value);
+  };
+  H5::Exception::dontPrint();
+  CHECK_THROWS_WITH(
+      read_bake(crafted("counts.h5", [&](H5::Group& g) { set_number(g, "count_x", 3); })),
+      Catch::Contains("counts.h5") && Catch::Contains("rows for 72 probes"));
+  CHECK_THROWS_WITH(
+      read_bake(crafted("spacing.h5", [&](H5::Group& g) { set_number(g, "spacing", -1); })),
+      Catch::Contains("spacing.h5") && Catch::Contains("is not a grid"));
+  CHECK_THROWS_WITH(
+      read_bake(crafted("huge.h5", [&](H5::Group& g) { set_number(g, "count_z", 1e12); })),
+      Catch::Contains("huge.h5") && Catch::Contains("out of range"));
+  CHECK_THROWS_WITH(read_bake(crafted("valid.h5",
+                                      [&](H5::Group& g) {
+                                        g.unlink("valid");
+                                        const std::vector<std::uint8_t> two(
+                                            read.receivers.valid.size(), 2);
+                                        const hsize_t dims[2] = {two.size(), 1};
+                                        g.createDataSet("valid", H5::PredType::NATIVE_UINT8,
+                                                        H5::DataSpace(2, dims))
+                                            .write(two.data(), H5::PredType::NATIVE_UINT8);
+                                      })),
+                    Catch::Contains("valid.h5") && Catch::Contains("other than 0 or 1"));
   const Rendered image = render(scene, read, registry(), times);
   CHECK(image.image.width == 64);
   // Every displayed vertex, the moving sphere's included, shaded and finite;

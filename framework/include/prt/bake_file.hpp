@@ -58,6 +58,9 @@ struct BakeData {
   BasisState exit_state;                  // glossy only
   std::map<std::string, double> metrics;  // timings (s), squared error, ...
 
+  // One vertex per transfer row: the mesh at vertex receivers, the probes'
+  // points otherwise (for compressors and encode reports).
+  const Mesh& row_mesh() const { return receivers.probes() ? receivers.points : mesh; }
   // The transfer's rows: one per receiver.
   std::size_t receiver_count() const {
     return receivers.probes() ? receivers.grid.count() : mesh.vertex_count();

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "prt/mesh.hpp"
+
 namespace prt {
 
 // A regular grid of probes: probe (x, y, z) sits at origin + spacing * (x, y, z),
@@ -46,8 +48,14 @@ struct Receivers {
   // probes only: 1 where the probe is usable, 0 where it sits inside
   // geometry (most of its rays hit back faces); one per probe.
   std::vector<std::uint8_t> valid;
+  // probes only: the probes as points (positions, zero normals, no
+  // triangles), one per transfer row: what a compressor that clusters by
+  // position, or a report of overdraw, is given instead of the scene's mesh.
+  Mesh points;
 
   bool probes() const { return kind == "probes"; }
+  // Probes on `grid` with their validity; `points` made from the grid.
+  static Receivers probes_on(const ProbeGrid& grid, std::vector<std::uint8_t> valid);
 };
 
 }  // namespace prt
