@@ -40,18 +40,24 @@ Viewer::Viewer(PluginRegistry& registry, const Options& options)
     data_ = prt::bake(scene_, registry_, {options.quiet}, times);
     write_bake(bake_file, data_);
   }
-  relighting_ = std::make_unique<Relighting>(scene_, data_, registry_);
-  light_source_ = std::make_unique<TurningLight>(*relighting_, scene_.load_environment());
+  if (data_.receivers.probes()) {  // docs/receivers.md: shaded from the probes on the CPU
+    probes_ = std::make_unique<ProbeView>(scene_, data_, registry_);
+    environment_ = scene_.load_environment();
+  } else {
+    relighting_ = std::make_unique<Relighting>(scene_, data_, registry_);
+    light_source_ = std::make_unique<TurningLight>(*relighting_, scene_.load_environment());
+  }
   lights_ = scene_.point_lights;
   Eigen::Vector3f low = data_.mesh.positions.front(), high = low;
   for (const auto& p : data_.mesh.positions) low = low.cwiseMin(p), high = high.cwiseMax(p);
-  light_step_ = 0.05 * double((high - low).norm());
+  light_step_ = (probes_ ? 0.01 : 0.05) * double((high - low).norm());
   encodings_.push_back({data_.compressor.name, data_.compressed, nullptr});
   encodings_.push_back({"exact", exact_form(data_.transfer), nullptr});
-  for (auto& encoding : encodings_)
-    encoding.kernel = std::make_unique<RelightKernel>(relighting_->prepare(encoding.transfer));
+  if (relighting_)
+    for (auto& encoding : encodings_)
+      encoding.kernel = std::make_unique<RelightKernel>(relighting_->prepare(encoding.transfer));
   current_ = options.exact ? 1 : 0;
-  home_ = scene_.make_camera(data_.mesh);
+  home_ = scene_.make_camera(probes_ ? probes_->display() : data_.mesh);
   exposure_ = static_cast<float>(keys::camera::exposure(scene_.camera));
   // The viewer draws with a renderer that draws on the GPU: the scene's when
   // it does. Its drawing methods, if it has a "method" choice, are what the
@@ -96,6 +102,7 @@ void Viewer::set_light_degrees(double degrees) {
 }
 
 void Viewer::move_point_light(const Eigen::Vector3d& offset) {
+  if (lights_.empty() && probes_) probes_->move((light_step_ * offset).cast<float>());
   if (lights_.empty()) return;
   selected_ = std::min(selected_, lights_.size() - 1);
   lights_[selected_].position += light_step_ * offset;
@@ -103,7 +110,7 @@ void Viewer::move_point_light(const Eigen::Vector3d& offset) {
 }
 
 void Viewer::drag_point_light(double dx, double dy) {
-  if (lights_.empty()) return;
+  if (lights_.empty() && !(probes_ && probes_->has_moving())) return;
   const Camera c = camera();
   const Eigen::Vector3d forward = (c.target - c.position).cast<double>().normalized();
   const Eigen::Vector3d right = forward.cross(c.up.cast<double>()).normalized();
@@ -118,7 +125,7 @@ std::vector<std::string> Viewer::encoding_names() const {
 }
 
 std::string Viewer::light_rotation_rule() const {
-  return light_source_->rule();
+  return light_source_ ? light_source_->rule() : "the map turned and projected again";
 }
 
 void Viewer::orbit(double yaw, double pitch) {
@@ -150,7 +157,13 @@ Camera Viewer::camera() const {
 void Viewer::update_light() {
   if (!light_dirty_) return;
   Stopwatch clock;
-  light_ = light_source_->at(light_degrees_);
+  if (probes_) {  // the map turned about +y from the scene's rotation, projected again
+    environment_->set_rotation(
+        rotation_about_up(keys::lighting::rotation(scene_.lighting) + light_degrees_));
+    light_ = probes_->light(*environment_);
+  } else {
+    light_ = light_source_->at(light_degrees_);
+  }
   light_ms_ = 1000 * clock.seconds();
   light_dirty_ = false;
 }
@@ -184,10 +197,36 @@ Eigen::MatrixX3f Viewer::heat_colours(const Eigen::MatrixX3d& light, const Camer
   return colours;  // 10% of the brightest vertex saturates to red
 }
 
+// A probe scene: every vertex shaded from the probes on the CPU (the light
+// at each probe, then 8 probes a vertex), drawn by the GPU renderer.
+Image Viewer::render_probes(const Camera& cam) {
+  Eigen::MatrixX3f colours = probes_->radiance(encodings_[current_].transfer, light_);
+  relight_ms_ = probes_->incident_ms() + probes_->shade_ms();
+  if (heatmap_) {
+    const Eigen::MatrixX3f exact = probes_->radiance(encodings_[1].transfer, light_);
+    const float scale = std::max(1e-12f, exact.rowwise().norm().maxCoeff());
+    for (Eigen::Index p = 0; p < colours.rows(); ++p)
+      colours.row(p) = heat(10.f * (colours.row(p) - exact.row(p)).norm() / scale).transpose();
+  }
+  RenderInput input;
+  input.mesh = &probes_->display();
+  input.vertex_radiance = &colours;
+  input.camera = cam;
+  input.background = background_ && !heatmap_ ? &*environment_ : nullptr;
+  Image image = renderer_->render(input);
+  overdraw_ = 0;
+  return image;
+}
+
 Image Viewer::render() {
   Stopwatch clock;
   update_light();
   const Camera cam = camera();
+  if (probes_) {
+    Image image = render_probes(cam);
+    frame_ms_ = 1000 * clock.seconds();
+    return image;
+  }
   // The exit basis toward this camera (glossy); the sums themselves run on the GPU.
   Relit relit;
   if (!relighting_->sums_here()) {
@@ -228,6 +267,12 @@ std::string Viewer::status() const {
                 heatmap_ ? " error heat-map" : "", method_.c_str(), frame_ms_, relight_ms_,
                 light_ms_, overdraw_, light_degrees_);
   std::string line = text;
+  if (probes_ && probes_->has_moving()) {
+    const Eigen::Vector3f& p = probes_->position();
+    std::snprintf(text, sizeof text, " | moving object at (%.3f, %.3f, %.3f)", p.x(), p.y(),
+                  p.z());
+    line += text;
+  }
   if (!lights_.empty()) {
     const Eigen::Vector3d& p = lights_[std::min(selected_, lights_.size() - 1)].position;
     std::snprintf(text, sizeof text, " | point light %zu at (%.3f, %.3f, %.3f)",

@@ -12,6 +12,7 @@
 #include "prt/renderer.hpp"
 #include "prt/scene.hpp"
 #include "prt/turning_light.hpp"
+#include "probe_view.hpp"
 
 namespace prt::view {
 
@@ -39,12 +40,15 @@ class Viewer {
   void toggle_heatmap() { heatmap_ = !heatmap_; }
   void toggle_method();
   void set_light_degrees(double degrees);
-  // Moves the selected point light by `offset` (mesh units); nothing without lights.
+  // Moves the selected point light by `offset` (key presses); nothing
+  // without lights. In a probe scene without point lights: the moving object.
   void move_point_light(const Eigen::Vector3d& offset);
   // Moves it in the camera's image plane by a mouse drag (pixels).
   void drag_point_light(double dx, double dy);
   // After the panel edited point_lights() in place.
-  void point_lights_changed() { relighting_->set_point_lights(lights_); }
+  void point_lights_changed() {
+    if (relighting_) relighting_->set_point_lights(lights_);
+  }
 
   const SceneSpec& scene() const { return scene_; }
   const BakeData& bake() const { return data_; }
@@ -60,7 +64,9 @@ class Viewer {
   double light_degrees() const { return light_degrees_; }
   std::vector<PointLight>& point_lights() { return lights_; }
   std::size_t& selected_light() { return selected_; }
-  std::string point_light_rule() const { return relighting_->point_light_rule(); }
+  std::string point_light_rule() const {
+    return relighting_ ? relighting_->point_light_rule() : std::string();
+  }
   std::string light_rotation_rule() const;
   struct Timings {
     double frame_ms, relight_ms, light_ms, overdraw;
@@ -85,11 +91,14 @@ class Viewer {
   Eigen::MatrixX3f cpu_radiance(std::size_t index, const Eigen::MatrixX3d& light,
                                 const Camera& camera);
   Eigen::MatrixX3f heat_colours(const Eigen::MatrixX3d& light, const Camera& camera);
+  Image render_probes(const Camera& camera);
 
   PluginRegistry& registry_;
   SceneSpec scene_;
   BakeData data_;
-  std::unique_ptr<Relighting> relighting_;  // refers to scene_ and data_
+  std::unique_ptr<Relighting> relighting_;  // refers to scene_ and data_; null at probes
+  std::unique_ptr<ProbeView> probes_;       // a probe bake: refers to scene_ and data_
+  std::optional<Environment> environment_;  // probes: the map, turned by rotate_light
   std::shared_ptr<Renderer> renderer_;
   std::string renderer_name_;         // a renderer that draws on the GPU (gpu_renderer)
   std::vector<std::string> methods_;  // its "method" choices, if it has any

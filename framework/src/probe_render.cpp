@@ -59,9 +59,16 @@ std::vector<Eigen::MatrixX3d> ProbeRelighting::incident(const CompressedTransfer
 ProbeShading ProbeRelighting::shade(const Mesh& points,
                                     const std::vector<Eigen::MatrixX3d>& incident,
                                     const ProbeLookup& lookup) const {
-  const Eigen::MatrixXd lobes = cosine_lobes(*incident_, points.normals, lobe_rule_);
-  return shade_from_probes(points, data_.receivers.grid, data_.receivers.valid, incident, lobes,
-                           caster_.get(), lookup);
+  return shade_from_probes(points, data_.receivers.grid, data_.receivers.valid, incident,
+                           lobes(points), caster_.get(), lookup);
+}
+
+Eigen::MatrixXd ProbeRelighting::lobes(const Mesh& points) const {
+  return cosine_lobes(*incident_, points.normals, lobe_rule_);
+}
+
+ProbeWeights ProbeRelighting::weights(const Mesh& points, const ProbeLookup& lookup) const {
+  return probe_weights(points, data_.receivers.grid, data_.receivers.valid, caster_.get(), lookup);
 }
 
 Mesh probe_scene_display(const SceneSpec& scene, const BakeData& data) {

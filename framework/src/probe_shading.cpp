@@ -97,23 +97,18 @@ void move_along_normals(const RayCaster& caster, const Mesh& points, Eigen::Inde
 
 }  // namespace
 
-ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
-                               const std::vector<std::uint8_t>& valid,
-                               const std::vector<Eigen::MatrixX3d>& incident,
-                               const Eigen::MatrixXd& lobes, const RayCaster* caster,
-                               const ProbeLookup& lookup) {
+ProbeWeights probe_weights(const Mesh& points, const ProbeGrid& grid,
+                           const std::vector<std::uint8_t>& valid, const RayCaster* caster,
+                           const ProbeLookup& lookup) {
   const Eigen::Index v = Eigen::Index(points.vertex_count());
-  if (valid.size() != grid.count() || incident.size() != grid.count())
-    throw Error("probe shading: " + std::to_string(grid.count()) + " probes, " +
-                std::to_string(valid.size()) + " validity flags and " +
-                std::to_string(incident.size()) + " incident lights");
-  if (lobes.rows() != v)
-    throw Error("probe shading: " + std::to_string(lobes.rows()) + " lobes for " +
-                std::to_string(v) + " points");
+  if (valid.size() != grid.count())
+    throw Error("probe shading: " + std::to_string(grid.count()) + " probes and " +
+                std::to_string(valid.size()) + " validity flags");
   const bool control = lookup.interpolation == ProbeInterpolation::visibility;
   if (control && !caster) throw Error("probe shading with leak control needs the scene's rays");
-  ProbeShading out;
-  out.radiance.resize(v, 3);
+  ProbeWeights out;
+  out.probes.resize(std::size_t(v));
+  out.weights.resize(std::size_t(v));
   std::atomic<std::size_t> unseen{0}, no_valid{0};
   tbb::parallel_for(Eigen::Index(0), (v + kPointsPerTask - 1) / kPointsPerTask,
                     [&](Eigen::Index task) {
@@ -121,22 +116,23 @@ ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
     const Eigen::Index count = std::min(kPointsPerTask, v - first);
     const auto points_here = static_cast<std::size_t>(count);
     std::vector<Eigen::Vector3f> at(points_here);
-    std::vector<std::array<std::uint32_t, 8>> corners(points_here);
-    std::vector<std::array<float, 8>> weights(points_here);
-    for (Eigen::Index i = 0; i < count; ++i) at[std::size_t(i)] = points.positions[std::size_t(first + i)];
+    std::vector<std::array<float, 8>> trilinear(points_here);
+    for (std::size_t i = 0; i < points_here; ++i) at[i] = points.positions[std::size_t(first) + i];
     if (control && lookup.normal_bias > 0)
       move_along_normals(*caster, points, first, lookup.normal_bias * grid.spacing, at);
-    for (Eigen::Index i = 0; i < count; ++i)
-      grid.cell(at[std::size_t(i)], corners[std::size_t(i)], weights[std::size_t(i)]);
+    auto* corners = out.probes.data() + first;
+    for (std::size_t i = 0; i < points_here; ++i) grid.cell(at[i], corners[i], trilinear[i]);
     std::vector<std::uint8_t> seen;
-    if (control) seen = probes_seen(*caster, grid, at, corners);
-    for (Eigen::Index i = 0; i < count; ++i) {
-      const auto& corner = corners[std::size_t(i)];
+    if (control)
+      seen = probes_seen(*caster, grid, at,
+                         std::vector<std::array<std::uint32_t, 8>>(corners, corners + points_here));
+    for (std::size_t i = 0; i < points_here; ++i) {
+      const auto& corner = corners[i];
       std::array<double, 8> w{};
       double total = 0;
       for (std::size_t c = 0; c < 8; ++c) {
-        const bool usable = !control || (valid[corner[c]] && seen[8 * std::size_t(i) + c]);
-        w[c] = usable ? weights[std::size_t(i)][c] : 0.0;
+        const bool usable = !control || (valid[corner[c]] && seen[8 * i + c]);
+        w[c] = usable ? trilinear[i][c] : 0.0;
         total += w[c];
       }
       if (control && !(total > 0)) {
@@ -144,31 +140,67 @@ ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
         // e.g. a wall's foot on the floor): the valid probes in front of the
         // surface, else the valid ones.
         ++unseen;
-        const std::size_t p = std::size_t(first + i);
+        const std::size_t p = std::size_t(first) + i;
         for (int pass = 0; pass < 2 && !(total > 0); ++pass)
           for (std::size_t c = 0; c < 8; ++c) {
             const bool in_front =
                 pass == 1 ||
                 points.normals[p].dot(grid.position(corner[c]) - points.positions[p]) > 0;
-            w[c] = valid[corner[c]] && in_front ? weights[std::size_t(i)][c] : 0.0;
+            w[c] = valid[corner[c]] && in_front ? trilinear[i][c] : 0.0;
             total += w[c];
           }
       }
-      Eigen::RowVector3d radiance = Eigen::RowVector3d::Zero();
-      if (total > 0) {
-        Eigen::MatrixX3d light = Eigen::MatrixX3d::Zero(lobes.cols(), 3);
-        for (std::size_t c = 0; c < 8; ++c)
-          if (w[c] > 0) light += (w[c] / total) * incident[corner[c]];
-        radiance = lobes.row(first + i) * light;
-      } else {
-        ++no_valid;
-      }
-      out.radiance.row(first + i) = radiance.cast<float>();
+      if (!(total > 0)) ++no_valid;
+      for (std::size_t c = 0; c < 8; ++c)
+        out.weights[std::size_t(first) + i][c] = total > 0 ? float(w[c] / total) : 0.f;
     }
   });
   out.unseen = unseen;
   out.no_valid_probe = no_valid;
   out.rays_cast = control ? std::uint64_t(8) * std::uint64_t(v) : 0;
+  return out;
+}
+
+Eigen::MatrixX3f shade_with(const ProbeWeights& weights, const Eigen::MatrixXd& lobes,
+                            const std::vector<Eigen::MatrixX3d>& incident) {
+  const auto v = Eigen::Index(weights.probes.size());
+  if (lobes.rows() != v)
+    throw Error("probe shading: " + std::to_string(lobes.rows()) + " lobes for " +
+                std::to_string(v) + " points");
+  for (const auto& e : incident)
+    if (e.rows() != lobes.cols())
+      throw Error("probe shading: incident light of " + std::to_string(e.rows()) +
+                  " coefficients for lobes of " + std::to_string(lobes.cols()));
+  Eigen::MatrixX3f radiance(v, 3);
+  tbb::parallel_for(Eigen::Index(0), v, [&](Eigen::Index p) {
+    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+    for (std::size_t c = 0; c < 8; ++c) {
+      const float w = weights.weights[std::size_t(p)][c];
+      if (w > 0) {
+        const std::uint32_t probe = weights.probes[std::size_t(p)][c];
+        if (probe >= incident.size()) throw Error("probe shading: a probe index out of range");
+        sum += double(w) * (lobes.row(p) * incident[probe]);
+      }
+    }
+    radiance.row(p) = sum.cast<float>();
+  });
+  return radiance;
+}
+
+ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
+                               const std::vector<std::uint8_t>& valid,
+                               const std::vector<Eigen::MatrixX3d>& incident,
+                               const Eigen::MatrixXd& lobes, const RayCaster* caster,
+                               const ProbeLookup& lookup) {
+  if (incident.size() != grid.count())
+    throw Error("probe shading: " + std::to_string(grid.count()) + " probes and " +
+                std::to_string(incident.size()) + " incident lights");
+  const ProbeWeights weights = probe_weights(points, grid, valid, caster, lookup);
+  ProbeShading out;
+  out.radiance = shade_with(weights, lobes, incident);
+  out.unseen = weights.unseen;
+  out.no_valid_probe = weights.no_valid_probe;
+  out.rays_cast = weights.rays_cast;
   return out;
 }
 

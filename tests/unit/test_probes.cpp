@@ -172,7 +172,7 @@ TEST_CASE("the leak control keeps light behind a wall out; plain trilinear lets 
   grid.origin = {0, 0, 0};
   grid.spacing = 1;
   grid.counts = {2, 1, 1};
-  std::vector<Eigen::MatrixX3d> incident(2, Eigen::MatrixX3d::Zero(9, 3));
+  std::vector<Eigen::MatrixX3d> incident(2, Eigen::MatrixX3d::Zero(4, 3));  // sh order 2
   incident[0].row(0).setConstant(10 * std::sqrt(4 * M_PI));  // bright side: radiance 10
   incident[1].row(0).setConstant(std::sqrt(4 * M_PI));       // dim side: radiance 1
   Mesh points;  // one point on each side, facing away from the wall
@@ -205,6 +205,11 @@ TEST_CASE("the leak control keeps light behind a wall out; plain trilinear lets 
   CHECK(none.radiance.allFinite());
   CHECK_THROWS_WITH(shade_from_probes(points, grid, valid, incident, lobes, nullptr, control),
                     Catch::Contains("needs the scene's rays"));
+  // Incident light in another basis than the lobes' is refused, not misread.
+  valid = {1, 1};
+  const std::vector<Eigen::MatrixX3d> nine(2, Eigen::MatrixX3d::Zero(9, 3));
+  CHECK_THROWS_WITH(shade_from_probes(points, grid, valid, nine, lobes, &caster, control),
+                    Catch::Contains("incident light of 9 coefficients for lobes of 4"));
 }
 
 namespace {

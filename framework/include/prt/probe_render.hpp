@@ -33,6 +33,10 @@ class ProbeRelighting {
   // probes a point, the leak control's rays against the bake's scene.
   ProbeShading shade(const Mesh& points, const std::vector<Eigen::MatrixX3d>& incident,
                      const ProbeLookup& lookup) const;
+  // Its two parts, for a view that keeps them while the light turns: the
+  // lobes of the points' normals, and which probes light each point.
+  Eigen::MatrixXd lobes(const Mesh& points) const;
+  ProbeWeights weights(const Mesh& points, const ProbeLookup& lookup) const;
 
  private:
   const SceneSpec& scene_;

@@ -42,9 +42,26 @@ struct ProbeShading {
   std::uint64_t rays_cast = 0;
 };
 
-// `incident`: one n x 3 per probe (incident_light); `lobes`: one row per
-// vertex of `points` (cosine_lobes of its normals); `caster`: the scene the
-// visibility rays test (needed for ProbeInterpolation::visibility).
+// Which probes each point takes light from, and how much: the part of the
+// shading that depends on where the points are, not on the light (a
+// viewer keeps it while the light turns). Weights sum to 1, or to 0 where
+// no valid probe is around.
+struct ProbeWeights {
+  std::vector<std::array<std::uint32_t, 8>> probes;
+  std::vector<std::array<float, 8>> weights;
+  std::size_t unseen = 0, no_valid_probe = 0;  // as ProbeShading's
+  std::uint64_t rays_cast = 0;
+};
+ProbeWeights probe_weights(const Mesh& points, const ProbeGrid& grid,
+                           const std::vector<std::uint8_t>& valid, const RayCaster* caster,
+                           const ProbeLookup& lookup);
+// Radiance (albedo 1) of the weighted points under the probes' incident light.
+Eigen::MatrixX3f shade_with(const ProbeWeights& weights, const Eigen::MatrixXd& lobes,
+                            const std::vector<Eigen::MatrixX3d>& incident);
+
+// Both: `incident`: one n x 3 per probe (incident_light); `lobes`: one row
+// per vertex of `points` (cosine_lobes of its normals); `caster`: the scene
+// the visibility rays test (needed for ProbeInterpolation::visibility).
 ProbeShading shade_from_probes(const Mesh& points, const ProbeGrid& grid,
                                const std::vector<std::uint8_t>& valid,
                                const std::vector<Eigen::MatrixX3d>& incident,
