@@ -53,7 +53,8 @@ int bake(Context& context, const BakeArgs& args) {
   BakeData data = bake_to_file(scene, plan, target, options, times);
   const Eigen::Index columns =
       data.streamed_transfer.rows > 0 ? data.streamed_transfer.cols : data.transfer.dimension();
-  std::cout << "baked " << data.mesh.vertex_count() << " vertices x " << columns
+  std::cout << "baked " << data.receiver_count()
+            << (data.receivers.probes() ? " probes x " : " vertices x ") << columns
             << " coefficients (" << data.basis.name << ", " << data.transport << ") -> "
             << target.file.path.string() << "\n"
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";

@@ -104,6 +104,16 @@ bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
   return true;
 }
 
+// The probe grid over the scene's mesh at [receivers] spacing.
+ProbeGrid probe_grid(const SceneSpec& scene, const Mesh& mesh) {
+  try {
+    return probe_grid_over(mesh.bounds_min(), mesh.bounds_max(),
+                           float(keys::receivers::spacing(scene.receivers)));
+  } catch (const Error& e) {
+    throw Error(scene.receivers.location(keys::receivers::spacing.name()), e.what());
+  }
+}
+
 // What a distributed bake cannot do yet, refused before any ray.
 void require_distributable(const SceneSpec& scene, const BakePlan& plan,
                            const RunOptions& options) {
@@ -161,9 +171,9 @@ void stream_from_slabs(const BakePlan& plan, const RunOptions& options, int rank
   data.transfer.group_of_channel = transfer.group_of_channel;
   auto own = std::make_shared<const TransferSignal>(std::move(transfer));
   data.streamed_transfer =
-      plan.fit ? kept_shard_transfer(plan, *options.checkpoint, data.mesh.vertex_count(), ranks,
+      plan.fit ? kept_shard_transfer(plan, *options.checkpoint, data.receiver_count(), ranks,
                                      std::move(own))
-               : kept_transfer(plan, *options.checkpoint, data.mesh.vertex_count(),
+               : kept_transfer(plan, *options.checkpoint, data.receiver_count(),
                                options.slab_vertices, std::move(own));
 }
 
@@ -182,88 +192,10 @@ void describe(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& 
   data.bounces = plan.bounces;
   data.subsurface = plan.subsurface;
   data.basis_state = plan.basis->save();
-  if (plan.glossy || scene.probes()) {  // glossy: the hemisphere basis; probes: the incident one
+  if (plan.glossy || plan.probes) {  // glossy: the hemisphere basis; probes: the incident one
     data.exit = plan.exit_record;
     data.exit_state = plan.exit->save();
   }
-}
-
-// Stage 3 and the file's record of it: the transfer compressed (or kept
-// exact), measured, reported. `receivers`: the compressor's mesh, one vertex
-// per row (clustering may use their positions and triangles).
-void compress_into(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
-                   const TransferSignal& transfer, const Mesh& receivers,
-                   const Distribution& where, StageTimes& times, BakeData& data) {
-  Stopwatch clock;
-  // Compression minimises the error of what is rendered (after a fit: the
-  // fitted basis's metric; at probes, the incident light's coefficients).
-  const RenderedMetric metric = data.receivers.probes() ? RenderedMetric{} : rendered_metric(plan);
-  data.compressed = options.compress || plan.sparse_terms > 0
-                        ? compress_stage(plan, transfer, receivers, scene.compressor.where, metric,
-                                         where)
-                        : exact_form(transfer);
-  const double encode_seconds = clock.seconds();
-  times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
-  const CompressionReport report =
-      measure(transfer, data.compressed, &receivers, encode_seconds, where, &metric);
-  record(report, data.metrics);
-  std::string text = report.text();
-  if (!text.empty() && text.back() == '\n') text.pop_back();
-  options.message(text);
-  data.metrics["squared_error"] = report.squared_error;
-  data.metrics["stored_floats"] = data.compressed.stored_floats();
-}
-
-// Probes: the grid over the scene's bounds traced over the whole sphere
-// (docs/receivers.md). One process, no checkpoint: a grid traces in seconds.
-BakeData bake_probes(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
-                     StageTimes& times) {
-  const SourceLocation where = scene.receivers.location(keys::receivers::kind.name());
-  if (options.comm && options.comm->size() > 1)
-    throw Error(where, "section [receivers]: a distributed bake of probes is not built yet; bake "
-                       "it with prt bake");
-  if (plan.fit)
-    throw Error(scene.basis.where, "basis \"" + plan.basis_record.name +
-                                       "\" is fitted to the visibility at vertices; probes take "
-                                       "a basis that needs no fit");
-  Stopwatch clock;
-  BakeData data;
-  data.mesh = scene.load_mesh();
-  times.add("load mesh", clock.seconds());
-  clock = Stopwatch();
-  const DirectionSet set = scene.directions();
-  ProbeGrid grid;
-  try {
-    grid = probe_grid_over(data.mesh.bounds_min(), data.mesh.bounds_max(),
-                           float(keys::receivers::spacing(scene.receivers)));
-  } catch (const Error& e) {
-    throw Error(scene.receivers.location(keys::receivers::spacing.name()), e.what());
-  }
-  const RayCaster caster(data.mesh);
-  times.add("directions + ray structure", clock.seconds());
-  clock = Stopwatch();
-  Progress progress("bake probes", double(grid.count()), plan.shadowed ? "rays" : "",
-                    options.quiet);
-  ProbeTransfer traced =
-      probe_transfer(caster, data.mesh, grid, set, *plan.basis, *plan.exit,
-                     keys::receivers::invalid_fraction(scene.receivers), plan.shadowed, &progress);
-  progress.finish();
-  times.add("trace probes", clock.seconds());
-  data.receivers = Receivers::probes_on(grid, traced.valid);
-  const std::size_t invalid =
-      std::size_t(std::count(traced.valid.begin(), traced.valid.end(), std::uint8_t(0)));
-  options.message(std::to_string(grid.count()) + " probes (" + std::to_string(grid.counts[0]) +
-                  " x " + std::to_string(grid.counts[1]) + " x " +
-                  std::to_string(grid.counts[2]) + ", spacing " +
-                  std::to_string(grid.spacing) + "), " + std::to_string(invalid) +
-                  " inside geometry");
-  compress_into(scene, plan, options, traced.transfer, data.receivers.points,
-                Distribution::whole_signal(traced.transfer.vertices()), times, data);
-  data.transfer = std::move(traced.transfer);
-  describe(scene, plan, set, options, data);
-  data.metrics["rays_cast"] = double(traced.rays_cast);
-  data.metrics["probes_invalid"] = double(invalid);
-  return data;
 }
 
 }  // namespace
@@ -278,7 +210,6 @@ BakeData bake(const SceneSpec& scene, PluginRegistry& registry, const RunOptions
 
 BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
               StageTimes& times) {
-  if (scene.probes()) return bake_probes(scene, plan, options, times);
   Stopwatch clock;
   BakeData data;
   data.mesh = scene.load_mesh();
@@ -291,15 +222,28 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const Communicator& comm = options.comm ? *options.comm : solo();
   const bool distributed = comm.size() > 1;
   if (distributed) require_distributable(scene, plan, options);
-  const Eigen::Index vertices = static_cast<Eigen::Index>(data.mesh.vertex_count());
-  Distribution encode_where{rank_parts(comm, vertices)};
+  if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, data.mesh), {});
+  // One row per receiver: the mesh's vertices, or the probes.
+  const auto rows = static_cast<Eigen::Index>(data.receiver_count());
+  Distribution encode_where{rank_parts(comm, rows)};
   encode_where.checkpoint = options.checkpoint;  // the compressor keeps its state there
   encode_where.checkpoint_seconds = options.checkpoint_seconds;
   const Shard shard = encode_where.parts->shard();
-  const bool on_disk = transfer_on_disk(plan, data.mesh, shard.rows(), options);
-  if (!distributed)
+  // Probes: a grid's rows fit in memory beside the mesh (12,288 probes of
+  // 900 coefficients: 44 MB).
+  const bool on_disk = !plan.probes && transfer_on_disk(plan, data.mesh, shard.rows(), options);
+  if (!distributed && !plan.probes)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
-  TransferOutcome stage = transfer_of(plan, data.mesh, set, options, shard, on_disk);
+  TransferOutcome stage;
+  if (plan.probes) {
+    ProbeStage probes = probe_shard_transfer(
+        plan, data.mesh, data.receivers.grid, set,
+        keys::receivers::invalid_fraction(scene.receivers), options, shard);
+    stage = std::move(probes.outcome);
+    data.receivers = Receivers::probes_on(data.receivers.grid, std::move(probes.valid));
+  } else {
+    stage = transfer_of(plan, data.mesh, set, options, shard, on_disk);
+  }
   times.append(stage.times);
   data.metrics = std::move(stage.metrics);
   data.direct = std::move(stage.direct);
@@ -311,13 +255,13 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   // fitted basis's metric).
   const RenderedMetric metric = rendered_metric(fitted);
   data.compressed = options.compress || plan.sparse_terms > 0
-                        ? compress_stage(fitted, transfer, data.mesh, scene.compressor.where,
-                                         metric, encode_where)
+                        ? compress_stage(fitted, transfer, data.row_mesh(),
+                                         scene.compressor.where, metric, encode_where)
                         : exact_form(transfer);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
   const CompressionReport report =
-      measure(transfer, data.compressed, &data.mesh, encode_seconds, encode_where, &metric);
+      measure(transfer, data.compressed, &data.row_mesh(), encode_seconds, encode_where, &metric);
   if (distributed && comm.rank() != 0) return {};  // rank 0 holds the bake
   record(report, data.metrics);
   std::string text = report.text();
@@ -333,6 +277,15 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   data.metrics["rays_cast"] = static_cast<double>(stage.rays_cast);
   data.metrics["squared_error"] = report.squared_error;
   data.metrics["stored_floats"] = data.compressed.stored_floats();
+  if (plan.probes) {
+    const auto invalid = std::count(data.receivers.valid.begin(), data.receivers.valid.end(), 0);
+    data.metrics["probes_invalid"] = double(invalid);
+    const ProbeGrid& grid = data.receivers.grid;
+    options.message(std::to_string(grid.count()) + " probes (" + std::to_string(grid.counts[0]) +
+                    " x " + std::to_string(grid.counts[1]) + " x " +
+                    std::to_string(grid.counts[2]) + ", spacing " + std::to_string(grid.spacing) +
+                    "), " + std::to_string(invalid) + " inside geometry");
+  }
   return data;
 }
 

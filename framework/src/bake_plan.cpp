@@ -110,6 +110,11 @@ void plan_glossy(const SceneSpec& scene, PluginRegistry& registry, BakePlan& pla
 // light's keeps what diffuse receivers need (irradiance is smooth) while
 // the light keeps the frequencies visibility cuts (docs/receivers.md).
 void plan_probes(const SceneSpec& scene, PluginRegistry& registry, BakePlan& plan) {
+  plan.probes = true;
+  if (plan.fit)
+    throw Error(scene.basis.where, "basis \"" + plan.basis_record.name +
+                                       "\" is fitted to the visibility at vertices; probes take "
+                                       "a basis that needs no fit");
   if (scene.exit.name.empty()) {
     plan.exit = plan.basis;
     plan.exit_record = plan.basis_record;
@@ -202,8 +207,14 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   return plan;
 }
 
+int exit_rows(const BakePlan& plan) {
+  return plan.glossy ? plan.glossy_operator.rows() : plan.probes ? plan.exit->size() : 1;
+}
+
 RenderedMetric rendered_metric(const BakePlan& plan) {
-  if (plan.sparse_terms > 0) return {};  // the basis's own coefficients are kept
+  // Sparse: the basis's own coefficients are kept. Probes: the incident
+  // light's coefficients, compared as they are.
+  if (plan.sparse_terms > 0 || plan.probes) return {};
   return RenderedMetric(*plan.basis, plan.glossy ? plan.exit.get() : nullptr);
 }
 

@@ -48,11 +48,14 @@ ProbeRays trace_probe(const RayCaster& caster, const Mesh& scene, const Eigen::V
 ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const ProbeGrid& grid,
                              const DirectionSet& set, const Basis& light_basis,
                              const Basis& incident_basis, double invalid_fraction, bool shadowed,
-                             Progress* progress) {
+                             Progress* progress, std::size_t first_probe,
+                             std::size_t last_probe) {
   const Eigen::MatrixXd projection = incident_basis.projection_matrix(set);  // s x n_E
   const Eigen::MatrixXd values = light_basis.evaluate(set.directions);        // s x n_B
   const Eigen::Index n = incident_basis.size(), m = light_basis.size();
-  const std::size_t probes = grid.count();
+  last_probe = std::min(last_probe, grid.count());
+  first_probe = std::min(first_probe, last_probe);
+  const std::size_t probes = last_probe - first_probe;
   ProbeTransfer out;
   out.transfer.kind = "incident";
   out.transfer.exit_rows = int(n);
@@ -66,8 +69,8 @@ ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const P
                       for (std::size_t p = first; p < last; ++p) {
                         Eigen::MatrixXd t;  // n_E x n_B
                         if (shadowed) {
-                          const ProbeRays rays = trace_probe(caster, scene, grid.position(p),
-                                                             set, invalid_fraction);
+                          const ProbeRays rays = trace_probe(
+                              caster, scene, grid.position(first_probe + p), set, invalid_fraction);
                           out.valid[p] = rays.valid;
                           if (!rays.valid) continue;
                           t = projection.transpose() * (rays.visible.asDiagonal() * values);

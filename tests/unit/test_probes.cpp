@@ -9,6 +9,8 @@
 
 #include "../../framework/src/bake_userblock.hpp"
 #include "prt/bake.hpp"
+#include "prt/checkpoint.hpp"
+#include "prt/visible_products.hpp"
 #include "prt/mesh_compose.hpp"
 #include "prt/probe_render.hpp"
 #include "prt/probe_shading.hpp"
@@ -351,4 +353,41 @@ constant = [1, 1, 1]
   CHECK_THROWS_WITH(parse(base + "[receivers]\nkind = \"texels\"\n"), Catch::Contains("kind"));
   CHECK_THROWS_WITH(parse(base + "[receivers]\nkind = \"probes\"\nspacing = 0\n"),
                     Catch::Contains("spacing"));
+}
+
+TEST_CASE("probes in slabs through a checkpoint equal probes at once, and resume", "[probes]") {
+  const fs::path dir = fs::temp_directory_path() / "prt_probe_slabs";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string text = kProbeScene;  // 2,268 probes: several slabs
+  text.replace(text.find("spacing = 1.0"), 13, "spacing = 0.45");
+  std::ofstream(dir / "probes.toml") << text;
+  const SceneSpec scene = SceneSpec::load(dir / "probes.toml", registry());
+  const BakePlan plan = plan_bake(scene, registry());
+  StageTimes times;
+  const BakeData whole = bake(scene, plan, RunOptions{true}, times);  // no checkpoint
+  REQUIRE(whole.receiver_count() > 2 * kProjectionBlock);
+  const CheckpointStore store(dir / "probes.h5", bake_key(scene, plan), "test");
+  RunOptions options{true};
+  options.checkpoint = &store;
+  options.slab_vertices = 1;  // one block of the projection a slab: several slabs
+  const BakeData slabbed = bake(scene, plan, options, times);
+  CHECK(slabbed.transfer.coefficients == whole.transfer.coefficients);
+  CHECK(slabbed.receivers.valid == whole.receivers.valid);
+  CHECK(slabbed.metrics == whole.metrics);
+  // A slab lost (never written by a killed run) is traced again; a damaged
+  // validity part is refused, naming it.
+  auto part = [](const char* what, std::size_t first, std::size_t last) {
+    char name[96];
+    std::snprintf(name, sizeof name, "%s.rows-%012zu-%012zu", what, first, last);
+    return std::string(name);
+  };
+  REQUIRE(fs::remove(store.folder() / part("transfer", 0, kProjectionBlock)));
+  const BakeData resumed = bake(scene, plan, options, times);
+  CHECK(resumed.transfer.coefficients == whole.transfer.coefficients);
+  CHECK(resumed.receivers.valid == whole.receivers.valid);
+  store.save(part("valid", kProjectionBlock, 2 * kProjectionBlock),
+             std::vector<std::int32_t>(3, 1));
+  CHECK_THROWS_WITH(bake(scene, plan, options, times), Catch::Contains("valid.rows"));
+  fs::remove_all(dir);
 }

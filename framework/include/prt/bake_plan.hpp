@@ -32,6 +32,7 @@ struct BakePlan {
   std::function<std::shared_ptr<Basis>()> new_basis;
   PluginRecord basis_record, exit_record, compressor_record;
   bool glossy = false, subsurface = false, fit = false;
+  bool probes = false;  // [receivers] kind = "probes": exit is the incident basis
   int bounces = 0;
   double bounce_albedo = 1;
   int sparse_terms = 0;          // > 0: the basis's own sparse approximation replaces compression
@@ -57,6 +58,10 @@ struct BakePlan {
   }
 };
 BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry);
+
+// Rows of each transfer's matrix: the exit basis's (glossy), the incident
+// basis's (probes), else 1.
+int exit_rows(const BakePlan& plan);
 
 // What a scene's bake depends on (scene text, mesh bytes, plug-ins, format):
 // the key of its checkpoint.

@@ -107,6 +107,18 @@ BakeData::StreamedRows kept_shard_transfer(const BakePlan& plan, const Checkpoin
                                            std::size_t vertices, int ranks,
                                            std::shared_ptr<const TransferSignal> own);
 
+// Probes (docs/receivers.md): stages 1-2 for the probes of `grid` over the
+// scene's mesh, slab by slab through options.checkpoint when there is one
+// (the ranks of a distributed bake taking slabs as they come free), else at
+// once. The outcome holds the shard's rows; `valid` every probe's flag.
+struct ProbeStage {
+  TransferOutcome outcome;
+  std::vector<std::uint8_t> valid;
+};
+ProbeStage probe_shard_transfer(const BakePlan& plan, const Mesh& scene, const ProbeGrid& grid,
+                                const DirectionSet& set, double invalid_fraction,
+                                const RunOptions& options, const Shard& shard);
+
 // 3. Compression (or the basis's sparse approximation), in the rendered metric.
 CompressedTransfer compress_stage(const BakePlan& plan, const TransferSignal& transfer,
                                   const Mesh& mesh, const SourceLocation& where,

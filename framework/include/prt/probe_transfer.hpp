@@ -29,12 +29,15 @@ struct ProbeTransfer {
 
 // `scene` is the geometry `caster` traces. A probe is invalid when more than
 // `invalid_fraction` of its rays hit back faces (it sits inside a closed
-// object). Unshadowed (`shadowed` false): V = 1 and no rays. Multithreaded;
-// the result does not depend on the thread count.
+// object). Unshadowed (`shadowed` false): V = 1 and no rays. Only probes
+// [first, last) (a slab of a checkpointed or distributed bake): the
+// result's rows and flags are theirs. Multithreaded; the result does not
+// depend on the thread count or on the range.
 ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const ProbeGrid& grid,
                              const DirectionSet& set, const Basis& light_basis,
                              const Basis& incident_basis, double invalid_fraction, bool shadowed,
-                             Progress* progress);
+                             Progress* progress, std::size_t first = 0,
+                             std::size_t last = static_cast<std::size_t>(-1));
 
 // The light arriving at each probe (n_E x 3 per probe: e_p = T_p l) from a
 // probe transfer's rows in any encoding; `light` is n_B x 3.

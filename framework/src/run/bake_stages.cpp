@@ -13,6 +13,7 @@
 #include "coupled_slabs.hpp"
 #include "kept_state.hpp"
 #include "prt/basis.hpp"
+#include "prt/probe_transfer.hpp"
 #include "prt/communicator_parts.hpp"
 #include "prt/error.hpp"
 #include "prt/frame.hpp"
@@ -29,8 +30,8 @@ namespace {
 
 // The kind and layout of a plan's transfer (what its rows mean).
 void set_shape(const BakePlan& plan, TransferSignal& signal) {
-  signal.kind = plan.glossy ? "glossy" : "diffuse";
-  signal.exit_rows = plan.glossy ? plan.glossy_operator.rows() : 1;
+  signal.kind = plan.glossy ? "glossy" : plan.probes ? "incident" : "diffuse";
+  signal.exit_rows = exit_rows(plan);
   if (plan.channels.groups.size() > 1) {
     signal.channel_groups = static_cast<int>(plan.channels.groups.size());
     signal.group_of_channel = plan.channels.group_of_channel;
@@ -69,7 +70,7 @@ std::uint64_t kept_rays(const CheckpointStore& store, const SlabRange& slab) {
 }
 
 Eigen::Index transfer_dimension(const BakePlan& plan) {
-  return Eigen::Index(plan.glossy ? plan.glossy_operator.rows() : 1) * plan.basis->size();
+  return Eigen::Index(exit_rows(plan)) * plan.basis->size();
 }
 
 // Rows [first, last) of a per-vertex transfer, slab by slab through the
@@ -533,6 +534,102 @@ std::string bake_key(const SceneSpec& scene, const BakePlan& plan) {
   for (const Params& part : scene.mesh_parts)
     if (const std::string file = keys::place::file(part); !file.empty()) digest.add_file(file);
   return digest.hex();
+}
+
+namespace {
+
+// A slab of probes: its validity flags are kept before its rows (which mark
+// it kept), so a kept slab always has them.
+void keep_probe_slab(const CheckpointStore& store, const SlabRange& slab,
+                     const ProbeTransfer& traced) {
+  store.save(rows_name("valid", slab),
+             std::vector<std::int32_t>(traced.valid.begin(), traced.valid.end()));
+  keep_slab(store, slab, traced.transfer.coefficients, traced.rays_cast);
+}
+
+void copy_kept_validity(const CheckpointStore& store, const SlabRange& slab,
+                        std::vector<std::uint8_t>& valid) {
+  const std::string name = rows_name("valid", slab);
+  const std::vector<std::int32_t> flags = store.load_ints(name);
+  if (flags.size() != slab.size())
+    throw misshapen_part(store, name, std::to_string(flags.size()) + " flags",
+                         std::to_string(slab.size()));
+  for (std::size_t i = 0; i < flags.size(); ++i) {
+    if (flags[i] != 0 && flags[i] != 1)
+      throw misshapen_part(store, name, "a flag other than 0 or 1", "0 or 1");
+    valid[slab.first + i] = std::uint8_t(flags[i]);
+  }
+}
+
+}  // namespace
+
+ProbeStage probe_shard_transfer(const BakePlan& plan, const Mesh& scene, const ProbeGrid& grid,
+                                const DirectionSet& set, double invalid_fraction,
+                                const RunOptions& options, const Shard& shard) {
+  const Communicator& comm = options.comm ? *options.comm : solo();
+  const std::size_t probes = grid.count();
+  const Eigen::Index cols = transfer_dimension(plan);
+  ProbeStage out;
+  TransferOutcome& result = out.outcome;
+  result.basis = plan.basis;
+  set_shape(plan, result.transfer);
+  Stopwatch clock;
+  std::optional<RayCaster> caster;
+  auto trace = [&](std::size_t first, std::size_t last, Progress* progress) {
+    if (!caster) caster.emplace(scene);
+    return probe_transfer(*caster, scene, grid, set, *plan.basis, *plan.exit, invalid_fraction,
+                          plan.shadowed, progress, first, last);
+  };
+  if (!options.checkpoint) {  // one process holding every probe
+    Progress progress("bake probes", double(probes), plan.shadowed ? "rays" : "", options.quiet);
+    ProbeTransfer traced = trace(0, probes, &progress);
+    progress.finish();
+    result.transfer.coefficients = std::move(traced.transfer.coefficients);
+    result.rays_cast = traced.rays_cast;
+    out.valid = std::move(traced.valid);
+    result.times.add("trace probes", clock.seconds());
+    return out;
+  }
+  // Slab by slab through the checkpoint; the ranks of a distributed bake
+  // take slabs as they come free (claims carry this run's id).
+  const CheckpointStore& store = *options.checkpoint;
+  const auto slabs = transfer_slabs(0, probes, options.slab_vertices);
+  const std::string run = comm.size() > 1 ? run_id(comm) : std::string("solo");
+  say_kept_slabs(
+      store, slabs, [&](const SlabRange& slab) { return slab_kept(store, slab); }, "probes",
+      [&](const std::string& text) { options.message(text); });
+  {
+    Progress progress(comm.size() > 1 ? "bake probes (slabs done or taken)" : "bake probes",
+                      double(probes), plan.shadowed ? "rays" : "", options.quiet);
+    for (const auto& slab : slabs) {
+      if (slab_kept(store, slab) ||
+          (comm.size() > 1 &&
+           !store.claim("claim-" + run + "." + rows_name("probes", slab.first, slab.last)))) {
+        progress.add(double(slab.size()));
+        continue;
+      }
+      keep_probe_slab(store, slab, trace(slab.first, slab.last, &progress));
+    }
+    progress.finish();
+  }
+  caster.reset();
+  comm.barrier();  // every slab is kept
+  // Every probe's validity (the renderers need all), this shard's rows.
+  out.valid.assign(probes, 0);
+  result.transfer.coefficients.resize(shard.rows(), cols);
+  for (const auto& slab : slabs) {
+    result.rays_cast += kept_rays(store, slab);
+    copy_kept_validity(store, slab, out.valid);
+    const std::size_t first = std::max(slab.first, std::size_t(shard.first)),
+                      last = std::min(slab.last, std::size_t(shard.last));
+    if (first >= last) continue;
+    const MatrixXfRow rows = kept_rows(store, slab, cols);
+    result.transfer.coefficients.middleRows(Eigen::Index(first) - shard.first,
+                                            Eigen::Index(last - first)) =
+        rows.middleRows(Eigen::Index(first - slab.first), Eigen::Index(last - first));
+  }
+  result.times.add("trace probes (slabs)", clock.seconds());
+  return out;
 }
 
 }  // namespace prt
