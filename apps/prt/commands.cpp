@@ -9,11 +9,11 @@
 
 #include "image_outputs.hpp"
 #include "prt/bake_file.hpp"
-#include "prt/mesh_compose.hpp"
 #include "prt/compressor.hpp"
 #include "prt/environment.hpp"
 #include "prt/image_metrics.hpp"
 #include "prt/memory.hpp"
+#include "prt/mesh_compose.hpp"
 #include "prt/output_file.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/progress.hpp"
@@ -183,9 +183,12 @@ int render(Context& context, const RenderArgs& args) {
     check_bake_records(bake_file.string(), data, context.registry);
     times.add("read bake file", clock.seconds());
     if (args.compare && data.receivers.probes())
-      throw Error(bake_file.string() + ": --compare measures transfer at vertices; for probes, "
-                                       "`prt probes " + args.scene + "` measures the moving object "
-                                       "against its ground truth");
+      throw Error(bake_file.string() +
+                  ": --compare measures transfer at vertices; for probes, "
+                  "`prt probes " +
+                  args.scene +
+                  "` measures the moving object "
+                  "against its ground truth");
     result = render(scene, data, context.registry, times, {context.quiet});
     if (args.compare) compare_with_truth(context, args, scene, data, result, times, output);
   }
@@ -266,8 +269,7 @@ int compress(Context& context, const CompressArgs& args) {
   const Distribution whole = Distribution::whole_signal(data.transfer.vertices());
   data.compressed = encode_in_metric(
       *compressor, readable_signal(*compressor, args.compressor, data.transfer, loaded),
-      &data.row_mesh(),
-      whole, metric);
+      &data.row_mesh(), whole, metric);
   loaded.reset();
   const double seconds = clock.seconds();
   times.add("compress (" + args.compressor + ")", seconds);
@@ -304,12 +306,11 @@ int info(Context& context, const std::string& file) {
                     ? "receivers:    probes, " + std::to_string(grid.counts[0]) + " x " +
                           std::to_string(grid.counts[1]) + " x " + std::to_string(grid.counts[2]) +
                           " every " + std::to_string(grid.spacing) + " from (" +
-                          std::to_string(grid.origin.x()) + ", " +
-                          std::to_string(grid.origin.y()) + ", " +
-                          std::to_string(grid.origin.z()) + ")\n"
+                          std::to_string(grid.origin.x()) + ", " + std::to_string(grid.origin.y()) +
+                          ", " + std::to_string(grid.origin.z()) + ")\n"
                     : std::string("receivers:    the mesh's vertices\n"))
             << "basis:        " << one_line(data.basis) << "\n"
-            << (data.transfer.glossy()      ? "exit basis:   " + one_line(data.exit) + "\n"
+            << (data.transfer.glossy()    ? "exit basis:   " + one_line(data.exit) + "\n"
                 : data.receivers.probes() ? "incident:     " + one_line(data.exit) + "\n"
                                           : "")
             << "transfer:     " << data.transfer.kind << ", "

@@ -139,11 +139,9 @@ int compress_sweep(Context& context, const CompressArgs& args) {
     const CompressedTransfer encoded = encode_in_metric(
         *compressors[i],
         readable_signal(*compressors[i], configurations[i].name, data.transfer, loaded),
-        &data.row_mesh(),
-        whole, metric);
-    rows.push_back({configurations[i].text,
-                    measure(data.transfer, encoded, &data.row_mesh(), clock.seconds(), whole,
-                            &metric)});
+        &data.row_mesh(), whole, metric);
+    rows.push_back({configurations[i].text, measure(data.transfer, encoded, &data.row_mesh(),
+                                                    clock.seconds(), whole, &metric)});
     progress.add(1);
   }
   mark_front(rows);

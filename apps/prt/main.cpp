@@ -185,8 +185,9 @@ Command compare_command(CLI::App& app) {
 Command probes_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::ProbesArgs>();
   auto* command = app.add_subcommand(
-      "probes", "shade a probe scene's moving object from its probes, with and without the leak "
-                "control, against the ground truth");
+      "probes",
+      "shade a probe scene's moving object from its probes, with and without the leak "
+      "control, against the ground truth");
   command->add_option("scene", args->scene, "scene description with [receivers] kind = \"probes\"")
       ->required();
   command->add_option("-b,--bake", args->bake, "bake file (default: from the scene)");

@@ -95,6 +95,96 @@ void write_images(const SceneSpec& scene, PluginRegistry& registry, const Mesh& 
   }
 }
 
+// What every position's measurement shares: the bake, its light at every
+// probe, the two lookups and the truth's samples.
+struct Measurement {
+  const SceneSpec& scene;
+  const BakeData& data;
+  PluginRegistry& registry;
+  const ProbeRelighting& relighting;
+  const Environment& environment;
+  std::vector<Eigen::MatrixX3d> incident;
+  ProbeLookup control, plain;
+  int samples = 0;
+  std::vector<std::uint64_t> seeds;
+  bool quiet = false;
+  double shade_seconds = 0;
+
+  std::pair<Eigen::MatrixX3f, double> truth_of(const Mesh& points, const RayCaster& occluders,
+                                               const std::string& label) const {
+    Progress progress(label, double(points.vertex_count()), "", quiet);
+    GroundTruthEstimate truth =
+        ground_truth_estimate(points, environment, std::max(1, samples / int(seeds.size())), seeds,
+                              &progress, nullptr, &occluders);
+    progress.finish();
+    return mean_and_noise(truth);
+  }
+
+  // The object at `at`: its errors, and (with `out`) the images.
+  Row measure(const Eigen::Vector3f& at, const RayCaster& scene_rays, const std::string& where,
+              const fs::path& out) {
+    Row row;
+    row.at = at;
+    const Mesh moving = scene.load_moving(at);
+    Mesh display = data.mesh;
+    append(display, moving);
+    const RayCaster display_rays(display);
+    Stopwatch clock;
+    const ProbeShading with = relighting.shade(moving, incident, control);
+    shade_seconds += clock.seconds();
+    const ProbeShading without = relighting.shade(moving, incident, plain);
+    const auto [truth, noise] = truth_of(moving, display_rays, "ground truth" + where);
+    const auto [scene_truth, scene_noise] =
+        truth_of(moving, scene_rays, "ground truth without the object's own shadow" + where);
+    row.control = relative_rms(with.radiance, truth);
+    row.trilinear = relative_rms(without.radiance, truth);
+    row.scene_control = relative_rms(with.radiance, scene_truth);
+    row.scene_trilinear = relative_rms(without.radiance, scene_truth);
+    row.floor = std::max(noise, scene_noise);
+    row.far_control = far_off(with.radiance, truth);
+    row.far_trilinear = far_off(without.radiance, truth);
+    if (!out.empty()) {  // every displayed vertex, for the images
+      const auto whole_truth = truth_of(display, display_rays, "ground truth of the image" + where);
+      write_images(scene, registry, display, (moving.bounds_min() + moving.bounds_max()) / 2,
+                   (moving.bounds_max() - moving.bounds_min()).maxCoeff(), environment,
+                   {{"leak_control", relighting.shade(display, incident, control).radiance},
+                    {"trilinear", relighting.shade(display, incident, plain).radiance},
+                    {"truth", whole_truth.first}},
+                   out);
+    }
+    return row;
+  }
+};
+
+void print_report(const BakeData& data, const std::vector<Row>& rows, double relight_seconds,
+                  double shade_seconds, std::size_t object_vertices, int samples) {
+  const ProbeGrid& grid = data.receivers.grid;
+  std::printf(
+      "probe transfer: %zu probes (%d x %d x %d, spacing %g), %zu inside geometry; "
+      "basis %s, %.0f floats stored\n",
+      data.receiver_count(), grid.counts[0], grid.counts[1], grid.counts[2], double(grid.spacing),
+      std::size_t(std::count(data.receivers.valid.begin(), data.receivers.valid.end(), 0)),
+      one_line(data.basis).c_str(), data.compressed.stored_floats());
+  std::printf("relight probes: %.3f ms; shade the object with leak control: %.1f ms a position\n",
+              1e3 * relight_seconds, 1e3 * shade_seconds / double(rows.size()));
+  std::printf(
+      "\n| moving object at | leak control | trilinear | trilinear / leak control | without the "
+      "object's own shadow: leak control | trilinear | trilinear / leak control | far off "
+      "(leak control / trilinear) | ground-truth noise |\n|---|---|---|---|---|---|---|---|---|\n");
+  for (const Row& row : rows)
+    std::printf(
+        "| %g, %g, %g | %.4f | %.4f | %.2fx | %.4f | %.4f | %.2fx | %.1f%% / %.1f%% | "
+        "%.4f |\n",
+        double(row.at.x()), double(row.at.y()), double(row.at.z()), row.control, row.trilinear,
+        row.trilinear / std::max(row.control, 1e-30), row.scene_control, row.scene_trilinear,
+        row.scene_trilinear / std::max(row.scene_control, 1e-30), 100 * row.far_control,
+        100 * row.far_trilinear, row.floor);
+  std::printf(
+      "\nRMS error of the object's %zu vertices relative to the ground truth's RMS "
+      "(%d samples a vertex); far off: a vertex's error above a quarter of that RMS.\n",
+      object_vertices, samples);
+}
+
 }  // namespace
 
 int probes(Context& context, const ProbesArgs& args) {
@@ -116,87 +206,27 @@ int probes(Context& context, const ProbesArgs& args) {
   check_bake_records(bake_file.string(), data, context.registry);
   const ProbeRelighting relighting(scene, data, context.registry);
   const Environment environment = scene.load_environment();
+  Measurement measurement{scene, data, context.registry, relighting, environment};
   Stopwatch clock;
-  const std::vector<Eigen::MatrixX3d> incident =
-      relighting.incident(data.compressed, relighting.light(environment));
+  measurement.incident = relighting.incident(data.compressed, relighting.light(environment));
   const double relight_seconds = clock.seconds();
-  ProbeLookup control = relighting.lookup(), plain = control;
-  control.interpolation = ProbeInterpolation::visibility;
-  plain.interpolation = ProbeInterpolation::trilinear;
-
-  const int samples = int(keys::ground_truth::samples(scene.ground_truth));
+  measurement.control = measurement.plain = relighting.lookup();
+  measurement.control.interpolation = ProbeInterpolation::visibility;
+  measurement.plain.interpolation = ProbeInterpolation::trilinear;
+  measurement.samples = int(keys::ground_truth::samples(scene.ground_truth));
   const auto seed = std::uint64_t(keys::ground_truth::seed(scene.ground_truth));
-  constexpr int kBatches = 4;  // as prt render --compare: its spread is the noise floor
-  std::vector<std::uint64_t> seeds;
-  for (int b = 0; b < kBatches; ++b) seeds.push_back(seed + std::uint64_t(b));
-  std::vector<Row> rows;
-  double shade_seconds = 0;
+  for (std::uint64_t b = 0; b < 4; ++b)  // as prt render --compare: their spread is the noise
+    measurement.seeds.push_back(seed + b);
+  measurement.quiet = context.quiet;
   const RayCaster scene_rays(data.mesh);
-  auto truth_of = [&](const Mesh& points, const RayCaster& occluders, const std::string& label) {
-    Progress progress(label, double(points.vertex_count()), "", context.quiet);
-    GroundTruthEstimate truth = ground_truth_estimate(
-        points, environment, std::max(1, samples / kBatches), seeds, &progress, nullptr, &occluders);
-    progress.finish();
-    return mean_and_noise(truth);
-  };
+  std::vector<Row> rows;
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    Row row;
-    row.at = positions[i];
-    const Mesh moving = scene.load_moving(row.at);
-    Mesh display = data.mesh;
-    append(display, moving);
-    const RayCaster display_rays(display);
-    clock = Stopwatch();
-    const ProbeShading with = relighting.shade(moving, incident, control);
-    shade_seconds += clock.seconds();
-    const ProbeShading without = relighting.shade(moving, incident, plain);
-    const std::string where = " at position " + std::to_string(i + 1);
-    const auto [truth, noise] = truth_of(moving, display_rays, "ground truth" + where);
-    const auto [scene_truth, scene_noise] =
-        truth_of(moving, scene_rays, "ground truth without the object's own shadow" + where);
-    row.control = relative_rms(with.radiance, truth);
-    row.trilinear = relative_rms(without.radiance, truth);
-    row.scene_control = relative_rms(with.radiance, scene_truth);
-    row.scene_trilinear = relative_rms(without.radiance, scene_truth);
-    row.floor = std::max(noise, scene_noise);
-    row.far_control = far_off(with.radiance, truth);
-    row.far_trilinear = far_off(without.radiance, truth);
-    rows.push_back(row);
-    if (!args.out.empty()) {  // every displayed vertex, for the images
-      const Eigen::Vector3f centre = (moving.bounds_min() + moving.bounds_max()) / 2;
-      const auto whole_truth = truth_of(display, display_rays, "ground truth of the image" + where);
-      write_images(scene, context.registry, display, centre,
-                   (moving.bounds_max() - moving.bounds_min()).maxCoeff(), environment,
-                   {{"leak_control", relighting.shade(display, incident, control).radiance},
-                    {"trilinear", relighting.shade(display, incident, plain).radiance},
-                    {"truth", whole_truth.first}},
-                   fs::path(args.out) / ("position" + std::to_string(i + 1)));
-    }
+    const std::string name = "position" + std::to_string(i + 1);
+    rows.push_back(measurement.measure(positions[i], scene_rays, " at " + name,
+                                       args.out.empty() ? fs::path() : fs::path(args.out) / name));
   }
-  std::printf("probe transfer: %zu probes (%d x %d x %d, spacing %g), %zu inside geometry; "
-              "basis %s, %.0f floats stored\n",
-              data.receiver_count(), data.receivers.grid.counts[0],
-              data.receivers.grid.counts[1], data.receivers.grid.counts[2],
-              double(data.receivers.grid.spacing),
-              std::size_t(std::count(data.receivers.valid.begin(), data.receivers.valid.end(), 0)),
-              one_line(data.basis).c_str(), data.compressed.stored_floats());
-  std::printf("relight probes: %.3f ms; shade the scene and object with leak control: %.1f ms "
-              "a position\n",
-              1e3 * relight_seconds, 1e3 * shade_seconds / double(positions.size()));
-  std::printf(
-      "\n| moving object at | leak control | trilinear | trilinear / leak control | without the "
-      "object's own shadow: leak control | trilinear | trilinear / leak control | far off "
-      "(leak control / trilinear) | ground-truth noise |\n|---|---|---|---|---|---|---|---|---|\n");
-  for (const Row& row : rows)
-    std::printf("| %g, %g, %g | %.4f | %.4f | %.2fx | %.4f | %.4f | %.2fx | %.1f%% / %.1f%% | "
-                "%.4f |\n",
-                double(row.at.x()), double(row.at.y()), double(row.at.z()), row.control,
-                row.trilinear, row.trilinear / std::max(row.control, 1e-30), row.scene_control,
-                row.scene_trilinear, row.scene_trilinear / std::max(row.scene_control, 1e-30),
-                100 * row.far_control, 100 * row.far_trilinear, row.floor);
-  std::printf("\nRMS error of the object's %zu vertices relative to the ground truth's RMS "
-              "(%d samples a vertex); far off: a vertex's error above a quarter of that RMS.\n",
-              scene.load_moving().vertex_count(), samples);
+  print_report(data, rows, relight_seconds, measurement.shade_seconds,
+               scene.load_moving().vertex_count(), measurement.samples);
   return 0;
 }
 

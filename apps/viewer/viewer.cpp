@@ -269,8 +269,7 @@ std::string Viewer::status() const {
   std::string line = text;
   if (probes_ && probes_->has_moving()) {
     const Eigen::Vector3f& p = probes_->position();
-    std::snprintf(text, sizeof text, " | moving object at (%.3f, %.3f, %.3f)", p.x(), p.y(),
-                  p.z());
+    std::snprintf(text, sizeof text, " | moving object at (%.3f, %.3f, %.3f)", p.x(), p.y(), p.z());
     line += text;
   }
   if (!lights_.empty()) {

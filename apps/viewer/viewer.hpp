@@ -6,13 +6,13 @@
 #include <string>
 #include <vector>
 
+#include "probe_view.hpp"
 #include "prt/basis.hpp"
 #include "prt/environment.hpp"
 #include "prt/pipeline.hpp"
 #include "prt/renderer.hpp"
 #include "prt/scene.hpp"
 #include "prt/turning_light.hpp"
-#include "probe_view.hpp"
 
 namespace prt::view {
 

@@ -114,6 +114,37 @@ ProbeGrid probe_grid(const SceneSpec& scene, const Mesh& mesh) {
   }
 }
 
+// The rows each rank compresses; the compressor keeps its state in the checkpoint.
+Distribution encoding_parts(const Communicator& comm, Eigen::Index rows,
+                            const RunOptions& options) {
+  Distribution where{rank_parts(comm, rows)};
+  where.checkpoint = options.checkpoint;
+  where.checkpoint_seconds = options.checkpoint_seconds;
+  return where;
+}
+
+// Stages 1-2 at probes: this rank's rows; every probe's validity goes into
+// data.receivers.
+TransferOutcome probe_stage(const SceneSpec& scene, const BakePlan& plan, const DirectionSet& set,
+                            const RunOptions& options, const Shard& shard, BakeData& data) {
+  ProbeStage probes =
+      probe_shard_transfer(plan, data.mesh, data.receivers.grid, set,
+                           keys::receivers::invalid_fraction(scene.receivers), options, shard);
+  data.receivers = Receivers::probes_on(data.receivers.grid, std::move(probes.valid));
+  return std::move(probes.outcome);
+}
+
+// The grid and how many of its probes sit inside geometry (also a metric).
+void say_probes(const RunOptions& options, BakeData& data) {
+  const auto invalid = std::count(data.receivers.valid.begin(), data.receivers.valid.end(), 0);
+  data.metrics["probes_invalid"] = double(invalid);
+  const ProbeGrid& grid = data.receivers.grid;
+  options.message(std::to_string(grid.count()) + " probes (" + std::to_string(grid.counts[0]) +
+                  " x " + std::to_string(grid.counts[1]) + " x " + std::to_string(grid.counts[2]) +
+                  ", spacing " + std::to_string(grid.spacing) + "), " + std::to_string(invalid) +
+                  " inside geometry");
+}
+
 // What a distributed bake cannot do yet, refused before any ray.
 void require_distributable(const SceneSpec& scene, const BakePlan& plan,
                            const RunOptions& options) {
@@ -170,11 +201,11 @@ void stream_from_slabs(const BakePlan& plan, const RunOptions& options, int rank
   data.transfer.channel_groups = transfer.channel_groups;
   data.transfer.group_of_channel = transfer.group_of_channel;
   auto own = std::make_shared<const TransferSignal>(std::move(transfer));
-  data.streamed_transfer =
-      plan.fit ? kept_shard_transfer(plan, *options.checkpoint, data.receiver_count(), ranks,
-                                     std::move(own))
-               : kept_transfer(plan, *options.checkpoint, data.receiver_count(),
-                               options.slab_vertices, std::move(own));
+  data.streamed_transfer = plan.fit
+                               ? kept_shard_transfer(plan, *options.checkpoint,
+                                                     data.receiver_count(), ranks, std::move(own))
+                               : kept_transfer(plan, *options.checkpoint, data.receiver_count(),
+                                               options.slab_vertices, std::move(own));
 }
 
 // What the file says of how it was made: scene, transport, plug-ins and
@@ -224,26 +255,15 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   if (distributed) require_distributable(scene, plan, options);
   if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, data.mesh), {});
   // One row per receiver: the mesh's vertices, or the probes.
-  const auto rows = static_cast<Eigen::Index>(data.receiver_count());
-  Distribution encode_where{rank_parts(comm, rows)};
-  encode_where.checkpoint = options.checkpoint;  // the compressor keeps its state there
-  encode_where.checkpoint_seconds = options.checkpoint_seconds;
+  const Distribution encode_where =
+      encoding_parts(comm, Eigen::Index(data.receiver_count()), options);
   const Shard shard = encode_where.parts->shard();
-  // Probes: a grid's rows fit in memory beside the mesh (12,288 probes of
-  // 900 coefficients: 44 MB).
+  // A probe grid's rows fit in memory (12,288 probes x 900 floats: 44 MB).
   const bool on_disk = !plan.probes && transfer_on_disk(plan, data.mesh, shard.rows(), options);
   if (!distributed && !plan.probes)
     require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
-  TransferOutcome stage;
-  if (plan.probes) {
-    ProbeStage probes = probe_shard_transfer(
-        plan, data.mesh, data.receivers.grid, set,
-        keys::receivers::invalid_fraction(scene.receivers), options, shard);
-    stage = std::move(probes.outcome);
-    data.receivers = Receivers::probes_on(data.receivers.grid, std::move(probes.valid));
-  } else {
-    stage = transfer_of(plan, data.mesh, set, options, shard, on_disk);
-  }
+  TransferOutcome stage = plan.probes ? probe_stage(scene, plan, set, options, shard, data)
+                                      : transfer_of(plan, data.mesh, set, options, shard, on_disk);
   times.append(stage.times);
   data.metrics = std::move(stage.metrics);
   data.direct = std::move(stage.direct);
@@ -255,8 +275,8 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   // fitted basis's metric).
   const RenderedMetric metric = rendered_metric(fitted);
   data.compressed = options.compress || plan.sparse_terms > 0
-                        ? compress_stage(fitted, transfer, data.row_mesh(),
-                                         scene.compressor.where, metric, encode_where)
+                        ? compress_stage(fitted, transfer, data.row_mesh(), scene.compressor.where,
+                                         metric, encode_where)
                         : exact_form(transfer);
   const double encode_seconds = clock.seconds();
   times.add("compress (" + plan.compressor_record.name + ")", encode_seconds);
@@ -277,15 +297,7 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   data.metrics["rays_cast"] = static_cast<double>(stage.rays_cast);
   data.metrics["squared_error"] = report.squared_error;
   data.metrics["stored_floats"] = data.compressed.stored_floats();
-  if (plan.probes) {
-    const auto invalid = std::count(data.receivers.valid.begin(), data.receivers.valid.end(), 0);
-    data.metrics["probes_invalid"] = double(invalid);
-    const ProbeGrid& grid = data.receivers.grid;
-    options.message(std::to_string(grid.count()) + " probes (" + std::to_string(grid.counts[0]) +
-                    " x " + std::to_string(grid.counts[1]) + " x " +
-                    std::to_string(grid.counts[2]) + ", spacing " + std::to_string(grid.spacing) +
-                    "), " + std::to_string(invalid) + " inside geometry");
-  }
+  if (plan.probes) say_probes(options, data);
   return data;
 }
 

@@ -41,10 +41,10 @@ void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
   if (scene.glossy() || (scene.probes() && !scene.exit.name.empty()))
     check_plugin_matches(data.exit, scene.exit, "exit basis");
   if (data.receivers.probes() != scene.probes())
-    throw Error(scene.receivers.location(),
-                "the bake file holds transfer at " + data.receivers.kind +
-                    ", but the scene asks for " + keys::receivers::kind(scene.receivers) +
-                    "; bake again");
+    throw Error(scene.receivers.location(), "the bake file holds transfer at " +
+                                                data.receivers.kind + ", but the scene asks for " +
+                                                keys::receivers::kind(scene.receivers) +
+                                                "; bake again");
 }
 
 void check_bake_dimension(const BakeData& data, const Basis& basis) {

@@ -79,7 +79,8 @@ void write_header(H5::H5File& h5, const BakeData& data) {
   write_text(root, "transport", data.transport);
   write_plugin(root, "basis", data.basis);
   write_plugin(root, "compressor", data.compressor);
-  if (data.transfer.glossy() || data.receivers.probes()) write_plugin(root, "exit_basis", data.exit);
+  if (data.transfer.glossy() || data.receivers.probes())
+    write_plugin(root, "exit_basis", data.exit);
   for (int c = 0; c < 3; ++c)
     write_number(root, "albedo_" + std::string(1, "rgb"[c]), data.albedo[c]);
 }

@@ -185,8 +185,8 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   const int version = verify_bake_file(file);
   if (version != kBakeFormatVersion && version != kReceiversFormatVersion)
     throw Error(file.string() + ": bake format version " + std::to_string(version) +
-                ", but this build reads versions " + std::to_string(kBakeFormatVersion) +
-                " and " + std::to_string(kReceiversFormatVersion) + "; re-bake the scene");
+                ", but this build reads versions " + std::to_string(kBakeFormatVersion) + " and " +
+                std::to_string(kReceiversFormatVersion) + "; re-bake the scene");
   // A crafted file with a valid checksum still reaches libhdf5, whose
   // defects (heap overflows, huge allocations, endless loops) it may
   // trigger: the file is parsed in a child process with bounded memory

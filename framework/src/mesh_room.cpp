@@ -59,13 +59,13 @@ Mesh make_room(int detail) {
   Mesh ground = make_cuboid(V(-4, -0.1f, -4), V(4, 0, 4), std::max(cell, 0.25f));
   append(room, ground);
   const V boxes[][2] = {
-      {V(-w - t, 0, -w - t), V(-w, height, w + t)},       // -x wall
-      {V(w, 0, -w - t), V(w + t, height, w + t)},         // +x wall
-      {V(-w, 0, -w - t), V(w, height, -w)},               // -z wall
-      {V(-w, 0, w), V(-1, height, w + t)},                // +z wall, left of the window
-      {V(1, 0, w), V(w, height, w + t)},                  // right of it
-      {V(-1, 0, w), V(1, 0.7f, w + t)},                   // below it
-      {V(-1, 1.9f, w), V(1, height, w + t)},              // above it
+      {V(-w - t, 0, -w - t), V(-w, height, w + t)},              // -x wall
+      {V(w, 0, -w - t), V(w + t, height, w + t)},                // +x wall
+      {V(-w, 0, -w - t), V(w, height, -w)},                      // -z wall
+      {V(-w, 0, w), V(-1, height, w + t)},                       // +z wall, left of the window
+      {V(1, 0, w), V(w, height, w + t)},                         // right of it
+      {V(-1, 0, w), V(1, 0.7f, w + t)},                          // below it
+      {V(-1, 1.9f, w), V(1, height, w + t)},                     // above it
       {V(-w - t, height, -w - t), V(w + t, height + t, w + t)},  // ceiling
   };
   for (const auto& box : boxes) append(room, make_cuboid(box[0], box[1], cell));

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <numeric>
 
 #include "prt/error.hpp"
 
@@ -65,8 +66,8 @@ std::vector<std::uint8_t> probes_seen(const RayCaster& caster, const ProbeGrid& 
 // further than the free space in front of it allows: a point whose move
 // would cross a surface (a thin wall, a nearby object) moves half as far,
 // then a quarter, else stays. A biased point inside a wall sees no probe.
-void move_along_normals(const RayCaster& caster, const Mesh& points, Eigen::Index first,
-                        float bias, std::vector<Eigen::Vector3f>& at) {
+void move_along_normals(const RayCaster& caster, const Mesh& points, Eigen::Index first, float bias,
+                        std::vector<Eigen::Vector3f>& at) {
   std::vector<float> origins(3 * at.size()), directions(3 * at.size()), far(at.size());
   std::vector<std::uint8_t> free(at.size());
   std::vector<float> moved(at.size(), 0.f);
@@ -97,6 +98,43 @@ void move_along_normals(const RayCaster& caster, const Mesh& points, Eigen::Inde
 
 }  // namespace
 
+namespace {
+
+// One point's weights over its 8 probes: the trilinear weights of the
+// usable ones (`seen`: null without the leak control), renormalised. A
+// point that sees none of its valid probes takes the valid ones in front of
+// its surface, else every valid one (`unseen` counts it). Zero weights: no
+// valid probe around.
+std::array<float, 8> point_weights(const Mesh& points, std::size_t p, const ProbeGrid& grid,
+                                   const std::vector<std::uint8_t>& valid,
+                                   const std::array<std::uint32_t, 8>& corner,
+                                   const std::array<float, 8>& trilinear, const std::uint8_t* seen,
+                                   std::atomic<std::size_t>& unseen) {
+  std::array<double, 8> w{};
+  double total = 0;
+  for (std::size_t c = 0; c < 8; ++c) {
+    w[c] = !seen || (valid[corner[c]] && seen[c]) ? trilinear[c] : 0.0;
+    total += w[c];
+  }
+  if (seen && !(total > 0)) {
+    // No valid probe in sight (the point's rays start on another surface,
+    // e.g. a wall's foot on the floor).
+    ++unseen;
+    for (int pass = 0; pass < 2 && !(total > 0); ++pass)
+      for (std::size_t c = 0; c < 8; ++c) {
+        const bool in_front =
+            pass == 1 || points.normals[p].dot(grid.position(corner[c]) - points.positions[p]) > 0;
+        w[c] = valid[corner[c]] && in_front ? trilinear[c] : 0.0;
+        total += w[c];
+      }
+  }
+  std::array<float, 8> out{};
+  for (std::size_t c = 0; c < 8; ++c) out[c] = total > 0 ? float(w[c] / total) : 0.f;
+  return out;
+}
+
+}  // namespace
+
 ProbeWeights probe_weights(const Mesh& points, const ProbeGrid& grid,
                            const std::vector<std::uint8_t>& valid, const RayCaster* caster,
                            const ProbeLookup& lookup) {
@@ -110,51 +148,29 @@ ProbeWeights probe_weights(const Mesh& points, const ProbeGrid& grid,
   out.probes.resize(std::size_t(v));
   out.weights.resize(std::size_t(v));
   std::atomic<std::size_t> unseen{0}, no_valid{0};
-  tbb::parallel_for(Eigen::Index(0), (v + kPointsPerTask - 1) / kPointsPerTask,
-                    [&](Eigen::Index task) {
-    const Eigen::Index first = task * kPointsPerTask;
-    const Eigen::Index count = std::min(kPointsPerTask, v - first);
-    const auto points_here = static_cast<std::size_t>(count);
-    std::vector<Eigen::Vector3f> at(points_here);
-    std::vector<std::array<float, 8>> trilinear(points_here);
-    for (std::size_t i = 0; i < points_here; ++i) at[i] = points.positions[std::size_t(first) + i];
-    if (control && lookup.normal_bias > 0)
-      move_along_normals(*caster, points, first, lookup.normal_bias * grid.spacing, at);
-    auto* corners = out.probes.data() + first;
-    for (std::size_t i = 0; i < points_here; ++i) grid.cell(at[i], corners[i], trilinear[i]);
-    std::vector<std::uint8_t> seen;
-    if (control)
-      seen = probes_seen(*caster, grid, at,
-                         std::vector<std::array<std::uint32_t, 8>>(corners, corners + points_here));
-    for (std::size_t i = 0; i < points_here; ++i) {
-      const auto& corner = corners[i];
-      std::array<double, 8> w{};
-      double total = 0;
-      for (std::size_t c = 0; c < 8; ++c) {
-        const bool usable = !control || (valid[corner[c]] && seen[8 * i + c]);
-        w[c] = usable ? trilinear[i][c] : 0.0;
-        total += w[c];
-      }
-      if (control && !(total > 0)) {
-        // No valid probe in sight (the point's rays start on another surface,
-        // e.g. a wall's foot on the floor): the valid probes in front of the
-        // surface, else the valid ones.
-        ++unseen;
-        const std::size_t p = std::size_t(first) + i;
-        for (int pass = 0; pass < 2 && !(total > 0); ++pass)
-          for (std::size_t c = 0; c < 8; ++c) {
-            const bool in_front =
-                pass == 1 ||
-                points.normals[p].dot(grid.position(corner[c]) - points.positions[p]) > 0;
-            w[c] = valid[corner[c]] && in_front ? trilinear[i][c] : 0.0;
-            total += w[c];
-          }
-      }
-      if (!(total > 0)) ++no_valid;
-      for (std::size_t c = 0; c < 8; ++c)
-        out.weights[std::size_t(first) + i][c] = total > 0 ? float(w[c] / total) : 0.f;
-    }
-  });
+  tbb::parallel_for(
+      Eigen::Index(0), (v + kPointsPerTask - 1) / kPointsPerTask, [&](Eigen::Index task) {
+        const auto first = std::size_t(task * kPointsPerTask);
+        const auto count = std::size_t(std::min(kPointsPerTask, v - Eigen::Index(first)));
+        std::vector<Eigen::Vector3f> at(points.positions.begin() + std::ptrdiff_t(first),
+                                        points.positions.begin() + std::ptrdiff_t(first + count));
+        if (control && lookup.normal_bias > 0)
+          move_along_normals(*caster, points, Eigen::Index(first),
+                             lookup.normal_bias * grid.spacing, at);
+        auto* corners = out.probes.data() + first;
+        std::vector<std::array<float, 8>> trilinear(count);
+        for (std::size_t i = 0; i < count; ++i) grid.cell(at[i], corners[i], trilinear[i]);
+        std::vector<std::uint8_t> seen;
+        if (control)
+          seen = probes_seen(*caster, grid, at,
+                             std::vector<std::array<std::uint32_t, 8>>(corners, corners + count));
+        for (std::size_t i = 0; i < count; ++i) {
+          auto& weights = out.weights[first + i];
+          weights = point_weights(points, first + i, grid, valid, corners[i], trilinear[i],
+                                  control ? seen.data() + 8 * i : nullptr, unseen);
+          if (!(std::accumulate(weights.begin(), weights.end(), 0.f) > 0)) ++no_valid;
+        }
+      });
   out.unseen = unseen;
   out.no_valid_probe = no_valid;
   out.rays_cast = control ? std::uint64_t(8) * std::uint64_t(v) : 0;

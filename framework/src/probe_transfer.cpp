@@ -30,8 +30,8 @@ ProbeRays trace_probe(const RayCaster& caster, const Mesh& scene, const Eigen::V
   std::vector<std::int64_t> triangle(s);
   std::vector<float> u(s), v(s);
   std::vector<std::uint8_t> escaped(s);
-  caster.intersect(scene, origins.data(), directions.data(), s, triangle.data(), u.data(),
-                   v.data(), escaped.data());
+  caster.intersect(scene, origins.data(), directions.data(), s, triangle.data(), u.data(), v.data(),
+                   escaped.data());
   ProbeRays out;
   out.visible.resize(Eigen::Index(s));
   std::size_t back = 0;
@@ -48,10 +48,9 @@ ProbeRays trace_probe(const RayCaster& caster, const Mesh& scene, const Eigen::V
 ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const ProbeGrid& grid,
                              const DirectionSet& set, const Basis& light_basis,
                              const Basis& incident_basis, double invalid_fraction, bool shadowed,
-                             Progress* progress, std::size_t first_probe,
-                             std::size_t last_probe) {
+                             Progress* progress, std::size_t first_probe, std::size_t last_probe) {
   const Eigen::MatrixXd projection = incident_basis.projection_matrix(set);  // s x n_E
-  const Eigen::MatrixXd values = light_basis.evaluate(set.directions);        // s x n_B
+  const Eigen::MatrixXd values = light_basis.evaluate(set.directions);       // s x n_B
   const Eigen::Index n = incident_basis.size(), m = light_basis.size();
   last_probe = std::min(last_probe, grid.count());
   first_probe = std::min(first_probe, last_probe);
@@ -62,38 +61,36 @@ ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const P
   out.transfer.coefficients = MatrixXfRow::Zero(Eigen::Index(probes), n * m);
   out.valid.assign(probes, 1);
   const Eigen::MatrixXd unshadowed = projection.transpose() * values;
-  tbb::parallel_for(std::size_t(0), (probes + kProbesPerTask - 1) / kProbesPerTask,
-                    [&](std::size_t task) {
-                      const std::size_t first = task * kProbesPerTask;
-                      const std::size_t last = std::min(probes, first + kProbesPerTask);
-                      for (std::size_t p = first; p < last; ++p) {
-                        Eigen::MatrixXd t;  // n_E x n_B
-                        if (shadowed) {
-                          const ProbeRays rays = trace_probe(
-                              caster, scene, grid.position(first_probe + p), set, invalid_fraction);
-                          out.valid[p] = rays.valid;
-                          if (!rays.valid) continue;
-                          t = projection.transpose() * (rays.visible.asDiagonal() * values);
-                        } else {
-                          t = unshadowed;
-                        }
-                        const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
-                                            Eigen::RowMajor>
-                            row_major = t;
-                        out.transfer.coefficients.row(Eigen::Index(p)) =
-                            Eigen::Map<const Eigen::RowVectorXd>(row_major.data(), n * m)
-                                .cast<float>();
-                      }
-                      if (progress)
-                        progress->add(double(last - first),
-                                      shadowed ? double(last - first) * double(set.size()) : 0);
-                    });
+  tbb::parallel_for(
+      std::size_t(0), (probes + kProbesPerTask - 1) / kProbesPerTask, [&](std::size_t task) {
+        const std::size_t first = task * kProbesPerTask;
+        const std::size_t last = std::min(probes, first + kProbesPerTask);
+        for (std::size_t p = first; p < last; ++p) {
+          Eigen::MatrixXd t;  // n_E x n_B
+          if (shadowed) {
+            const ProbeRays rays =
+                trace_probe(caster, scene, grid.position(first_probe + p), set, invalid_fraction);
+            out.valid[p] = rays.valid;
+            if (!rays.valid) continue;
+            t = projection.transpose() * (rays.visible.asDiagonal() * values);
+          } else {
+            t = unshadowed;
+          }
+          const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> row_major =
+              t;
+          out.transfer.coefficients.row(Eigen::Index(p)) =
+              Eigen::Map<const Eigen::RowVectorXd>(row_major.data(), n * m).cast<float>();
+        }
+        if (progress)
+          progress->add(double(last - first),
+                        shadowed ? double(last - first) * double(set.size()) : 0);
+      });
   out.rays_cast = shadowed ? std::uint64_t(probes) * std::uint64_t(set.size()) : 0;
   return out;
 }
 
-std::vector<Eigen::MatrixX3d> incident_light(const CompressedTransfer& transfer,
-                                             int incident_size, const Eigen::MatrixX3d& light) {
+std::vector<Eigen::MatrixX3d> incident_light(const CompressedTransfer& transfer, int incident_size,
+                                             const Eigen::MatrixX3d& light) {
   const Eigen::Index n = incident_size, m = light.rows();
   if (transfer.dimension != n * m)
     throw Error("probe transfer of " + std::to_string(transfer.dimension) +
@@ -103,8 +100,8 @@ std::vector<Eigen::MatrixX3d> incident_light(const CompressedTransfer& transfer,
   tbb::parallel_for(Eigen::Index(0), transfer.vertices(), [&](Eigen::Index p) {
     Eigen::RowVectorXf row(n * m);
     transfer.decode_row(p, row);
-    const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
-        t(row.data(), n, m);
+    const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> t(
+        row.data(), n, m);
     incident[std::size_t(p)] = t.cast<double>() * light;
   });
   return incident;

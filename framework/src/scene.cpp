@@ -90,7 +90,7 @@ const ParamSchema& ground_truth_schema() {
 }
 
 const std::array<std::string, 13> kSections = {
-    "mesh",     "material", "transport", "basis",  "exit",         "compressor", "lighting",
+    "mesh",     "material", "transport", "basis",        "exit",      "compressor", "lighting",
     "renderer", "camera",   "output",    "ground_truth", "receivers", "moving"};
 
 SourceLocation location_of(const toml::source_region& region, const fs::path& file) {
@@ -360,7 +360,8 @@ void read_sections(const toml::table& root, SceneSpec& scene) {
 // A placed mesh names exactly one of a file or a generated mesh.
 void check_placed(const Params& params, const char* where) {
   if (keys::place::file(params).empty() == keys::place::generate(params).empty())
-    throw Error(params.location(), std::string(where) + ": give exactly one of \"file\" or \"generate\"");
+    throw Error(params.location(),
+                std::string(where) + ": give exactly one of \"file\" or \"generate\"");
 }
 
 // What probes receive: distant light over the sphere, shadowed by the scene
@@ -377,8 +378,10 @@ void check_receivers(const SceneSpec& scene) {
   if (scene.has_moving()) check_placed(scene.moving, "section [moving]");
   const SourceLocation where = scene.receivers.location(keys::receivers::kind.name());
   auto refuse = [&](const std::string& what) {
-    throw Error(where, "section [receivers]: probes receive distant light, shadowed by the "
-                       "scene; " + what);
+    throw Error(where,
+                "section [receivers]: probes receive distant light, shadowed by the "
+                "scene; " +
+                    what);
   };
   if (scene.glossy()) refuse("a glossy material is a surface's, not a probe's: use lambert");
   if (keys::transport::bounces(scene.transport) > 0)

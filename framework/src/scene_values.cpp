@@ -52,10 +52,9 @@ namespace {
 // A [[mesh.add]] or [moving] mesh, placed.
 Mesh load_placed(const Params& params, const Eigen::Vector3f& position) {
   const std::string file_name = keys::place::file(params);
-  const Mesh mesh =
-      !file_name.empty()
-          ? prt::load_mesh(file_name)
-          : make_generated(keys::place::generate(params), int(keys::place::detail(params)));
+  const Mesh mesh = !file_name.empty() ? prt::load_mesh(file_name)
+                                       : make_generated(keys::place::generate(params),
+                                                        int(keys::place::detail(params)));
   return placed(mesh, position, float(keys::place::size(params)));
 }
 
@@ -74,11 +73,17 @@ Mesh SceneSpec::load_mesh() const {
   return loaded;
 }
 
-bool SceneSpec::probes() const { return keys::receivers::kind(receivers) == "probes"; }
+bool SceneSpec::probes() const {
+  return keys::receivers::kind(receivers) == "probes";
+}
 
-bool SceneSpec::has_moving() const { return moving_given; }
+bool SceneSpec::has_moving() const {
+  return moving_given;
+}
 
-Mesh SceneSpec::load_moving() const { return load_moving(position_of(moving)); }
+Mesh SceneSpec::load_moving() const {
+  return load_moving(position_of(moving));
+}
 
 Mesh SceneSpec::load_moving(const Eigen::Vector3f& position) const {
   if (!has_moving()) throw Error(file.string() + ": the scene has no [moving] object");

@@ -1,22 +1,22 @@
 // Probes: the grid, the probe transfer, shading from probes with and without
 // the leak control, probe scenes and their bake files.
 #include <H5Cpp.h>
+#include <tbb/global_control.h>
 
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
-#include <tbb/global_control.h>
 
 #include "../../framework/src/bake_userblock.hpp"
 #include "prt/bake.hpp"
 #include "prt/checkpoint.hpp"
-#include "prt/visible_products.hpp"
 #include "prt/mesh_compose.hpp"
 #include "prt/probe_render.hpp"
 #include "prt/probe_shading.hpp"
 #include "prt/probe_transfer.hpp"
 #include "prt/receivers.hpp"
 #include "prt/sh.hpp"
+#include "prt/visible_products.hpp"
 
 using namespace prt;
 namespace fs = std::filesystem;
@@ -55,9 +55,9 @@ TEST_CASE("a probe grid is centred in its box and interpolates linear functions 
   CHECK(grid.position(grid.count() - 1).x() == Approx(0.75));
   CHECK(grid.origin.y() == Approx(0.25));
   auto linear = [](const Eigen::Vector3f& p) { return 2 * p.x() - 3 * p.y() + 0.5f * p.z() + 1; };
-  for (const Eigen::Vector3f point : {Eigen::Vector3f(0.1f, 0.4f, -0.3f),
-                                     Eigen::Vector3f(-0.7f, 0.26f, 1.6f),
-                                     Eigen::Vector3f(0.75f, 0.75f, 1.75f)}) {
+  for (const Eigen::Vector3f point :
+       {Eigen::Vector3f(0.1f, 0.4f, -0.3f), Eigen::Vector3f(-0.7f, 0.26f, 1.6f),
+        Eigen::Vector3f(0.75f, 0.75f, 1.75f)}) {
     std::array<std::uint32_t, 8> probes;
     std::array<float, 8> weights;
     grid.cell(point, probes, weights);
@@ -105,7 +105,8 @@ TEST_CASE("probe transfer: identity in open air, a hemisphere over a floor, zero
   grid.spacing = 1;
   grid.counts = {1, 2, 1};  // (0, -0.5, 0) inside the slab, (0, 0.5, 0) above it
   const RayCaster caster(floor);
-  const ProbeTransfer t = probe_transfer(caster, floor, grid, set, *basis, *basis, 0.25, true, nullptr);
+  const ProbeTransfer t =
+      probe_transfer(caster, floor, grid, set, *basis, *basis, 0.25, true, nullptr);
   REQUIRE(t.transfer.vertices() == 2);
   CHECK(t.transfer.kind == "incident");
   CHECK(t.valid[0] == 0);
@@ -128,7 +129,8 @@ TEST_CASE("probe transfer: identity in open air, a hemisphere over a floor, zero
   CHECK((up * incident[1].col(0))(0) == Approx(1.25).epsilon(2e-3));
   CHECK((down * incident[1].col(0))(0) == Approx(-0.25).epsilon(1e-2));
   // Unshadowed: P^T B, the identity for an orthonormal basis (to quadrature).
-  const ProbeTransfer open = probe_transfer(caster, floor, grid, set, *basis, *basis, 0.25, false, nullptr);
+  const ProbeTransfer open =
+      probe_transfer(caster, floor, grid, set, *basis, *basis, 0.25, false, nullptr);
   const Eigen::Map<const Eigen::Matrix<float, 9, 9, Eigen::RowMajor>> identity(
       open.transfer.coefficients.row(1).data());
   CHECK((identity.cast<double>() - Eigen::MatrixXd::Identity(9, 9)).cwiseAbs().maxCoeff() < 1e-3);
@@ -141,9 +143,11 @@ TEST_CASE("probe transfer does not depend on the thread count", "[probes]") {
   const Mesh scene = make_room(0);
   const ProbeGrid grid = probe_grid_over(scene.bounds_min(), scene.bounds_max(), 0.5f);
   const RayCaster caster(scene);
-  const ProbeTransfer all = probe_transfer(caster, scene, grid, set, *basis, *basis, 0.25, true, nullptr);
+  const ProbeTransfer all =
+      probe_transfer(caster, scene, grid, set, *basis, *basis, 0.25, true, nullptr);
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  const ProbeTransfer single = probe_transfer(caster, scene, grid, set, *basis, *basis, 0.25, true, nullptr);
+  const ProbeTransfer single =
+      probe_transfer(caster, scene, grid, set, *basis, *basis, 0.25, true, nullptr);
   CHECK(all.valid == single.valid);
   CHECK(all.transfer.coefficients == single.transfer.coefficients);
   // At this spacing the room's ceiling slab holds a layer of probes (y = 2.55).
@@ -155,12 +159,14 @@ TEST_CASE("probe transfer does not depend on the thread count", "[probes]") {
 TEST_CASE("a Lambertian lobe under constant unit light gives exit radiance 1", "[probes]") {
   for (int order : {1, 3, 6}) {
     const auto basis = sh_basis(order);
-    std::vector<Eigen::Vector3f> normals{{0, 1, 0}, {1, 0, 0}, Eigen::Vector3f(1, -2, 3).normalized()};
+    std::vector<Eigen::Vector3f> normals{
+        {0, 1, 0}, {1, 0, 0}, Eigen::Vector3f(1, -2, 3).normalized()};
     const Eigen::MatrixXd lobes = cosine_lobes(*basis, normals, DirectionSet::fibonacci(2048));
     Eigen::VectorXd constant = Eigen::VectorXd::Zero(basis->size());
     constant[0] = std::sqrt(4 * M_PI);
     for (Eigen::Index v = 0; v < lobes.rows(); ++v)
-      CHECK((lobes.row(v) * constant)(0) == Approx(1).epsilon(2e-4));  // the rule's error at the kink
+      CHECK((lobes.row(v) * constant)(0) ==
+            Approx(1).epsilon(2e-4));  // the rule's error at the kink
   }
 }
 
@@ -183,7 +189,8 @@ TEST_CASE("the leak control keeps light behind a wall out; plain trilinear lets 
   const Eigen::MatrixXd lobes = cosine_lobes(*basis, points.normals, DirectionSet::fibonacci(2048));
   std::vector<std::uint8_t> valid{1, 1};
   ProbeLookup control;  // visibility, bias 0.25 spacing: the points move to x = 0.95 and 0.05
-  const ProbeShading with = shade_from_probes(points, grid, valid, incident, lobes, &caster, control);
+  const ProbeShading with =
+      shade_from_probes(points, grid, valid, incident, lobes, &caster, control);
   ProbeLookup plain;
   plain.interpolation = ProbeInterpolation::trilinear;
   const ProbeShading without =
@@ -201,7 +208,8 @@ TEST_CASE("the leak control keeps light behind a wall out; plain trilinear lets 
   CHECK(fallback.unseen == 1);
   CHECK(fallback.radiance(0, 0) == Approx(10).epsilon(2e-4));
   valid = {0, 0};
-  const ProbeShading none = shade_from_probes(points, grid, valid, incident, lobes, &caster, control);
+  const ProbeShading none =
+      shade_from_probes(points, grid, valid, incident, lobes, &caster, control);
   CHECK(none.no_valid_probe == 2);
   CHECK(none.radiance.cwiseAbs().maxCoeff() == 0);
   CHECK(none.radiance.allFinite());
@@ -263,8 +271,8 @@ TEST_CASE("a probe scene bakes, writes version 5, reads back its receivers and r
   StageTimes times;
   RunOptions options;
   options.quiet = true;
-  const BakeData baked = bake_to_file(scene, plan, {{scene.bake_path(), FileKind::bake, "bake", true}},
-                                      options, times);
+  const BakeData baked = bake_to_file(
+      scene, plan, {{scene.bake_path(), FileKind::bake, "bake", true}}, options, times);
   REQUIRE(baked.receivers.probes());
   const BakeData read = read_bake(scene.bake_path());
   CHECK(read.format_version() == kReceiversFormatVersion);

@@ -41,7 +41,7 @@ ProbeTransfer probe_transfer(const RayCaster& caster, const Mesh& scene, const P
 
 // The light arriving at each probe (n_E x 3 per probe: e_p = T_p l) from a
 // probe transfer's rows in any encoding; `light` is n_B x 3.
-std::vector<Eigen::MatrixX3d> incident_light(const CompressedTransfer& transfer,
-                                             int incident_size, const Eigen::MatrixX3d& light);
+std::vector<Eigen::MatrixX3d> incident_light(const CompressedTransfer& transfer, int incident_size,
+                                             const Eigen::MatrixX3d& light);
 
 }  // namespace prt

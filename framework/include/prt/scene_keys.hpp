@@ -28,8 +28,8 @@ inline constexpr auto generate = param::choice("generate", "", "sphere|plane|box
                                                "a generated mesh instead of a file");
 inline constexpr auto detail =
     param::integer("detail", "3", 0, 8, "subdivision level of a generated mesh");
-inline constexpr auto position = param::reals(
-    "position", "0,0,0", 3, -kBig, kBig, "where the bottom centre of the mesh's bounds goes");
+inline constexpr auto position = param::reals("position", "0,0,0", 3, -kBig, kBig,
+                                              "where the bottom centre of the mesh's bounds goes");
 inline constexpr auto size =
     param::real("size", "1", 1e-9, kBig, "the longest side of the mesh's bounds, scene units");
 }  // namespace place

@@ -13,12 +13,12 @@
 #include "coupled_slabs.hpp"
 #include "kept_state.hpp"
 #include "prt/basis.hpp"
-#include "prt/probe_transfer.hpp"
 #include "prt/communicator_parts.hpp"
 #include "prt/error.hpp"
 #include "prt/frame.hpp"
 #include "prt/glossy.hpp"
 #include "prt/pipeline.hpp"
+#include "prt/probe_transfer.hpp"
 #include "prt/progress.hpp"
 #include "prt/row_file.hpp"
 #include "prt/transport.hpp"
@@ -561,6 +561,25 @@ void copy_kept_validity(const CheckpointStore& store, const SlabRange& slab,
   }
 }
 
+// Once every slab is kept: every probe's validity (the renderers need all)
+// and the shard's rows, with the rays of every slab.
+void read_probe_slabs(const CheckpointStore& store, const std::vector<SlabRange>& slabs,
+                      const Shard& shard, Eigen::Index cols, ProbeStage& out) {
+  out.valid.assign(slabs.empty() ? 0 : slabs.back().last, 0);
+  MatrixXfRow& rows = out.outcome.transfer.coefficients;
+  rows.resize(shard.rows(), cols);
+  for (const auto& slab : slabs) {
+    out.outcome.rays_cast += kept_rays(store, slab);
+    copy_kept_validity(store, slab, out.valid);
+    const std::size_t first = std::max(slab.first, std::size_t(shard.first)),
+                      last = std::min(slab.last, std::size_t(shard.last));
+    if (first >= last) continue;
+    const auto count = Eigen::Index(last - first);
+    rows.middleRows(Eigen::Index(first) - shard.first, count) =
+        kept_rows(store, slab, cols).middleRows(Eigen::Index(first - slab.first), count);
+  }
+}
+
 }  // namespace
 
 ProbeStage probe_shard_transfer(const BakePlan& plan, const Mesh& scene, const ProbeGrid& grid,
@@ -614,20 +633,7 @@ ProbeStage probe_shard_transfer(const BakePlan& plan, const Mesh& scene, const P
   }
   caster.reset();
   comm.barrier();  // every slab is kept
-  // Every probe's validity (the renderers need all), this shard's rows.
-  out.valid.assign(probes, 0);
-  result.transfer.coefficients.resize(shard.rows(), cols);
-  for (const auto& slab : slabs) {
-    result.rays_cast += kept_rays(store, slab);
-    copy_kept_validity(store, slab, out.valid);
-    const std::size_t first = std::max(slab.first, std::size_t(shard.first)),
-                      last = std::min(slab.last, std::size_t(shard.last));
-    if (first >= last) continue;
-    const MatrixXfRow rows = kept_rows(store, slab, cols);
-    result.transfer.coefficients.middleRows(Eigen::Index(first) - shard.first,
-                                            Eigen::Index(last - first)) =
-        rows.middleRows(Eigen::Index(first - slab.first), Eigen::Index(last - first));
-  }
+  read_probe_slabs(store, slabs, shard, cols, out);
   result.times.add("trace probes (slabs)", clock.seconds());
   return out;
 }
