@@ -114,6 +114,14 @@ ProbeGrid probe_grid(const SceneSpec& scene, const Mesh& mesh) {
   }
 }
 
+// The encoding's report: into the metrics, and said.
+void say_report(const CompressionReport& report, const RunOptions& options, BakeData& data) {
+  record(report, data.metrics);
+  std::string text = report.text();
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  options.message(text);
+}
+
 // The rows each rank compresses; the compressor keeps its state in the checkpoint.
 Distribution encoding_parts(const Communicator& comm, Eigen::Index rows,
                             const RunOptions& options) {
@@ -283,10 +291,7 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const CompressionReport report =
       measure(transfer, data.compressed, &data.row_mesh(), encode_seconds, encode_where, &metric);
   if (distributed && comm.rank() != 0) return {};  // rank 0 holds the bake
-  record(report, data.metrics);
-  std::string text = report.text();
-  if (!text.empty() && text.back() == '\n') text.pop_back();
-  options.message(text);
+  say_report(report, options, data);
   if (stage.whole)  // every rank computed the whole transfer (bounces, subsurface light)
     data.transfer = std::move(*stage.whole);
   else if (distributed)
