@@ -2,7 +2,7 @@
 # Probe spacing and bases against the moving object's error (docs/receivers.md):
 # bakes scenes/room_probes.toml at each spacing and basis pair, then measures
 # the elephant at three positions (the room's middle, by the window, against
-# the +x wall) with `prt probes`. Prints one Markdown table; ~2 minutes on 2 cores.
+# the +x wall) with `prt probes`. Prints one Markdown table; ~30 s on 2 cores.
 # usage: scripts/probe_sweep.sh [build dir] [output folder]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

@@ -420,6 +420,10 @@ void write_summaries(const fs::path& out, const fs::path& results, const SceneSp
 int bench(Context& context, const BenchArgs& args) {
   Progress::set_enabled(!context.quiet);
   const SceneSpec base = SceneSpec::load(args.scene, context.registry);
+  if (base.probes())  // its sweeps time and measure transfer at vertices
+    throw Error(base.receivers.location(keys::receivers::kind.name()),
+                "prt bench measures transfer at vertices; a probe scene is measured by `prt "
+                "probes` and scripts/probe_sweep.sh (docs/receivers.md)");
   const fs::path out =
       args.out.empty() ? fs::path("bench_" + base.file.stem().string()) : fs::path(args.out);
   if (fs::exists(out) && !fs::is_directory(out))

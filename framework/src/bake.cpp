@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <optional>
 
 #include "prt/bake_stages.hpp"
@@ -104,14 +105,32 @@ bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
   return true;
 }
 
-// The probe grid over the scene's mesh at [receivers] spacing.
-ProbeGrid probe_grid(const SceneSpec& scene, const Mesh& mesh) {
+// The probe grid over the scene's mesh at [receivers] spacing, refused
+// (before any allocation or ray) when its rows cannot fit in memory: each
+// probe's n_E x n_B floats twice (exact and encoded) and its point.
+ProbeGrid probe_grid(const SceneSpec& scene, const BakePlan& plan, const Mesh& mesh) {
+  const SourceLocation where = scene.receivers.location(keys::receivers::spacing.name());
+  ProbeGrid grid;
   try {
-    return probe_grid_over(mesh.bounds_min(), mesh.bounds_max(),
+    grid = probe_grid_over(mesh.bounds_min(), mesh.bounds_max(),
                            float(keys::receivers::spacing(scene.receivers)));
   } catch (const Error& e) {
-    throw Error(scene.receivers.location(keys::receivers::spacing.name()), e.what());
+    throw Error(where, e.what());
   }
+  const double probes = double(grid.counts[0]) * grid.counts[1] * grid.counts[2];
+  const double floats = double(plan.basis->size()) * double(plan.exit->size());
+  const double bytes = probes * (2 * floats * sizeof(float) + 32);
+  if (probes > double(std::numeric_limits<std::uint32_t>::max()) || bytes > available_memory()) {
+    char message[400];
+    std::snprintf(message, sizeof message,
+                  "section [receivers]: %.0f probes (%d x %d x %d) of %.0f coefficients each need "
+                  "about %.1f GB, but %.1f GB are available; raise the spacing, or give [exit] a "
+                  "smaller incident basis",
+                  probes, grid.counts[0], grid.counts[1], grid.counts[2], floats, bytes / 1e9,
+                  available_memory() / 1e9);
+    throw Error(where, message);
+  }
+  return grid;
 }
 
 // The encoding's report: into the metrics, and said.
@@ -261,7 +280,11 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const Communicator& comm = options.comm ? *options.comm : solo();
   const bool distributed = comm.size() > 1;
   if (distributed) require_distributable(scene, plan, options);
-  if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, data.mesh), {});
+  if (plan.probes && options.traced)
+    throw Error(scene.receivers.location(keys::receivers::kind.name()),
+                "section [receivers]: traced visibility serves transfer at vertices; a probe "
+                "scene traces its probes itself");
+  if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, plan, data.mesh), {});
   // One row per receiver: the mesh's vertices, or the probes.
   const Distribution encode_where =
       encoding_parts(comm, Eigen::Index(data.receiver_count()), options);

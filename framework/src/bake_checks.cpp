@@ -156,6 +156,7 @@ std::vector<std::string> check_bake_records(const std::string& file, const BakeD
 }
 
 RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry) {
+  if (data.receivers.probes()) return {};  // as the bake: the incident coefficients as they are
   std::shared_ptr<Basis> basis;
   try {
     basis = basis_of_record(data.basis, data.basis_state, registry, "basis");
@@ -173,7 +174,7 @@ RenderedMetric rendered_metric(const BakeData& data, PluginRegistry& registry) {
 
 void check_encoding(const BakeData& data, const CompressedTransfer& transfer,
                     const std::string& what, bool finite) {
-  transfer.validate(static_cast<Eigen::Index>(data.mesh.vertex_count()), finite);
+  transfer.validate(static_cast<Eigen::Index>(data.receiver_count()), finite);
   const Eigen::Index columns =
       data.transfer.dimension() > 0 ? data.transfer.dimension() : data.compressed.dimension;
   if (transfer.dimension != columns)

@@ -34,8 +34,10 @@ void write_bake(const fs::path& file, const BakeData& data) {
   data.mesh.validate("bake data");
   const auto rows = static_cast<Eigen::Index>(data.receiver_count());
   if (data.receivers.probes()) {
-    check_probe_grid(data.receivers.grid, data.receivers.valid.size(), file.string());
-    check_probe_grid(data.receivers.grid, std::size_t(rows), file.string());
+    check_probe_grid(data.receivers.grid, file.string());
+    if (data.receivers.valid.size() != std::size_t(rows))
+      throw Error(file.string() + ": " + std::to_string(data.receivers.valid.size()) +
+                  " validity flags for " + std::to_string(rows) + " probes; nothing written");
   }
   data.compressed.validate(rows);
   const bool streamed = data.streamed_transfer.rows > 0;

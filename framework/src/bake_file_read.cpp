@@ -25,12 +25,12 @@ namespace {
 constexpr double kParseMemory = 512e6, kParseSeconds = 10, kParseBytesPerSecond = 20e6;
 
 // The root's attributes: format, scene, plug-ins, albedo.
-void read_header(const H5::H5File& h5, BakeData& data) {
+// `version`: the sealed header's, which the attribute must repeat.
+void read_header(const H5::H5File& h5, BakeData& data, int version) {
   H5::Group root = open_group(h5, "/");
   if (!root.attrExists("format") || read_text(root, "format") != kFormatName)
     throw Error("it is an HDF5 file but not a PRT bake");
-  const double version = read_number(root, "format_version");
-  if (version != kBakeFormatVersion && version != kReceiversFormatVersion)
+  if (read_number(root, "format_version") != version)
     throw Error("its header and its format_version attribute disagree");
   // Version 5 says the rows are at receivers (/receivers); 4 at the vertices.
   data.receivers.kind = version == kReceiversFormatVersion ? "probes" : "vertices";
@@ -151,7 +151,7 @@ void read_states_and_metrics(const H5::H5File& h5, BakeData& data) {
 
 // The child's side: parses the file with libhdf5 and sends its fields, or
 // the one message that says why it cannot.
-void parse_and_send(const fs::path& file, int fd) {
+void parse_and_send(const fs::path& file, int fd, int version) {
   bake_stream::Out out(fd);
   try {
     H5::Exception::dontPrint();
@@ -160,7 +160,7 @@ void parse_and_send(const fs::path& file, int fd) {
     H5::H5File h5(file.string(), H5F_ACC_RDONLY);
     require_no_external_links(h5);
     BakeData data;
-    read_header(h5, data);
+    read_header(h5, data, version);
     read_mesh(h5, data);
     read_receivers(h5, data);
     read_transfer(h5, data, out);
@@ -196,7 +196,7 @@ BakeData read_bake(const fs::path& file, const ReadOptions& options) {
   const ChildLimits limits{kParseMemory + 2 * bytes, seconds, seconds + kParseSeconds};
   BakeData data;
   exchange_with_child(
-      file.string(), limits, [&](int fd) { parse_and_send(file, fd); },
+      file.string(), limits, [&](int fd) { parse_and_send(file, fd, version); },
       [&](int fd) {
         bake_stream::In in(fd, bytes, options, data, limits.idle_seconds);
         try {

@@ -125,8 +125,10 @@ void check_bake_values(BakeData& data) {
   check_texts(data);
   check_mesh(data.mesh);
   if (data.receivers.probes()) {
-    check_probe_grid(data.receivers.grid, data.receivers.valid.size(), "/receivers");
-    check_probe_grid(data.receivers.grid, data.receiver_count(), "/receivers");
+    check_probe_grid(data.receivers.grid, "/receivers");
+    if (data.receivers.valid.size() != data.receiver_count())
+      throw Error("/receivers/valid has " + std::to_string(data.receivers.valid.size()) +
+                  " flags for " + std::to_string(data.receiver_count()) + " probes");
     for (std::uint8_t flag : data.receivers.valid)
       if (flag > 1) throw Error("/receivers/valid holds a value other than 0 or 1");
     data.receivers = Receivers::probes_on(data.receivers.grid, std::move(data.receivers.valid));

@@ -55,7 +55,7 @@ Mesh make_room(int detail) {
   const float t = 0.2f, w = 2, height = 2.5f;
   using V = Eigen::Vector3f;
   Mesh room;
-  // The ground: one face (its top) of a thin slab below y = 0.
+  // The ground: a thin closed slab whose top is y = 0.
   Mesh ground = make_cuboid(V(-4, -0.1f, -4), V(4, 0, 4), std::max(cell, 0.25f));
   append(room, ground);
   const V boxes[][2] = {

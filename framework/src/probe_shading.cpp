@@ -73,15 +73,18 @@ void move_along_normals(const RayCaster& caster, const Mesh& points, Eigen::Inde
   std::vector<float> moved(at.size(), 0.f);
   std::vector<std::size_t> pending(at.size());
   for (std::size_t i = 0; i < at.size(); ++i) pending[i] = i;
+  // The rays start one ray offset off the surface, as the bake's do: from
+  // the point itself they would hit its own triangles.
+  const float offset = caster.offset();
   for (float step = bias; step > bias / 5 && !pending.empty(); step /= 2) {
     for (std::size_t k = 0; k < pending.size(); ++k) {
       const std::size_t i = pending[k];
       const Eigen::Vector3f& n = points.normals[std::size_t(first) + i];
       for (int a = 0; a < 3; ++a) {
-        origins[3 * k + a] = at[i][a];
+        origins[3 * k + a] = at[i][a] + offset * n[a];
         directions[3 * k + a] = n[a];
       }
-      far[k] = step;
+      far[k] = std::max(0.f, step - offset);
     }
     caster.occluded(origins.data(), directions.data(), pending.size(), free.data(), far.data());
     std::size_t kept = 0;
@@ -103,8 +106,9 @@ namespace {
 // One point's weights over its 8 probes: the trilinear weights of the
 // usable ones (`seen`: null without the leak control), renormalised. A
 // point that sees none of its valid probes takes the valid ones in front of
-// its surface, else every valid one (`unseen` counts it). Zero weights: no
-// valid probe around.
+// its surface, else every valid one, else (a point on a face of its cell,
+// whose corners with weight are all invalid) every valid corner equally
+// (`unseen` counts them). Zero weights: no valid probe around.
 std::array<float, 8> point_weights(const Mesh& points, std::size_t p, const ProbeGrid& grid,
                                    const std::vector<std::uint8_t>& valid,
                                    const std::array<std::uint32_t, 8>& corner,
@@ -120,11 +124,11 @@ std::array<float, 8> point_weights(const Mesh& points, std::size_t p, const Prob
     // No valid probe in sight (the point's rays start on another surface,
     // e.g. a wall's foot on the floor).
     ++unseen;
-    for (int pass = 0; pass < 2 && !(total > 0); ++pass)
+    for (int pass = 0; pass < 3 && !(total > 0); ++pass)
       for (std::size_t c = 0; c < 8; ++c) {
         const bool in_front =
-            pass == 1 || points.normals[p].dot(grid.position(corner[c]) - points.positions[p]) > 0;
-        w[c] = valid[corner[c]] && in_front ? trilinear[c] : 0.0;
+            pass > 0 || points.normals[p].dot(grid.position(corner[c]) - points.positions[p]) > 0;
+        w[c] = valid[corner[c]] && in_front ? (pass == 2 ? 1.0 : trilinear[c]) : 0.0;
         total += w[c];
       }
   }

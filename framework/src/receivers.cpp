@@ -69,16 +69,13 @@ Receivers Receivers::probes_on(const ProbeGrid& grid, std::vector<std::uint8_t> 
   return r;
 }
 
-void check_probe_grid(const ProbeGrid& grid, std::size_t expected, const std::string& source) {
+void check_probe_grid(const ProbeGrid& grid, const std::string& source) {
   bool ok = grid.origin.allFinite() && std::isfinite(grid.spacing) && grid.spacing > 0;
   for (int c : grid.counts) ok = ok && c >= 1 && c <= 4096;
   if (!ok)
     throw Error(source + ": the probe grid (spacing " + std::to_string(grid.spacing) + ", counts " +
                 std::to_string(grid.counts[0]) + " x " + std::to_string(grid.counts[1]) + " x " +
                 std::to_string(grid.counts[2]) + ") is not a grid");
-  if (grid.count() != expected)
-    throw Error(source + ": the probe grid has " + std::to_string(grid.count()) + " probes for " +
-                std::to_string(expected) + " transfer rows");
 }
 
 }  // namespace prt

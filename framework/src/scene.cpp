@@ -440,7 +440,9 @@ SceneSpec SceneSpec::parse(const std::string& text, const fs::path& file,
   // The exit basis serves glossy materials; a lambert one still has it
   // checked (a sweep may vary the BRDF over one scene file).
   if (scene.glossy() || root["exit"].as_table())
-    scene.exit = read_plugin(root, "exit", "hsh", PluginKind::basis, registry, scene);
+    // At probes [exit] is the incident basis, a sphere basis: sh by default.
+    scene.exit = read_plugin(root, "exit", scene.probes() ? "sh" : "hsh", PluginKind::basis,
+                             registry, scene);
   scene.compressor =
       read_plugin(root, "compressor", "none", PluginKind::compressor, registry, scene);
   scene.renderer = read_plugin(root, "renderer", "cpu", PluginKind::renderer, registry, scene);

@@ -51,11 +51,15 @@ namespace {
 
 // A [[mesh.add]] or [moving] mesh, placed.
 Mesh load_placed(const Params& params, const Eigen::Vector3f& position) {
-  const std::string file_name = keys::place::file(params);
-  const Mesh mesh = !file_name.empty() ? prt::load_mesh(file_name)
-                                       : make_generated(keys::place::generate(params),
-                                                        int(keys::place::detail(params)));
-  return placed(mesh, position, float(keys::place::size(params)));
+  try {  // its problems located at its table
+    const std::string file_name = keys::place::file(params);
+    const Mesh mesh = !file_name.empty() ? prt::load_mesh(file_name)
+                                         : make_generated(keys::place::generate(params),
+                                                          int(keys::place::detail(params)));
+    return placed(mesh, position, float(keys::place::size(params)));
+  } catch (const Error& e) {
+    throw Error(params.location(), e.what());
+  }
 }
 
 Eigen::Vector3f position_of(const Params& params) {

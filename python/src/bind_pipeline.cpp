@@ -49,8 +49,10 @@ void check_camera(const Camera& c) {
 }
 
 std::string traced_key(const SceneSpec& scene) {
-  return scene.file.parent_path().string() + "\n" + scene.mesh.describe() + "\n" +
-         scene.transport.describe() + "\n" + scene.material.describe();
+  std::string key = scene.file.parent_path().string() + "\n" + scene.mesh.describe() + "\n" +
+                    scene.transport.describe() + "\n" + scene.material.describe();
+  for (const Params& part : scene.mesh_parts) key += "\n" + part.describe();  // [[mesh.add]]
+  return key;
 }
 
 py::dict times_dict(const StageTimes& times) {

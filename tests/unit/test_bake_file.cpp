@@ -133,7 +133,14 @@ TEST_CASE("damaged and foreign files are refused with a clear message", "[bake]"
   seal_bake_file(dir / "future.h5", 99);  // a well-formed file of a later format
   CHECK_THROWS_WITH(read_bake(dir / "future.h5"),
                     Catch::Contains("format version 99") &&
-                        Catch::Contains("reads version " + std::to_string(kBakeFormatVersion)));
+                        Catch::Contains("reads versions " + std::to_string(kBakeFormatVersion) +
+                                        " and " + std::to_string(kReceiversFormatVersion)));
+  // A bake at vertices sealed as a probe bake (version 5): the header and the
+  // file's own format_version attribute must agree.
+  fs::copy_file(dir / "whole.h5", dir / "relabelled.h5", fs::copy_options::overwrite_existing);
+  seal_bake_file(dir / "relabelled.h5", kReceiversFormatVersion);
+  CHECK_THROWS_WITH(read_bake(dir / "relabelled.h5"),
+                    Catch::Contains("relabelled.h5") && Catch::Contains("disagree"));
 }
 
 TEST_CASE("the same scene and seed bake to bit-identical files", "[bake_file][reproducibility]") {

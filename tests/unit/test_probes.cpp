@@ -170,7 +170,7 @@ TEST_CASE("a Lambertian lobe under constant unit light gives exit radiance 1", "
   }
 }
 
-TEST_CASE("the leak control keeps light behind a wall out; plain trilinear lets it in",
+TEST_CASE("the leak control keeps light behind a wall out, where plain trilinear lets it in",
           "[probes]") {
   const auto basis = sh_basis(2);
   // Two probes, x = 0 and x = 1, a wall between them at x in [0.4, 0.6].
@@ -220,6 +220,33 @@ TEST_CASE("the leak control keeps light behind a wall out; plain trilinear lets 
   const std::vector<Eigen::MatrixX3d> nine(2, Eigen::MatrixX3d::Zero(9, 3));
   CHECK_THROWS_WITH(shade_from_probes(points, grid, valid, nine, lobes, &caster, control),
                     Catch::Contains("incident light of 9 coefficients for lobes of 4"));
+}
+
+TEST_CASE("the normal bias moves a point of the traced scene off its own surface", "[probes]") {
+  const auto basis = sh_basis(2);
+  // A floor slab whose top is y = 0; probes at y = 0.05 (dark) and 1.05 (lit).
+  Mesh floor = make_box(1.0f);
+  for (Eigen::Vector3f& p : floor.positions)
+    p = Eigen::Vector3f(50 * p.x(), p.y() - 0.5f, 50 * p.z());
+  const RayCaster caster(floor);
+  ProbeGrid grid;
+  grid.origin = {0, 0.05f, 0};
+  grid.spacing = 1;
+  grid.counts = {1, 2, 1};
+  std::vector<Eigen::MatrixX3d> incident(2, Eigen::MatrixX3d::Zero(4, 3));
+  incident[1].row(0).setConstant(std::sqrt(4 * M_PI));  // radiance 1 at the upper probe
+  Mesh points;                                          // a vertex of the floor's top face
+  points.positions = {{0, 0, 0}};
+  points.normals = {{0, 1, 0}};
+  const Eigen::MatrixXd lobes = cosine_lobes(*basis, points.normals, DirectionSet::fibonacci(2048));
+  ProbeLookup lookup;
+  lookup.normal_bias = 0.5f;  // half a spacing: to y = 0.5, 0.45 of the way to the lit probe
+  const ProbeShading shaded =
+      shade_from_probes(points, grid, {1, 1}, incident, lobes, &caster, lookup);
+  // The upper probe's light is a constant 1, so the radiance is its weight;
+  // a point left on the floor (its ray hitting its own face) would get 0.
+  CHECK(shaded.radiance(0, 0) == Approx(0.45).epsilon(1e-3));
+  CHECK(shaded.unseen == 0);
 }
 
 namespace {

@@ -23,9 +23,9 @@ Eigen::MatrixXd cosine_lobes(const Basis& basis, const std::vector<Eigen::Vector
 enum class ProbeInterpolation {
   trilinear,   // the 8 probes' trilinear weights, invalid probes included
   visibility,  // leak control: the point moves normal_bias spacings along its
-               // normal (less where a surface is nearer); invalid probes and
-               // probes it cannot see (a ray to the probe is blocked) drop
-               // out, the rest renormalised
+               // normal (less where a surface is nearer; up to 3 rays);
+               // invalid probes and probes it cannot see (a ray to the
+               // probe is blocked) drop out, the rest renormalised
 };
 
 struct ProbeLookup {
@@ -36,8 +36,9 @@ struct ProbeLookup {
 struct ProbeShading {
   Eigen::MatrixX3f radiance;  // v x 3, albedo 1
   // Leak control: points that saw none of their valid probes and fell back
-  // to the valid ones in front of their surface (else all valid ones);
-  // points with no valid probe around them (black).
+  // to the valid ones in front of their surface (else all valid ones, else
+  // every valid corner of their cell equally); points with no valid probe
+  // among their cell's corners (black).
   std::size_t unseen = 0, no_valid_probe = 0;
   std::uint64_t rays_cast = 0;
 };

@@ -39,8 +39,8 @@ struct ProbeGrid {
 ProbeGrid probe_grid_over(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float spacing);
 
 // Throws prt::Error unless the grid is finite, its spacing positive and its
-// probe count `expected` (the transfer's rows); `source` names it.
-void check_probe_grid(const ProbeGrid& grid, std::size_t expected, const std::string& source);
+// counts in range; `source` names it.
+void check_probe_grid(const ProbeGrid& grid, const std::string& source);
 
 struct Receivers {
   std::string kind = "vertices";  // "vertices" or "probes"
