@@ -196,7 +196,11 @@ Command probes_command(CLI::App& app) {
                       "the scene's [moving] position)");
   command->add_option("--out", args->out,
                       "folder for images of each position: leak control, trilinear, truth");
-  add_reference_options(command, args->reference);
+  command  // the truths depend on the object's place, so none is cached
+      ->add_option("--samples", args->reference.samples,
+                   "Monte Carlo samples per vertex of the ground truth (default: the scene's "
+                   "[ground_truth] samples)")
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(1048576)));
   return {command, [args](prt::cli::Context& context) { return prt::cli::probes(context, *args); }};
 }
 
