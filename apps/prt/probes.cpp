@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "prt/bake_checks.hpp"
 #include "prt/ground_truth.hpp"
+#include "prt/ground_truth_render.hpp"
 #include "prt/mesh_compose.hpp"
 #include "prt/output_file.hpp"
 #include "prt/probe_render.hpp"
@@ -29,12 +30,6 @@ Eigen::Vector3f parse_position(const std::string& text) {
   if (!in || comma1 != ',' || comma2 != ',' || !p.allFinite() || in.peek() != EOF)
     throw Error("--at \"" + text + "\": give a position as x,y,z (e.g. --at 1.5,0,0.2)");
   return p;
-}
-
-// Relative RMS of `estimate` against `truth` over their rows, all channels.
-double relative_rms(const Eigen::MatrixX3f& estimate, const Eigen::MatrixX3f& truth) {
-  const double norm = truth.cast<double>().norm();
-  return norm > 0 ? (estimate - truth).cast<double>().norm() / norm : 0.0;
 }
 
 // Share of rows whose error exceeds a quarter of the truth's RMS per row.
@@ -136,10 +131,10 @@ struct Measurement {
     const auto [truth, noise] = truth_of(moving, display_rays, "ground truth" + where);
     const auto [scene_truth, scene_noise] =
         truth_of(moving, scene_rays, "ground truth without the object's own shadow" + where);
-    row.control = relative_rms(with.radiance, truth);
-    row.trilinear = relative_rms(without.radiance, truth);
-    row.scene_control = relative_rms(with.radiance, scene_truth);
-    row.scene_trilinear = relative_rms(without.radiance, scene_truth);
+    row.control = vertex_error(with.radiance, truth).relative_rms;
+    row.trilinear = vertex_error(without.radiance, truth).relative_rms;
+    row.scene_control = vertex_error(with.radiance, scene_truth).relative_rms;
+    row.scene_trilinear = vertex_error(without.radiance, scene_truth).relative_rms;
     row.floor = std::max(noise, scene_noise);
     row.far_control = far_off(with.radiance, truth);
     row.far_trilinear = far_off(without.radiance, truth);

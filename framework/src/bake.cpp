@@ -157,7 +157,7 @@ TransferOutcome probe_stage(const SceneSpec& scene, const BakePlan& plan, const 
   ProbeStage probes =
       probe_shard_transfer(plan, data.mesh, data.receivers.grid, set,
                            keys::receivers::invalid_fraction(scene.receivers), options, shard);
-  data.receivers = Receivers::probes_on(data.receivers.grid, std::move(probes.valid));
+  data.receivers.valid = std::move(probes.valid);  // the grid and its points are set
   return std::move(probes.outcome);
 }
 
