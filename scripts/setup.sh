@@ -13,7 +13,7 @@ demo_packages=(
   build-essential cmake pkg-config ninja-build
   libeigen3-dev libembree-dev libopenmesh-dev libboost-dev libboost-filesystem-dev
   libtbb-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libopenexr-dev
-  libhdf5-dev libstb-dev liblapack-dev libxxhash-dev
+  libhdf5-dev libstb-dev liblapack-dev libxxhash-dev libcgal-dev
 )
 packages=(
   "${demo_packages[@]}" clang-format clang libglfw3-dev libglm-dev catch2 hdf5-tools

@@ -47,7 +47,7 @@ void report(const prt::BakeData& data, const prt::StageTimes& times,
   }
   if (comm.rank() != 0) return;
   std::cout << "baked " << data.receiver_count()
-            << (data.receivers.probes() ? " probes x " : " vertices x ")
+            << " " << (data.receivers.at_vertices() ? "vertices" : data.receivers.kind) << " x "
             << (data.streamed_transfer.rows ? data.streamed_transfer.cols
                                             : data.transfer.dimension())
             << " coefficients (" << data.basis.name << ", " << data.transport << ") on "

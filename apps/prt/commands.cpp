@@ -54,7 +54,8 @@ int bake(Context& context, const BakeArgs& args) {
   const Eigen::Index columns =
       data.streamed_transfer.rows > 0 ? data.streamed_transfer.cols : data.transfer.dimension();
   std::cout << "baked " << data.receiver_count()
-            << (data.receivers.probes() ? " probes x " : " vertices x ") << columns
+            << " " << (data.receivers.at_vertices() ? "vertices" : data.receivers.kind) << " x "
+            << columns
             << " coefficients (" << data.basis.name << ", " << data.transport << ") -> "
             << target.file.path.string() << "\n"
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
@@ -189,6 +190,9 @@ int render(Context& context, const RenderArgs& args) {
                   args.scene +
                   "` measures the moving object "
                   "against its ground truth");
+    if (args.compare && data.receivers.texels())
+      throw Error(bake_file.string() + ": --compare measures transfer at vertices; for texels, `prt texels " +
+                  args.scene + "` measures them and the mesh's vertices against the ground truth at points over the surface");
     result = render(scene, data, context.registry, times, {context.quiet});
     if (args.compare) compare_with_truth(context, args, scene, data, result, times, output);
   }
@@ -308,6 +312,10 @@ int info(Context& context, const std::string& file) {
                           " every " + std::to_string(grid.spacing) + " from (" +
                           std::to_string(grid.origin.x()) + ", " + std::to_string(grid.origin.y()) +
                           ", " + std::to_string(grid.origin.z()) + ")\n"
+                : data.receivers.texels()
+                    ? "receivers:    texels, " + std::to_string(data.receivers.atlas.texels.size()) +
+                          " of a " + std::to_string(data.receivers.atlas.width) + " x " +
+                          std::to_string(data.receivers.atlas.height) + " atlas\n"
                     : std::string("receivers:    the mesh's vertices\n"))
             << "basis:        " << one_line(data.basis) << "\n"
             << (data.transfer.glossy()    ? "exit basis:   " + one_line(data.exit) + "\n"

@@ -45,6 +45,15 @@ struct ProbesArgs {
 };
 int probes(Context& context, const ProbesArgs& args);
 
+// prt texels: texels.cpp.
+struct TexelsArgs {
+  std::string scene, out;
+  std::vector<std::int64_t> resolutions;  // atlas resolutions (default: the scene's)
+  std::int64_t points = 20000;            // surface points the error is measured at
+  ReferenceArgs reference;
+};
+int texels(Context& context, const TexelsArgs& args);
+
 struct CompressArgs {
   std::string bake, output, compressor;  // no default: the one default is the scene's ("none")
   std::vector<std::string> parameters;   // key=value

@@ -181,6 +181,32 @@ Command compare_command(CLI::App& app) {
           [args](prt::cli::Context& context) { return prt::cli::compare_bases(context, *args); }};
 }
 
+// prt texels
+Command texels_command(CLI::App& app) {
+  auto args = std::make_shared<prt::cli::TexelsArgs>();
+  auto* command = app.add_subcommand(
+      "texels",
+      "bake a texel scene at its texels and at its mesh's vertices and measure both against "
+      "the ground truth at points over the surface");
+  command->add_option("scene", args->scene, "scene description with [receivers] kind = \"texels\"")
+      ->required();
+  command->add_option("--resolution", args->resolutions,
+                      "atlas resolution to bake and measure (repeatable; default: the scene's "
+                      "[receivers] resolution)")
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(8192)));
+  command->add_option("--points", args->points, "surface points the error is measured at")
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(10000000)));
+  command->add_option("--out", args->out,
+                      "folder for images: per texel, per vertex, and the truth (at 4x the "
+                      "resolution's texels)");
+  command
+      ->add_option("--samples", args->reference.samples,
+                   "Monte Carlo samples per point of the ground truth (default: the scene's "
+                   "[ground_truth] samples)")
+      ->check(CLI::Range(std::int64_t(1), std::int64_t(1048576)));
+  return {command, [args](prt::cli::Context& context) { return prt::cli::texels(context, *args); }};
+}
+
 // prt probes
 Command probes_command(CLI::App& app) {
   auto args = std::make_shared<prt::cli::ProbesArgs>();
@@ -288,7 +314,7 @@ int main(int argc, char** argv) {
       bake_command(app),  render_command(app),    compress_command(app),   analyze_command(app),
       bench_command(app), stability_command(app), image_diff_command(app), compare_command(app),
       info_command(app),  plugins_command(app),   subdivide_command(app),  demo_command(app),
-      probes_command(app)};
+      probes_command(app), texels_command(app)};
   CLI11_PARSE(app, argc, argv);
   prt::Progress::set_enabled(!quiet);
   try {

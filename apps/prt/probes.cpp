@@ -32,15 +32,6 @@ Eigen::Vector3f parse_position(const std::string& text) {
   return p;
 }
 
-// Share of rows whose error exceeds a quarter of the truth's RMS per row.
-double far_off(const Eigen::MatrixX3f& estimate, const Eigen::MatrixX3f& truth) {
-  const double limit = 0.25 * truth.cast<double>().norm() / std::sqrt(double(truth.rows()));
-  Eigen::Index count = 0;
-  for (Eigen::Index v = 0; v < truth.rows(); ++v)
-    count += (estimate.row(v) - truth.row(v)).cast<double>().norm() > limit;
-  return truth.rows() ? double(count) / double(truth.rows()) : 0.0;
-}
-
 // One position's errors: against the truth (the object shadows itself, as
 // in the world) and against the light the scene alone lets through (what
 // probes can hold: they do not know the object).
@@ -49,18 +40,6 @@ struct Row {
   double control = 0, trilinear = 0, scene_control = 0, scene_trilinear = 0;
   double far_control = 0, far_trilinear = 0, floor = 0;
 };
-
-// The mean of the batches and its noise (RMS of the mean's standard error,
-// relative to the mean's RMS).
-std::pair<Eigen::MatrixX3f, double> mean_and_noise(const GroundTruthEstimate& truth) {
-  const auto batches = double(truth.batches.size());
-  Eigen::MatrixX3f mean = Eigen::MatrixX3f::Zero(truth.batches[0].rows(), 3);
-  for (const auto& batch : truth.batches) mean += batch / float(batches);
-  double spread = 0;
-  for (const auto& batch : truth.batches)
-    spread += (batch - mean).cast<double>().squaredNorm() / (batches * (batches - 1));
-  return {mean, std::sqrt(spread) / std::max(1e-30, mean.cast<double>().norm())};
-}
 
 void write_images(const SceneSpec& scene, PluginRegistry& registry, const Mesh& display,
                   const Eigen::Vector3f& target, float size, const Environment& environment,

@@ -5,6 +5,24 @@
 
 namespace prt::cli {
 
+std::pair<Eigen::MatrixX3f, double> mean_and_noise(const GroundTruthEstimate& truth) {
+  const auto batches = double(truth.batches.size());
+  Eigen::MatrixX3f mean = Eigen::MatrixX3f::Zero(truth.batches[0].rows(), 3);
+  for (const auto& batch : truth.batches) mean += batch / float(batches);
+  double spread = 0;
+  for (const auto& batch : truth.batches)
+    spread += (batch - mean).cast<double>().squaredNorm() / (batches * (batches - 1));
+  return {mean, std::sqrt(spread) / std::max(1e-30, mean.cast<double>().norm())};
+}
+
+double far_off(const Eigen::MatrixX3f& estimate, const Eigen::MatrixX3f& truth) {
+  const double limit = 0.25 * truth.cast<double>().norm() / std::sqrt(double(truth.rows()));
+  Eigen::Index count = 0;
+  for (Eigen::Index v = 0; v < truth.rows(); ++v)
+    count += (estimate.row(v) - truth.row(v)).cast<double>().norm() > limit;
+  return truth.rows() ? double(count) / double(truth.rows()) : 0.0;
+}
+
 void apply_samples(const ReferenceArgs& args, SceneSpec& scene) {
   if (args.samples == 0) return;
   // Its range is [ground_truth] samples' range, checked by the command line.

@@ -5,10 +5,19 @@
 #include <string>
 
 #include "commands.hpp"
+#include "prt/ground_truth.hpp"
 #include "prt/reference_cache.hpp"
 #include "prt/scene.hpp"
 
 namespace prt::cli {
+
+// The mean of a ground truth's batches and its noise: the RMS of the mean's
+// standard error, relative to the mean's RMS.
+std::pair<Eigen::MatrixX3f, double> mean_and_noise(const GroundTruthEstimate& truth);
+
+// Share of rows whose error exceeds a quarter of the truth's RMS per row:
+// the small artifacts a good RMS hides.
+double far_off(const Eigen::MatrixX3f& estimate, const Eigen::MatrixX3f& truth);
 
 // --samples N replaces the scene's [ground_truth] samples (checked as the scene's key is).
 void apply_samples(const ReferenceArgs& args, SceneSpec& scene);

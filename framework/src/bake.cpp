@@ -15,6 +15,7 @@
 #include "prt/probe_transfer.hpp"
 #include "prt/progress.hpp"
 #include "prt/rendered_metric.hpp"
+#include "prt/texel_atlas.hpp"
 #include "prt/transport.hpp"
 
 namespace prt {
@@ -131,6 +132,31 @@ ProbeGrid probe_grid(const SceneSpec& scene, const BakePlan& plan, const Mesh& m
     throw Error(where, message);
   }
   return grid;
+}
+
+// The texels of the mesh's atlas at [receivers] resolution, with their points.
+Receivers texel_receivers(const SceneSpec& scene, const Mesh& mesh) {
+  const SourceLocation where = scene.receivers.location(keys::receivers::resolution.name());
+  const std::string file = keys::mesh::file(scene.mesh);
+  try {
+    return Receivers::texels_of(
+        texel_samples(mesh, int(keys::receivers::resolution(scene.receivers)),
+                      file.empty() ? "the generated mesh" : file));
+  } catch (const Error& e) {
+    throw Error(where, e.what());
+  }
+}
+
+// How many texels of the atlas hold transfer (also a metric).
+void say_texels(const RunOptions& options, BakeData& data) {
+  const TexelAtlas& atlas = data.receivers.atlas;
+  const double covered =
+      double(atlas.texels.size()) / (double(atlas.width) * double(atlas.height));
+  data.metrics["texels"] = double(atlas.texels.size());
+  char text[160];
+  std::snprintf(text, sizeof text, "%zu texels of a %d x %d atlas (%.0f%% of it; the rest lie outside every chart)",
+                atlas.texels.size(), atlas.width, atlas.height, 100 * covered);
+  options.message(text);
 }
 
 // The encoding's report: into the metrics, and said.
@@ -280,21 +306,29 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const Communicator& comm = options.comm ? *options.comm : solo();
   const bool distributed = comm.size() > 1;
   if (distributed) require_distributable(scene, plan, options);
-  if (plan.probes && options.traced)
+  if ((plan.probes || plan.texels) && options.traced)
     throw Error(scene.receivers.location(keys::receivers::kind.name()),
-                "section [receivers]: traced visibility serves transfer at vertices; a probe "
-                "scene traces its probes itself");
+                "section [receivers]: traced visibility serves transfer at vertices; a " +
+                    keys::receivers::kind(scene.receivers) + " scene traces its receivers itself");
   if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, plan, data.mesh), {});
+  if (plan.texels) data.receivers = texel_receivers(scene, data.mesh);
+  // Texels trace from their points toward the scene's mesh.
+  BakePlan at_texels = plan;
+  at_texels.occluders = &data.mesh;
+  const BakePlan& traced = plan.texels ? at_texels : plan;
   // One row per receiver: the mesh's vertices, or the probes.
   const Distribution encode_where =
       encoding_parts(comm, Eigen::Index(data.receiver_count()), options);
   const Shard shard = encode_where.parts->shard();
   // A probe grid's rows fit in memory (12,288 probes x 900 floats: 44 MB).
-  const bool on_disk = !plan.probes && transfer_on_disk(plan, data.mesh, shard.rows(), options);
+  const bool on_disk =
+      !plan.probes && transfer_on_disk(plan, data.row_mesh(), shard.rows(), options);
   if (!distributed && !plan.probes)
-    require_memory(scene, plan, data.mesh, set, plan.keep_visibility || options.traced, on_disk);
-  TransferOutcome stage = plan.probes ? probe_stage(scene, plan, set, options, shard, data)
-                                      : transfer_of(plan, data.mesh, set, options, shard, on_disk);
+    require_memory(scene, plan, data.row_mesh(), set, plan.keep_visibility || options.traced,
+                   on_disk);
+  TransferOutcome stage = plan.probes
+                              ? probe_stage(scene, plan, set, options, shard, data)
+                              : transfer_of(traced, data.row_mesh(), set, options, shard, on_disk);
   times.append(stage.times);
   data.metrics = std::move(stage.metrics);
   data.direct = std::move(stage.direct);
@@ -326,6 +360,7 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   data.metrics["squared_error"] = report.squared_error;
   data.metrics["stored_floats"] = data.compressed.stored_floats();
   if (plan.probes) say_probes(options, data);
+  if (plan.texels) say_texels(options, data);
   return data;
 }
 

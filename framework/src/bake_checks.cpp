@@ -40,11 +40,18 @@ void check_bake_matches(const BakeData& data, const SceneSpec& scene) {
   check_plugin_matches(data.basis, scene.basis, "basis");
   if (scene.glossy() || (scene.probes() && !scene.exit.name.empty()))
     check_plugin_matches(data.exit, scene.exit, "exit basis");
-  if (data.receivers.probes() != scene.probes())
+  if (data.receivers.kind != keys::receivers::kind(scene.receivers))
     throw Error(scene.receivers.location(), "the bake file holds transfer at " +
                                                 data.receivers.kind + ", but the scene asks for " +
                                                 keys::receivers::kind(scene.receivers) +
                                                 "; bake again");
+  const auto resolution = keys::receivers::resolution(scene.receivers);
+  if (data.receivers.texels() && data.receivers.atlas.width != resolution)
+    throw Error(scene.receivers.location(keys::receivers::resolution.name()),
+                "the bake file holds texels of a " + std::to_string(data.receivers.atlas.width) +
+                    " x " + std::to_string(data.receivers.atlas.height) +
+                    " atlas, but the scene asks for resolution " + std::to_string(resolution) +
+                    "; bake again");
 }
 
 void check_bake_dimension(const BakeData& data, const Basis& basis) {

@@ -33,6 +33,7 @@ void write_bake(const fs::path& file, const BakeData& data) {
   H5::Exception::dontPrint();
   data.mesh.validate("bake data");
   const auto rows = static_cast<Eigen::Index>(data.receiver_count());
+  if (data.receivers.texels()) check_texel_atlas(data.receivers.atlas, file.string());
   if (data.receivers.probes()) {
     check_probe_grid(data.receivers.grid, file.string());
     if (data.receivers.valid.size() != std::size_t(rows))
@@ -47,7 +48,7 @@ void write_bake(const fs::path& file, const BakeData& data) {
       streamed ? data.streamed_transfer.cols : data.transfer.dimension();
   if (transfer_rows != rows)
     throw Error(file.string() + ": transfer rows do not match the " +
-                (data.receivers.probes() ? "probes" : "mesh's vertices"));
+                (data.receivers.at_vertices() ? "mesh's vertices" : data.receivers.kind));
   const TransferSignal& t = data.transfer;
   bool channels_ok = t.channel_groups >= 1 && t.channel_groups <= 3 && t.exit_rows >= 1 &&
                      transfer_cols % (Eigen::Index(t.exit_rows) * t.channel_groups) == 0;
@@ -92,12 +93,21 @@ void write_mesh(H5::H5File& h5, const Mesh& m) {
   write_vectors<Eigen::Vector3f, float>(mesh, "positions", m.positions);
   write_vectors<Eigen::Vector3f, float>(mesh, "normals", m.normals);
   write_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles", m.triangles);
+  if (!m.uvs.empty()) write_vectors<Eigen::Vector2f, float>(mesh, "uvs", m.uvs);
 }
 
 // Where the transfer's rows are, when not at the mesh's vertices.
 void write_receivers(H5::H5File& h5, const Receivers& r) {
   H5::Group receivers = create_group(h5, "receivers");
   write_text(receivers, "kind", r.kind);
+  if (r.texels()) {  // the texels and their surface points
+    write_number(receivers, "width", r.atlas.width);
+    write_number(receivers, "height", r.atlas.height);
+    write_array(receivers, "texels", r.atlas.texels.data(), r.atlas.texels.size(), 1);
+    write_vectors<Eigen::Vector3f, float>(receivers, "positions", r.points.positions);
+    write_vectors<Eigen::Vector3f, float>(receivers, "normals", r.points.normals);
+    return;
+  }
   write_number(receivers, "spacing", r.grid.spacing);
   for (int a = 0; a < 3; ++a) {
     const std::string axis(1, "xyz"[a]);
@@ -180,7 +190,7 @@ void write_bake_to(const fs::path& temporary, const fs::path& file, const BakeDa
     {  // every object closed before the file, so its close reports the flush
       write_header(h5, data);
       write_mesh(h5, data.mesh);
-      if (data.receivers.probes()) write_receivers(h5, data.receivers);
+      if (!data.receivers.at_vertices()) write_receivers(h5, data.receivers);
       write_transfer(h5, data, streamed);
       write_compressed(h5, data.compressed);
       write_states_and_metrics(h5, data);

@@ -33,7 +33,7 @@ void read_header(const H5::H5File& h5, BakeData& data, int version) {
   if (read_number(root, "format_version") != version)
     throw Error("its header and its format_version attribute disagree");
   // Version 5 says the rows are at receivers (/receivers); 4 at the vertices.
-  data.receivers.kind = version == kReceiversFormatVersion ? "probes" : "vertices";
+  data.receivers.kind = version == kReceiversFormatVersion ? "probes" : "vertices";  // or texels: /receivers says
   data.scene_file = read_text(root, "scene_file");
   data.scene_text = read_bytes(root, "scene_text");
   data.transport = read_text(root, "transport");
@@ -49,14 +49,28 @@ void read_mesh(const H5::H5File& h5, BakeData& data) {
   data.mesh.normals = read_vectors<Eigen::Vector3f, float>(mesh, "normals");
   data.mesh.triangles =
       read_vectors<std::array<std::uint32_t, 3>, std::uint32_t>(mesh, "triangles");
+  if (mesh.nameExists("uvs")) data.mesh.uvs = read_vectors<Eigen::Vector2f, float>(mesh, "uvs");
+}
+
+// The texels of a version 5 file and their points (checked in bake_values.cpp).
+void read_texels(const H5::Group& receivers, BakeData& data) {
+  TexelAtlas& atlas = data.receivers.atlas;
+  atlas.width = int(read_count(receivers, "width", 16384));
+  atlas.height = int(read_count(receivers, "height", 16384));
+  hsize_t rows, cols;
+  atlas.texels = read_array<std::uint32_t>(receivers, "texels", rows, cols);
+  data.receivers.points.positions = read_vectors<Eigen::Vector3f, float>(receivers, "positions");
+  data.receivers.points.normals = read_vectors<Eigen::Vector3f, float>(receivers, "normals");
 }
 
 // The probe grid of a version 5 file (checked in bake_values.cpp).
 void read_receivers(const H5::H5File& h5, BakeData& data) {
-  if (!data.receivers.probes()) return;
+  if (data.receivers.at_vertices()) return;
   H5::Group receivers = open_group(h5, "receivers");
-  if (read_text(receivers, "kind") != "probes")
-    throw Error("/receivers names a kind of receiver other than probes");
+  data.receivers.kind = read_text(receivers, "kind");
+  if (data.receivers.texels()) return read_texels(receivers, data);
+  if (!data.receivers.probes())
+    throw Error("/receivers names a kind of receiver other than texels or probes");
   ProbeGrid& grid = data.receivers.grid;
   grid.spacing = float(read_number(receivers, "spacing"));
   for (int a = 0; a < 3; ++a) {

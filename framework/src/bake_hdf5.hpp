@@ -299,23 +299,34 @@ inline MatrixXfRow read_matrix(const H5::Group& group, const std::string& name) 
   return Eigen::Map<MatrixXfRow>(values.data(), rows, cols);
 }
 
+// Coordinates per item: an Eigen vector's size, or a std::array's.
+template <class V>
+constexpr int components_of() {
+  if constexpr (requires { V::SizeAtCompileTime; })
+    return int(V::SizeAtCompileTime);
+  else
+    return int(std::tuple_size_v<V>);
+}
+
 template <class V, class T>
 inline void write_vectors(H5::Group& group, const std::string& name, const std::vector<V>& items) {
+  constexpr int n = components_of<V>();
   std::vector<T> flat;
-  flat.reserve(items.size() * 3);
+  flat.reserve(items.size() * n);
   for (const auto& item : items)
-    for (int c = 0; c < 3; ++c) flat.push_back(static_cast<T>(item[c]));
-  write_array(group, name, flat.data(), items.size(), 3);
+    for (int c = 0; c < n; ++c) flat.push_back(static_cast<T>(item[c]));
+  write_array(group, name, flat.data(), items.size(), n);
 }
 
 template <class V, class T>
 inline std::vector<V> read_vectors(const H5::Group& group, const std::string& name) {
   hsize_t rows, cols;
+  constexpr int n = components_of<V>();
   auto flat = read_array<T>(group, name, rows, cols);
-  if (cols != 3) throw Error("dataset \"" + name + "\" must have 3 columns");
+  if (cols != n) throw Error("dataset \"" + name + "\" must have " + std::to_string(n) + " columns");
   std::vector<V> items(rows);
   for (hsize_t r = 0; r < rows; ++r)
-    for (int c = 0; c < 3; ++c) items[r][c] = flat[r * 3 + c];
+    for (int c = 0; c < n; ++c) items[r][c] = flat[r * n + c];
   return items;
 }
 

@@ -195,6 +195,7 @@ BakePlan plan_bake(const SceneSpec& scene, PluginRegistry& registry) {
   plan.fit = plan.basis->can_fit();
   if (plan.glossy) plan_glossy(scene, registry, plan);
   if (scene.probes()) plan_probes(scene, registry, plan);
+  plan.texels = scene.texels();
   plan.subsurface_material = scene.subsurface();
   plan.channels = scene.channels();
   plan.keep_visibility = plan.fit || plan.glossy;

@@ -145,6 +145,13 @@ void In::operator()(std::vector<Eigen::Vector3f>& v) {
   payload(v.data(), shape);
 }
 
+void In::operator()(std::vector<Eigen::Vector2f>& v) {
+  const Shape shape = header(sizeof(float));
+  if (shape.cols != 2) refuse("texture coordinates of " + std::to_string(shape.cols) + " values");
+  v.resize(shape.rows);
+  payload(v.data(), shape);
+}
+
 void In::operator()(MatrixXfRow& m) {
   const Shape shape = header(sizeof(float));
   m.resize(Eigen::Index(shape.rows), Eigen::Index(shape.cols));
@@ -188,7 +195,7 @@ void In::rows(TransferSignal& signal, bool direct) {
   if (rows != receivers && !(direct && rows == 0 && cols == 0))
     throw Error("the " + std::string(direct ? "direct transfer" : "transfer") + " has " +
                 std::to_string(rows) + " rows for " + std::to_string(receivers) +
-                (data_.receivers.probes() ? " probes" : " vertices"));
+                " " + (data_.receivers.at_vertices() ? "vertices" : data_.receivers.kind));
   const double beside = kMeshBytesPerVertex * double(data_.mesh.vertex_count());
   std::shared_ptr<RowFile> file;
   if (!direct && reading_.memory_budget > 0 && shape.bytes() + beside > reading_.memory_budget)

@@ -53,6 +53,9 @@ class Out {
   void operator()(const std::vector<Eigen::Vector3f>& v) {
     frame(v.size(), 3, sizeof(float), v.data());
   }
+  void operator()(const std::vector<Eigen::Vector2f>& v) {
+    frame(v.size(), 2, sizeof(float), v.data());
+  }
   void operator()(const MatrixXfRow& m) { frame(m.rows(), m.cols(), sizeof(float), m.data()); }
   void operator()(const Eigen::MatrixXd& m) { frame(m.rows(), m.cols(), sizeof(double), m.data()); }
   void operator()(const std::vector<MatrixXfRow>& blocks);
@@ -112,6 +115,7 @@ class In {
   }
   void operator()(Eigen::Vector3f& v) { expect(1, 3, sizeof(float), v.data()); }
   void operator()(std::vector<Eigen::Vector3f>& v);
+  void operator()(std::vector<Eigen::Vector2f>& v);
   void operator()(MatrixXfRow& m);
   void operator()(Eigen::MatrixXd& m);
   void operator()(std::vector<MatrixXfRow>& blocks);
@@ -163,6 +167,8 @@ void bake_fields(Io& io, Data& d) {
   io(d.mesh.positions), io(d.mesh.normals), io(d.mesh.triangles);
   io(d.receivers.kind), io(d.receivers.grid.origin), io(d.receivers.grid.spacing);
   io(d.receivers.grid.counts), io(d.receivers.valid);
+  io(d.mesh.uvs), io(d.receivers.atlas.width), io(d.receivers.atlas.height);
+  io(d.receivers.atlas.texels), io(d.receivers.points.positions), io(d.receivers.points.normals);
   io(d.albedo), io(d.material), io(d.bounces), io(d.subsurface);
   io(d.transfer.kind), io(d.transfer.exit_rows), io(d.transfer.channel_groups);
   io(d.transfer.group_of_channel);

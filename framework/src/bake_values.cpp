@@ -83,7 +83,7 @@ void check_transfer(BakeData& data) {
   if (transfer.vertices() != static_cast<Eigen::Index>(data.receiver_count()))
     throw Error("the transfer has " + std::to_string(transfer.vertices()) + " rows for " +
                 std::to_string(data.receiver_count()) +
-                (data.receivers.probes() ? " probes" : " vertices"));
+                " " + (data.receivers.at_vertices() ? "vertices" : data.receivers.kind));
   if ((transfer.kind == "incident") != data.receivers.probes())
     throw Error("transfer kind \"" + transfer.kind + "\" at " + data.receivers.kind);
 
@@ -113,6 +113,27 @@ void check_compressed(const BakeData& data) {
   c.validate(static_cast<Eigen::Index>(data.receiver_count()));
 }
 
+// A texel bake: its atlas, one point (finite, unit normal) per texel, and
+// the mesh's texture coordinates the renderers look the texels up through.
+void check_texels(const BakeData& data) {
+  const Receivers& r = data.receivers;
+  check_texel_atlas(r.atlas, "/receivers");
+  const std::size_t n = r.atlas.texels.size();
+  if (r.points.positions.size() != n || r.points.normals.size() != n)
+    throw Error("/receivers has " + std::to_string(r.points.positions.size()) + " positions and " +
+                std::to_string(r.points.normals.size()) + " normals for " + std::to_string(n) +
+                " texels");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!r.points.positions[i].allFinite() ||
+        !(std::abs(r.points.normals[i].norm() - 1) < 1e-3f))
+      throw Error("/receivers: texel " + std::to_string(i) +
+                  " has a non-finite position or a normal that is not unit length");
+  if (data.mesh.uvs.size() != data.mesh.vertex_count())
+    throw Error("/mesh has " + std::to_string(data.mesh.uvs.size()) +
+                " texture coordinates for " + std::to_string(data.mesh.vertex_count()) +
+                " vertices; texel receivers need one per vertex");
+}
+
 void check_finite(const BasisState& state, const char* group) {
   for (const auto& [name, matrix] : state.matrices)
     if (!matrix.allFinite())
@@ -132,6 +153,8 @@ void check_bake_values(BakeData& data) {
     for (std::uint8_t flag : data.receivers.valid)
       if (flag > 1) throw Error("/receivers/valid holds a value other than 0 or 1");
     data.receivers = Receivers::probes_on(data.receivers.grid, std::move(data.receivers.valid));
+  } else if (data.receivers.texels()) {
+    check_texels(data);
   } else if (data.receivers.kind != "vertices") {
     throw Error("unknown receivers \"" + data.receivers.kind + "\"");
   }

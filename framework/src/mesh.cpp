@@ -12,6 +12,7 @@
 #include <map>
 #include <mutex>
 #include <sstream>
+#include <tuple>
 
 #include "mesh_file_check.hpp"
 #include "prt/error.hpp"
@@ -129,6 +130,37 @@ void Mesh::validate(const std::string& source) const {
   if (normals.size() != positions.size())
     throw Error(source + ": " + std::to_string(normals.size()) + " normals for " +
                 std::to_string(positions.size()) + " vertices");
+  if (!uvs.empty() && uvs.size() != positions.size())
+    throw Error(source + ": " + std::to_string(uvs.size()) + " texture coordinates for " +
+                std::to_string(positions.size()) + " vertices");
+  for (std::size_t v = 0; v < uvs.size(); ++v)
+    if (!uvs[v].allFinite())
+      throw Error(source + ": vertex " + std::to_string(v) +
+                  " has a NaN or infinite texture coordinate");
+}
+
+void split_at_uv_seams(Mesh& mesh,
+                       const std::vector<std::array<Eigen::Vector2f, 3>>& corner_uvs) {
+  std::map<std::tuple<std::uint32_t, float, float>, std::uint32_t> index;
+  Mesh split;
+  split.skipped_degenerate_faces = mesh.skipped_degenerate_faces;
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    std::array<std::uint32_t, 3> t{};
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.triangles[f][std::size_t(k)];
+      const Eigen::Vector2f uv = corner_uvs[f][std::size_t(k)];
+      const auto [at, added] =
+          index.try_emplace({v, uv.x(), uv.y()}, std::uint32_t(split.positions.size()));
+      if (added) {
+        split.positions.push_back(mesh.positions[v]);
+        split.normals.push_back(mesh.normals[v]);
+        split.uvs.push_back(uv);
+      }
+      t[std::size_t(k)] = at->second;
+    }
+    split.triangles.push_back(t);
+  }
+  mesh = std::move(split);
 }
 
 namespace {
@@ -174,9 +206,15 @@ bool read_openmesh(OMesh& om, const std::filesystem::path& file, OpenMesh::IO::O
 // The mesh file through OpenMesh; its log (what OpenMesh said of the file) is
 // returned for the checks that follow.
 std::string read_with_openmesh(const std::filesystem::path& file, OMesh& om,
-                               OpenMesh::IO::Options& options) {
+                               OpenMesh::IO::Options& options, bool uvs) {
   om.request_vertex_normals();
   options = OpenMesh::IO::Options::VertexNormal;
+  if (uvs) {
+    om.request_vertex_texcoords2D();
+    om.request_halfedge_texcoords2D();
+    options += OpenMesh::IO::Options::VertexTexCoord;
+    options += OpenMesh::IO::Options::FaceTexCoord;
+  }
   OpenMeshLogCapture capture;
   const bool ok = read_openmesh(om, file, options);
   const std::string log = capture.text();
@@ -214,12 +252,24 @@ void check_read_counts(const std::filesystem::path& file, const OMesh& om,
   }
 }
 
-// Triangles with a non-zero area; the others are counted as skipped.
-void add_triangles(const OMesh& om, Mesh& mesh) {
+// Triangles with a non-zero area; the others are counted as skipped. With
+// `corner_uvs`, each kept triangle's texture coordinates (per face corner
+// where the file gives them so, else per vertex).
+void add_triangles(const OMesh& om, Mesh& mesh, const OpenMesh::IO::Options& options,
+                   std::vector<std::array<Eigen::Vector2f, 3>>* corner_uvs) {
   for (auto fh : om.faces()) {
     std::array<std::uint32_t, 3> t{};
+    std::array<Eigen::Vector2f, 3> uv{};
     int k = 0;
-    for (auto vh : om.fv_range(fh)) t[k++] = static_cast<std::uint32_t>(vh.idx());
+    for (auto hh : om.fh_range(fh)) {
+      const auto vh = om.to_vertex_handle(hh);
+      if (corner_uvs) {
+        const auto& c = options.check(OpenMesh::IO::Options::FaceTexCoord) ? om.texcoord2D(hh)
+                                                                             : om.texcoord2D(vh);
+        uv[std::size_t(k)] = {c[0], c[1]};
+      }
+      t[std::size_t(k++)] = static_cast<std::uint32_t>(vh.idx());
+    }
     const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
                           c = mesh.positions[t[2]];
     if (!((b - a).cross(c - a).squaredNorm() > 0.f)) {
@@ -227,6 +277,7 @@ void add_triangles(const OMesh& om, Mesh& mesh) {
       continue;
     }
     mesh.triangles.push_back(t);
+    if (corner_uvs) corner_uvs->push_back(uv);
   }
 }
 
@@ -251,7 +302,7 @@ void add_file_normals(const OMesh& om, const OpenMesh::IO::Options& options, Mes
 
 }  // namespace
 
-Mesh load_mesh(const std::filesystem::path& file) {
+Mesh load_mesh(const std::filesystem::path& file, bool uvs) {
   const std::string source = file.string();
   std::error_code error;
   const auto status = std::filesystem::status(file, error);
@@ -264,7 +315,9 @@ Mesh load_mesh(const std::filesystem::path& file) {
   reject_non_finite_text(file);
   OMesh om;
   OpenMesh::IO::Options options;
-  const std::string log = read_with_openmesh(file, om, options);
+  const std::string log = read_with_openmesh(file, om, options, uvs);
+  const bool has_uvs = uvs && (options.check(OpenMesh::IO::Options::FaceTexCoord) ||
+                               options.check(OpenMesh::IO::Options::VertexTexCoord));
   Mesh mesh;
   mesh.positions.reserve(om.n_vertices());
   for (auto vh : om.vertices()) {
@@ -280,9 +333,12 @@ Mesh load_mesh(const std::filesystem::path& file) {
   if (const auto complex = count_lines_containing(log, "complex"))
     log_warning(source + ": " + std::to_string(complex) +
                 " non-manifold face(s); OpenMesh duplicated their vertices");
-  add_triangles(om, mesh);
+  std::vector<std::array<Eigen::Vector2f, 3>> corner_uvs;
+  add_triangles(om, mesh, options, has_uvs ? &corner_uvs : nullptr);
   add_file_normals(om, options, mesh);
   if (mesh.normals.empty()) mesh.compute_normals();
+  // Normals first, over the whole surface: a seam does not crease the shading.
+  if (has_uvs) split_at_uv_seams(mesh, corner_uvs);
   mesh.validate(source);
   if (mesh.skipped_degenerate_faces > 0)
     log_warning(source + ": skipped " + std::to_string(mesh.skipped_degenerate_faces) +

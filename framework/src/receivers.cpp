@@ -78,4 +78,12 @@ void check_probe_grid(const ProbeGrid& grid, const std::string& source) {
                 std::to_string(grid.counts[2]) + ") is not a grid");
 }
 
+Receivers Receivers::texels_of(TexelSamples samples) {
+  Receivers r;
+  r.kind = "texels";
+  r.atlas = std::move(samples.atlas);
+  r.points = std::move(samples.points);
+  return r;
+}
+
 }  // namespace prt

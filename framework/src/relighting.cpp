@@ -37,7 +37,7 @@ Relighting::Relighting(const SceneSpec& scene, const BakeData& data, PluginRegis
       throw Error(exit.where, "the bake's transfer has " + std::to_string(data.transfer.exit_rows) +
                                   " exit rows, but exit basis \"" + exit.name + "\" has " +
                                   std::to_string(exit_->size()) + " functions; bake again");
-    frames_ = tangent_frames(data.mesh);
+    frames_ = tangent_frames(data.row_mesh());
   }
   if (!scene.point_lights.empty() && data.transfer.channel_groups > 1)
     throw Error(scene.material.location(),
@@ -65,10 +65,10 @@ std::string Relighting::point_light_rule() const {
 
 Eigen::MatrixX3f Relighting::point_radiance(const CompressedTransfer& transfer,
                                             const MatrixXfRow* exit_values) const {
-  const auto v = static_cast<Eigen::Index>(data_.mesh.vertex_count());
+  const auto v = static_cast<Eigen::Index>(data_.row_mesh().vertex_count());
   if (point_lights_.empty()) return Eigen::MatrixX3f::Zero(v, 3);
   Eigen::MatrixX3f radiance =
-      point_light_radiance(data_.mesh, transfer, data_.transfer.exit_rows, *projector_,
+      point_light_radiance(data_.row_mesh(), transfer, data_.transfer.exit_rows, *projector_,
                            point_lights_, exit_ ? exit_values : nullptr);
   for (int c = 0; c < 3; ++c) radiance.col(c) *= data_.albedo[c];
   return radiance;
@@ -128,6 +128,7 @@ Relit Relighting::relight(const RelightKernel& kernel, const Eigen::MatrixX3d& l
     out.vertex_radiance += point_radiance(kernel.transfer(), &out.exit_values);
     out.summed = true;
   }
+  if (data_.receivers.texels()) out.summed = true;  // renderers draw the texels' sums as a texture
   return out;
 }
 
@@ -150,7 +151,7 @@ Eigen::MatrixX3f Relighting::relight(const ViewTransfer& view,
 
 MatrixXfRow Relighting::exit_values_toward(const Camera& camera) const {
   if (!exit_) return {};
-  return exit_values(*exit_, local_view_directions(data_.mesh, frames_, camera.position));
+  return exit_values(*exit_, local_view_directions(data_.row_mesh(), frames_, camera.position));
 }
 
 RenderInput Relighting::input(const CompressedTransfer& transfer, const Relit& relit,
@@ -162,10 +163,11 @@ RenderInput Relighting::input(const CompressedTransfer& transfer, const Relit& r
   input.albedo = data_.albedo;
   input.camera = camera;
   if (exit_) input.exit_values = &relit.exit_values;
-  if (relit.summed) {  // point lights or channel transfers: the renderer draws the sums made here
+  if (relit.summed) {  // point lights, channel transfers or texels: the renderer draws these sums
     input.vertex_radiance = &relit.vertex_radiance;
     input.albedo = Eigen::Vector3f::Ones();
   }
+  if (data_.receivers.texels()) input.texels = &data_.receivers.atlas;
   return input;
 }
 

@@ -37,7 +37,8 @@ ParamSchema place_schema(const char* owner) {
 const ParamSchema& receivers_schema() {
   static const ParamSchema s{
       "section [receivers]",
-      {keys::receivers::kind, keys::receivers::spacing, keys::receivers::interpolation,
+      {keys::receivers::kind, keys::receivers::resolution, keys::receivers::spacing,
+       keys::receivers::interpolation,
        keys::receivers::normal_bias, keys::receivers::invalid_fraction}};
   return s;
 }
@@ -366,8 +367,28 @@ void check_placed(const Params& params, const char* where) {
 
 // What probes receive: distant light over the sphere, shadowed by the scene
 // (docs/receivers.md); what they do not yet, refused before any ray.
+// What texels receive: distant light, shadowed by the mesh, at a diffuse
+// surface; what they do not yet, refused before any ray.
+void check_texels(const SceneSpec& scene) {
+  const SourceLocation where = scene.receivers.location(keys::receivers::kind.name());
+  auto refuse = [&](const std::string& what) {
+    throw Error(where, "section [receivers]: texels receive distant light, shadowed by the "
+                       "mesh, at a diffuse surface; " + what);
+  };
+  if (!scene.mesh_parts.empty())
+    refuse("[[mesh.add]] joins meshes without one atlas: join them in one file with texture "
+           "coordinates");
+  if (scene.glossy()) refuse("glossy transfer at texels is not built yet: use lambert");
+  if (keys::transport::bounces(scene.transport) > 0)
+    refuse("inter-reflected light at texels is not built yet: use bounces = 0");
+  if (keys::material::subsurface(scene.material))
+    refuse("subsurface light at texels is not built yet");
+  if (!scene.point_lights.empty()) refuse("point lights at texels are not built yet");
+}
+
 void check_receivers(const SceneSpec& scene) {
   for (const Params& part : scene.mesh_parts) check_placed(part, "[[mesh.add]]");
+  if (scene.texels()) check_texels(scene);
   if (!scene.probes()) {
     if (scene.has_moving())
       throw Error(scene.moving.location(),

@@ -12,6 +12,7 @@
 #include "prt/glossy.hpp"
 #include "prt/lattice_lighting.hpp"
 #include "prt/mesh.hpp"
+#include "prt/mesh_atlas.hpp"
 #include "prt/mesh_compose.hpp"
 #include "prt/plugin.hpp"
 #include "prt/registry.hpp"
@@ -70,15 +71,24 @@ Eigen::Vector3f position_of(const Params& params) {
 
 Mesh SceneSpec::load_mesh() const {
   const std::string file_name = keys::mesh::file(mesh);
-  Mesh loaded = !file_name.empty() ? prt::load_mesh(file_name)
+  Mesh loaded = !file_name.empty() ? prt::load_mesh(file_name, texels())
                                    : make_generated(keys::mesh::generate(mesh),
                                                     static_cast<int>(keys::mesh::detail(mesh)));
   for (const Params& part : mesh_parts) append(loaded, load_placed(part, position_of(part)));
+  // Texels need an atlas: the file's, else CGAL's conformal map of a disk.
+  if (texels() && loaded.uvs.empty())
+    compute_atlas(loaded, file_name.empty() ? "generated mesh \"" + keys::mesh::generate(mesh) +
+                                                  "\""
+                                            : file_name);
   return loaded;
 }
 
 bool SceneSpec::probes() const {
   return keys::receivers::kind(receivers) == "probes";
+}
+
+bool SceneSpec::texels() const {
+  return keys::receivers::kind(receivers) == "texels";
 }
 
 bool SceneSpec::has_moving() const {

@@ -53,6 +53,8 @@ TransportResult trace_stage(const BakePlan& plan, const Mesh& mesh, const Direct
   }
   Progress progress("bake transfer", double(mesh.vertex_count()), transport.shadowed ? "rays" : "",
                     options.quiet);
+  std::optional<RayCaster> surfaces;  // rows that are not the mesh's vertices (texels)
+  if (plan.occluders && plan.shadowed) transport.caster = &surfaces.emplace(*plan.occluders);
   return transport.keep_visibility
              ? diffuse_transfer(mesh, set, Eigen::MatrixXd(set.size(), 0), transport, &progress)
              : diffuse_transfer(mesh, set, *plan.basis, transport, &progress);

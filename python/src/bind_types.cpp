@@ -131,6 +131,16 @@ void bind_types(py::module_& m) {
                                                           static_cast<py::ssize_t>(t.size()), 3,
                                                           self);
                              })
+      .def_property_readonly(
+          "uvs",
+          [](const Mesh& mesh) {
+            py::array_t<float> out({py::ssize_t(mesh.uvs.size()), py::ssize_t(2)});
+            auto view = out.mutable_unchecked<2>();
+            for (std::size_t v = 0; v < mesh.uvs.size(); ++v)
+              for (int c = 0; c < 2; ++c) view(py::ssize_t(v), c) = mesh.uvs[v][c];
+            return out;
+          },
+          "(vertices, 2) texture coordinates of the texel atlas; (0, 2) without one")
       .def_property_readonly("vertex_count", &Mesh::vertex_count)
       .def_property_readonly("triangle_count", &Mesh::triangle_count)
       .def("__repr__", [](const Mesh& mesh) {
@@ -372,9 +382,23 @@ void bind_types(py::module_& m) {
       .def("__repr__", &one_line);
 
   py::class_<Receivers>(m, "Receivers",
-                        "Where a bake's transfer rows are: the mesh's vertices, or probes on a "
-                        "grid (docs/receivers.md).")
-      .def_readonly("kind", &Receivers::kind, "\"vertices\" or \"probes\"")
+                        "Where a bake's transfer rows are: the mesh's vertices, the texels of "
+                        "its atlas, or probes on a grid (docs/receivers.md).")
+      .def_readonly("kind", &Receivers::kind, "\"vertices\", \"texels\" or \"probes\"")
+      .def_property_readonly(
+          "width", [](const Receivers& r) { return r.atlas.width; },
+          "texels: the atlas texture's width in texels")
+      .def_property_readonly(
+          "height", [](const Receivers& r) { return r.atlas.height; },
+          "texels: the atlas texture's height in texels")
+      .def_property_readonly(
+          "texels",
+          [](const Receivers& r) {
+            py::array_t<std::uint32_t> out(py::ssize_t(r.atlas.texels.size()));
+            std::copy(r.atlas.texels.begin(), r.atlas.texels.end(), out.mutable_data());
+            return out;
+          },
+          "texels: each row's texel, y * width + x (uv [x, x+1] / width x [y, y+1] / height)")
       .def_property_readonly(
           "origin", [](const Receivers& r) { return Eigen::Vector3f(r.grid.origin); },
           "probes: position of probe (0, 0, 0)")
@@ -387,13 +411,14 @@ void bind_types(py::module_& m) {
       .def_property_readonly(
           "positions",
           [](const Receivers& r) {
-            py::array_t<float> out({py::ssize_t(r.grid.count()), py::ssize_t(3)});
+            const std::size_t n = r.points.vertex_count();
+            py::array_t<float> out({py::ssize_t(n), py::ssize_t(3)});
             auto view = out.mutable_unchecked<2>();
-            for (std::size_t p = 0; p < r.grid.count(); ++p)
-              for (int a = 0; a < 3; ++a) view(py::ssize_t(p), a) = r.grid.position(p)[a];
+            for (std::size_t p = 0; p < n; ++p)
+              for (int a = 0; a < 3; ++a) view(py::ssize_t(p), a) = r.points.positions[p][a];
             return out;
           },
-          "probes: (count, 3) probe positions, in transfer row order")
+          "probes and texels: (rows, 3) positions, in transfer row order")
       .def_property_readonly(
           "valid",
           [](const Receivers& r) {
@@ -403,8 +428,9 @@ void bind_types(py::module_& m) {
           },
           "probes: False where a probe sits inside geometry (its row is zero)")
       .def_readonly("points", &Receivers::points,
-                    "probes: the probes as a point mesh (no triangles), one vertex per row: the "
-                    "mesh to give prt.compress and prt.measure for this transfer");
+                    "probes and texels: a point mesh (no triangles; texels' surface normals), one "
+                    "vertex per row: the mesh to give prt.compress and prt.measure for this "
+                    "transfer");
 
   py::class_<BakeData>(m, "BakeData", "A bake: the contents of one bake file.")
       .def_static(

@@ -6,6 +6,7 @@
 #    of 255 and under 0.5% of pixels off by more than 8 levels;
 #  - prt-view renders scripted frames and exits cleanly; its screenshot
 #    changes when the light rotates and when the camera orbits;
+#  - a probe and a texel scene draw alike on both renderers and in prt-view;
 #  - a bad scene and a missing bake get clear messages, not crashes.
 set -euo pipefail
 prt="$1"
@@ -153,6 +154,37 @@ grep -q "moving object at" <<<"$out" || { echo "FAIL: no moving object in the st
 line=$("$prt" image-diff vp0.png vp_moved.png)
 echo "moved object vs first frame: $line"
 awk -v l="$line" 'BEGIN { split(l, w, " "); if (w[4] < 0.05) { print "FAIL: no change"; exit 1 } }'
+
+# A texel scene (docs/receivers.md): the OpenGL renderer's texture lookup
+# (GL_LINEAR) matches the CPU renderer's bilinear lookup, and prt-view's
+# first frame matches prt render.
+cat >texels.toml <<EOT
+[mesh]
+file = "$data/meshes/nefertiti.off"
+[receivers]
+kind = "texels"
+resolution = 32
+[transport]
+rays = 256
+[basis]
+plugin = "sh"
+order = 6
+[lighting]
+environment = "$data/hdri/courtyard.exr"
+rotation = 90
+[camera]
+position = [0.0, 0.3, 8.0]
+target = [0.0, 0.0, -0.4]
+width = 240
+height = 280
+fov = 40
+EOT
+"$prt" -q bake texels.toml >/dev/null
+"$prt" -q render texels.toml -o cpu_texels.png >/dev/null
+x "$prt" -q render texels.toml -r opengl -o gl_texels.png >/dev/null
+check_match "texels" cpu_texels.png gl_texels.png
+x "$viewer" -q texels.toml --frames 1 --light-step 0 --screenshot vt0.png >/dev/null
+check_match "viewer texel frame vs prt render" cpu_texels.png vt0.png
 
 # Clear messages for bad input.
 printf '[mesh]\nfile = "nowhere.off"\n[lighting]\nconstant = [1,1,1]\n' >bad.toml

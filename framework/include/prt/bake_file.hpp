@@ -36,7 +36,7 @@ struct BakeData {
   PluginRecord basis, compressor;
   PluginRecord exit;      // glossy only: the hemisphere basis of exit radiance
   std::string transport;  // e.g. "fibonacci 1024 shadowed seed=1"
-  Mesh mesh;              // the scene's geometry; at vertex receivers, one row per vertex
+  Mesh mesh;              // the scene's geometry (with its atlas at texels); at vertex receivers, one row per vertex
   Receivers receivers;    // where the transfer's rows are (default: the mesh's vertices)
   Eigen::Vector3f albedo{1, 1, 1};
   std::string material = "lambert kd=1";  // the BRDF the transfer was baked for
@@ -60,13 +60,15 @@ struct BakeData {
 
   // One vertex per transfer row: the mesh at vertex receivers, the probes'
   // points otherwise (for compressors and encode reports).
-  const Mesh& row_mesh() const { return receivers.probes() ? receivers.points : mesh; }
+  const Mesh& row_mesh() const { return receivers.at_vertices() ? mesh : receivers.points; }
   // The transfer's rows: one per receiver.
   std::size_t receiver_count() const {
-    return receivers.probes() ? receivers.grid.count() : mesh.vertex_count();
+    return receivers.probes()   ? receivers.grid.count()
+           : receivers.texels() ? receivers.atlas.texels.size()
+                                : mesh.vertex_count();
   }
   int format_version() const {
-    return receivers.probes() ? kReceiversFormatVersion : kBakeFormatVersion;
+    return receivers.at_vertices() ? kBakeFormatVersion : kReceiversFormatVersion;
   }
 };
 

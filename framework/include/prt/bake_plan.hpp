@@ -33,6 +33,11 @@ struct BakePlan {
   PluginRecord basis_record, exit_record, compressor_record;
   bool glossy = false, subsurface = false, fit = false;
   bool probes = false;  // [receivers] kind = "probes": exit is the incident basis
+  bool texels = false;  // [receivers] kind = "texels": rows are the atlas's texels
+  // The surfaces rays meet when the rows are not the mesh's own vertices
+  // (texels: the scene's mesh); null: the rows' mesh itself.
+  const Mesh* occluders = nullptr;
+  const Mesh& surfaces(const Mesh& rows) const { return occluders ? *occluders : rows; }
   int bounces = 0;
   double bounce_albedo = 1;
   int sparse_terms = 0;          // > 0: the basis's own sparse approximation replaces compression

@@ -13,6 +13,9 @@ struct Mesh {
   std::vector<Eigen::Vector3f> positions;
   std::vector<Eigen::Vector3f> normals;  // unit length, one per vertex
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  // A texel atlas: empty, or one (u, v) in [0, 1]^2 per vertex. A vertex on
+  // a seam between charts is one vertex per chart (split_at_uv_seams).
+  std::vector<Eigen::Vector2f> uvs;
   std::size_t skipped_degenerate_faces = 0;
 
   std::size_t vertex_count() const { return positions.size(); }
@@ -22,14 +25,20 @@ struct Mesh {
 
   // Area-weighted vertex normals from the triangles.
   void compute_normals();
-  // Throws prt::Error naming the first NaN/Inf coordinate, out-of-range index or
-  // missing normal; `source` is used in the message.
+  // Throws prt::Error naming the first NaN/Inf coordinate, out-of-range index,
+  // missing normal or bad uv; `source` is used in the message.
   void validate(const std::string& source) const;
 };
 
 // Loads a mesh; keeps normals stored in the file, else computes them.
 // Degenerate faces (zero area, repeated vertex) are skipped and counted.
-Mesh load_mesh(const std::filesystem::path& file);
+// With `uvs`, the file's texture coordinates too (OBJ vt per face corner,
+// PLY u, v or s, t per vertex) when it has them, the mesh split at their seams.
+Mesh load_mesh(const std::filesystem::path& file, bool uvs = false);
+
+// One vertex per (vertex, corner uv) pair: `corner_uvs` holds three per
+// triangle. Positions and normals are copied, so shading is unchanged.
+void split_at_uv_seams(Mesh& mesh, const std::vector<std::array<Eigen::Vector2f, 3>>& corner_uvs);
 
 // Generated meshes for tests that need no download.
 Mesh make_sphere(int subdivisions, float radius = 1.0f);  // icosphere, exact normals

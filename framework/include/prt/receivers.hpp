@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "prt/mesh.hpp"
+#include "prt/texel_atlas.hpp"
 
 namespace prt {
 
@@ -43,17 +44,23 @@ ProbeGrid probe_grid_over(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, 
 void check_probe_grid(const ProbeGrid& grid, const std::string& source);
 
 struct Receivers {
-  std::string kind = "vertices";  // "vertices" or "probes"
+  std::string kind = "vertices";  // "vertices", "texels" or "probes"
   ProbeGrid grid;                 // probes only
+  TexelAtlas atlas;               // texels only: which texel each row is
   // probes only: 1 where the probe is usable, 0 where it sits inside
   // geometry (most of its rays hit back faces); one per probe.
   std::vector<std::uint8_t> valid;
-  // probes only: the probes as points (positions, zero normals, no
-  // triangles), one per transfer row: what a compressor that clusters by
-  // position, or a report of overdraw, is given instead of the scene's mesh.
+  // probes and texels: one point per transfer row (positions; the texels'
+  // surface normals, zero normals at probes; no triangles): what the bake
+  // traces from, and what a compressor that clusters by position, or a
+  // report of overdraw, is given instead of the scene's mesh.
   Mesh points;
 
   bool probes() const { return kind == "probes"; }
+  bool texels() const { return kind == "texels"; }
+  bool at_vertices() const { return kind == "vertices"; }
+  // Texels of an atlas, with their surface points.
+  static Receivers texels_of(TexelSamples samples);
   // Probes on `grid` with their validity; `points` made from the grid.
   static Receivers probes_on(const ProbeGrid& grid, std::vector<std::uint8_t> valid);
 };

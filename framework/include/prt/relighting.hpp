@@ -29,7 +29,7 @@ std::string under_resolved_light(const Eigen::MatrixX3d& light, const std::vecto
 
 struct Rendered {
   Image image;
-  Eigen::MatrixX3f vertex_radiance;          // v x 3 including albedo
+  Eigen::MatrixX3f vertex_radiance;          // v x 3 including albedo (texels: one row per texel)
   std::map<std::string, double> statistics;  // the renderer's (overdraw, draw time, ...)
 };
 
@@ -38,7 +38,7 @@ struct Rendered {
 // camera (glossy) and the radiance each vertex sends to it (albedo included).
 struct Relit {
   MatrixXfRow exit_values;  // glossy only: v x N_r
-  Eigen::MatrixX3f vertex_radiance;
+  Eigen::MatrixX3f vertex_radiance;  // one row per transfer row (vertex or texel)
   // Point lights or per-channel transfers: the sums are made here, and
   // renderers draw vertex_radiance.
   bool summed = false;
@@ -65,7 +65,11 @@ class Relighting {
   // Whether relight() makes the per-vertex sums itself (point lights or
   // per-channel transfers: Relit::summed) rather than leaving them to the
   // renderer's constants-and-weights path.
-  bool sums_here() const { return data_.transfer.channel_groups > 1 || !point_lights_.empty(); }
+  // Per-texel transfer is summed here too: renderers look its sums up as a texture.
+  bool sums_here() const {
+    return data_.transfer.channel_groups > 1 || !point_lights_.empty() ||
+           data_.receivers.texels();
+  }
   Relit relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
                 const Camera& camera) const {
     return relight(prepare(transfer), light, camera);

@@ -8,6 +8,7 @@
 #include "prt/image.hpp"
 #include "prt/mesh.hpp"
 #include "prt/plugin.hpp"
+#include "prt/texel_atlas.hpp"
 #include "prt/transfer.hpp"
 
 namespace prt {
@@ -30,6 +31,11 @@ struct RenderInput {
   Eigen::Vector3f albedo{1, 1, 1};
   Camera camera;
   const Environment* background = nullptr;  // drawn behind the mesh when set
+  // Per-texel transfer: the radiance (vertex_radiance, or the transfer's
+  // sums) has one row per texel of this atlas, looked up through the mesh's
+  // uvs (radiance_texture in prt/texel_atlas.hpp) instead of interpolated
+  // from vertices.
+  const TexelAtlas* texels = nullptr;
 };
 
 class Renderer : public PluginObject {

@@ -74,6 +74,7 @@ struct SceneSpec {
   // The scene's mesh with every [[mesh.add]] joined to it.
   Mesh load_mesh() const;
   bool probes() const;      // [receivers] kind = "probes"
+  bool texels() const;      // [receivers] kind = "texels"
   bool has_moving() const;  // a [moving] section
   // The [moving] object placed at `position` (default: the scene's).
   Mesh load_moving() const;

@@ -85,7 +85,7 @@ TransferOutcome slabbed_transfer(const BakePlan& plan, const Mesh& mesh, const D
       [&](const std::string& text) { options.message(text); });
   Stopwatch clock;
   std::optional<RayCaster> caster;
-  if (plan.shadowed && kept < slabs.size()) caster.emplace(mesh);
+  if (plan.shadowed && kept < slabs.size()) caster.emplace(plan.surfaces(mesh));
   const std::vector<Frame> frames =
       plan.glossy && kept < slabs.size() ? tangent_frames(mesh) : std::vector<Frame>();
   TransferOutcome result;
@@ -275,7 +275,7 @@ TransferOutcome shard_transfer(const BakePlan& plan, const Mesh& mesh, const Dir
     if (slab_kept(store, slab)) continue;
     if (!store.claim("claim-" + run + "." + rows_name("transfer", slab.first, slab.last)))
       continue;  // another rank has it
-    if (plan.shadowed && !caster) caster.emplace(mesh);
+    if (plan.shadowed && !caster) caster.emplace(plan.surfaces(mesh));
     if (plan.glossy && frames.empty()) frames = tangent_frames(mesh);
     const TransferOutcome computed = slab_transfer(plan, mesh, set, caster ? &*caster : nullptr,
                                                    frames, slab.first, slab.last, nullptr);
@@ -335,7 +335,7 @@ bool bits_kept(const CheckpointStore& store, const SlabRange& slab) {
 void trace_bits(const BakePlan& plan, const Mesh& mesh, const DirectionSet& set,
                 const CheckpointStore& store, std::optional<RayCaster>& caster,
                 const SlabRange& slab, Progress& progress) {
-  if (plan.shadowed && !caster) caster.emplace(mesh);
+  if (plan.shadowed && !caster) caster.emplace(plan.surfaces(mesh));
   TransportResult traced = trace_slab(plan, mesh, set, caster ? &*caster : nullptr, slab.first,
                                       slab.last, true, false, &progress);
   keep_count(store, "bitrays", slab, traced.rays_cast);

@@ -139,7 +139,7 @@ TransportResult slabbed_trace(const BakePlan& plan, const Mesh& mesh, const Dire
   for (std::size_t i = 0; i < slabs.size(); ++i) {
     const SlabRange& slab = slabs[i];
     if (!sharing.mine(i) || store.has(rows_name(kRays, slab))) continue;
-    if (plan.shadowed && !caster) caster.emplace(mesh);
+    if (plan.shadowed && !caster) caster.emplace(plan.surfaces(mesh));
     TransportResult traced = trace_slab(plan, mesh, set, caster ? &*caster : nullptr, slab.first,
                                         slab.last, plan.keep_visibility, hits, &progress);
     keep_traced_slab(store, slab, plan.keep_visibility, hits, words, traced, out);

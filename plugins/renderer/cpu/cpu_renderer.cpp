@@ -6,6 +6,7 @@
 #include "prt/plugin.hpp"
 #include "prt/relight.hpp"
 #include "prt/renderer.hpp"
+#include "prt/texel_render.hpp"
 #include "rasterizer.hpp"
 
 namespace prt {
@@ -26,6 +27,7 @@ class CpuRenderer final : public Renderer {
     const Camera& camera = in.camera;
     Image image(camera.width, camera.height);
     if (background_ && in.background) draw_environment(*in.background, camera, image);
+    if (in.texels) return draw_texels(in, image);
     Eigen::MatrixX3f radiance;
     if (in.vertex_radiance)
       radiance = *in.vertex_radiance;
@@ -42,6 +44,20 @@ class CpuRenderer final : public Renderer {
   }
 
  private:
+  // Per-texel transfer: each pixel looks the radiance texture up at its uv
+  // (perspective-correct), bilinearly.
+  static Image draw_texels(const RenderInput& in, Image& image) {
+    const RadianceTexture texture = texel_texture(in, "cpu");
+    const Mesh& mesh = *in.mesh;
+    MatrixXfRow uvs(Eigen::Index(mesh.vertex_count()), 2);
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) uvs.row(Eigen::Index(v)) = mesh.uvs[v];
+    rasterize(mesh, uvs, in.camera, image, [&](const float* uv, float* rgb) {
+      const Eigen::Vector3f radiance = texture.lookup({uv[0], uv[1]});
+      for (int c = 0; c < 3; ++c) rgb[c] = radiance[c];
+    });
+    return image;
+  }
+
   bool background_;
 };
 

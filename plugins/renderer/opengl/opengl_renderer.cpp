@@ -14,6 +14,7 @@
 #include "prt/relight.hpp"
 #include "prt/renderer.hpp"
 #include "shaders.hpp"
+#include "texel_draw.hpp"
 
 namespace prt {
 
@@ -77,6 +78,7 @@ class OpenGLRenderer final : public Renderer {
     context_->make_current();
     const Camera& camera = in.camera;
     prepare_framebuffer(camera.width, camera.height);
+    if (in.texels) return draw_texels(in);
     upload_scene(in);
     const auto start = std::chrono::steady_clock::now();
     upload_constants(in);
@@ -92,6 +94,17 @@ class OpenGLRenderer final : public Renderer {
   bool draws_on_gpu() const override { return true; }
 
  private:
+  // Per-texel transfer: the radiance texture looked up per fragment.
+  Image draw_texels(const RenderInput& in) {
+    const auto start = std::chrono::steady_clock::now();
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+    glViewport(0, 0, width_, height_);
+    texel_draw_.draw(in, view_projection(in.camera, *in.mesh));
+    glFinish();
+    stats_["draw_seconds"] = seconds_since(start);
+    return read_image(in);
+  }
+
   // ---- resources ---------------------------------------------------------
   void prepare_framebuffer(int width, int height) {
     if (framebuffer_ && width == width_ && height == height_) return;
@@ -398,6 +411,7 @@ class OpenGLRenderer final : public Renderer {
   }
 
   void release() {
+    texel_draw_.release();
     if (vao_) glDeleteVertexArrays(1, &vao_);
     if (vertex_buffer_) glDeleteBuffers(1, &vertex_buffer_);
     if (index_buffer_) glDeleteBuffers(1, &index_buffer_);
@@ -451,6 +465,7 @@ class OpenGLRenderer final : public Renderer {
   TextureBuffer constants_, cluster_of_vertex_, group_of_cluster_, weights_, weight_index_,
       vertex_colour_, exit_values_;
   std::vector<Group> groups_;
+  TexelDraw texel_draw_;
   Key key_;
   std::map<std::string, double> stats_;
 };

@@ -1,0 +1,14 @@
+// What a renderer draws for per-texel transfer: the radiance texture.
+#pragma once
+#include "prt/renderer.hpp"
+#include "prt/texel_atlas.hpp"
+
+namespace prt {
+
+// The texture of a per-texel render input (RenderInput::texels): its rows
+// (vertex_radiance, or the transfer relit under its light), albedo applied,
+// clamped at zero (negative ringing is not light), dilated past the charts.
+// Throws prt::Error when the rows do not match the atlas or the mesh has no uvs.
+RadianceTexture texel_texture(const RenderInput& in, const char* renderer);
+
+}  // namespace prt
