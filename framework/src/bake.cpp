@@ -135,28 +135,30 @@ ProbeGrid probe_grid(const SceneSpec& scene, const BakePlan& plan, const Mesh& m
 }
 
 // The texels of the mesh's atlas at [receivers] resolution, with their points.
-Receivers texel_receivers(const SceneSpec& scene, const Mesh& mesh) {
+// Also says how many texels of the atlas hold transfer (also metrics).
+Receivers texel_receivers(const SceneSpec& scene, const Mesh& mesh, const RunOptions& options,
+                          std::map<std::string, double>& metrics) {
   const SourceLocation where = scene.receivers.location(keys::receivers::resolution.name());
   const std::string file = keys::mesh::file(scene.mesh);
+  TexelSamples samples;
   try {
-    return Receivers::texels_of(
-        texel_samples(mesh, int(keys::receivers::resolution(scene.receivers)),
-                      file.empty() ? "the generated mesh" : file));
+    samples = texel_samples(mesh, int(keys::receivers::resolution(scene.receivers)),
+                            file.empty() ? "the generated mesh" : file);
   } catch (const Error& e) {
     throw Error(where, e.what());
   }
-}
-
-// How many texels of the atlas hold transfer (also a metric).
-void say_texels(const RunOptions& options, BakeData& data) {
-  const TexelAtlas& atlas = data.receivers.atlas;
-  const double covered =
-      double(atlas.texels.size()) / (double(atlas.width) * double(atlas.height));
-  data.metrics["texels"] = double(atlas.texels.size());
-  char text[160];
-  std::snprintf(text, sizeof text, "%zu texels of a %d x %d atlas (%.0f%% of it; the rest lie outside every chart)",
-                atlas.texels.size(), atlas.width, atlas.height, 100 * covered);
+  const TexelAtlas& atlas = samples.atlas;
+  metrics["texels"] = double(atlas.texels.size());
+  metrics["texels_on_borders"] = double(samples.border);
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "%zu texels of a %d x %d atlas (%.0f%% of it; %zu of them along the charts' "
+                "borders; the rest of the atlas lies outside every chart)",
+                atlas.texels.size(), atlas.width, atlas.height,
+                100.0 * double(atlas.texels.size()) / (double(atlas.width) * atlas.height),
+                samples.border);
   options.message(text);
+  return Receivers::texels_of(std::move(samples));
 }
 
 // The encoding's report: into the metrics, and said.
@@ -311,7 +313,8 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
                 "section [receivers]: traced visibility serves transfer at vertices; a " +
                     keys::receivers::kind(scene.receivers) + " scene traces its receivers itself");
   if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, plan, data.mesh), {});
-  if (plan.texels) data.receivers = texel_receivers(scene, data.mesh);
+  std::map<std::string, double> receiver_metrics;
+  if (plan.texels) data.receivers = texel_receivers(scene, data.mesh, options, receiver_metrics);
   // Texels trace from their points toward the scene's mesh.
   BakePlan at_texels = plan;
   at_texels.occluders = &data.mesh;
@@ -360,7 +363,7 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   data.metrics["squared_error"] = report.squared_error;
   data.metrics["stored_floats"] = data.compressed.stored_floats();
   if (plan.probes) say_probes(options, data);
-  if (plan.texels) say_texels(options, data);
+  data.metrics.insert(receiver_metrics.begin(), receiver_metrics.end());
   return data;
 }
 

@@ -75,7 +75,7 @@ Mesh SceneSpec::load_mesh() const {
                                    : make_generated(keys::mesh::generate(mesh),
                                                     static_cast<int>(keys::mesh::detail(mesh)));
   for (const Params& part : mesh_parts) append(loaded, load_placed(part, position_of(part)));
-  // Texels need an atlas: the file's, else CGAL's conformal map of a disk.
+  // Texels need an atlas: the file's, else CGAL's as-rigid-as-possible map of a disk.
   if (texels() && loaded.uvs.empty())
     compute_atlas(loaded, file_name.empty() ? "generated mesh \"" + keys::mesh::generate(mesh) +
                                                   "\""

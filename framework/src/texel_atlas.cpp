@@ -135,6 +135,7 @@ TexelSamples texel_samples(const Mesh& mesh, int resolution, const std::string& 
   for (std::size_t i = 0; i < claims.size(); ++i) {
     if (claims[i].distance2 == std::numeric_limits<float>::max()) continue;
     out.atlas.texels.push_back(std::uint32_t(i));
+    out.border += claims[i].distance2 > 0;
     out.points.positions.push_back(point_of(mesh, claims[i]));
     out.points.normals.push_back(normal_of(mesh, claims[i]));
   }

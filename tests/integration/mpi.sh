@@ -251,6 +251,32 @@ SCENE
 cmp -s "$work/probes.serial.h5" "$work/probes.3.h5" ||
   { echo "FAIL: probes on 3 ranks differ from prt bake"; exit 1; }
 echo "probes: prt-mpi on 3 ranks = prt bake, byte for byte"
+# Texels (docs/receivers.md): slabs of texels, traced against the mesh,
+# CPCA over the ranks' shards; the file is prt bake's.
+cat >"$work/texels.toml" <<SCENE
+[mesh]
+file = "$src/data/meshes/nefertiti.off"
+[receivers]
+kind = "texels"
+resolution = 48
+[transport]
+rays = 256
+[basis]
+plugin = "sh"
+order = 6
+[compressor]
+plugin = "cpca"
+clusters = 16
+components = 4
+[lighting]
+environment = "$src/data/hdri/courtyard.exr"
+SCENE
+"$prt" -q bake "$work/texels.toml" -o "$work/texels.serial.h5" >/dev/null
+"${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/texels.toml" -o "$work/texels.3.h5" \
+  --slab-vertices 256 >/dev/null
+cmp -s "$work/texels.serial.h5" "$work/texels.3.h5" ||
+  { echo "FAIL: texels on 3 ranks differ from prt bake"; exit 1; }
+echo "texels: prt-mpi on 3 ranks = prt bake, byte for byte"
 # Killed between bounces on 3 ranks, resumed on 2: the same file.
 # (The bunny, three bounces: bounce 1's state lives while bounce 2 runs.)
 sed -e 's/^bounces = 2/bounces = 3/' -e 's|ChineseDragon-10kv.off|bunny00.off|' \

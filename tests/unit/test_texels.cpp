@@ -150,7 +150,7 @@ TEST_CASE("an OBJ's texture coordinates are read per corner and its vertices spl
   fs::remove(file);
 }
 
-TEST_CASE("CGAL's conformal atlas maps a disk into the unit square and refuses other shapes",
+TEST_CASE("CGAL's atlas maps a disk into the unit square and refuses other shapes",
           "[texels]") {
   Mesh plane = make_plane(4);
   compute_atlas(plane, "plane");
@@ -159,15 +159,15 @@ TEST_CASE("CGAL's conformal atlas maps a disk into the unit square and refuses o
   for (const auto& uv : plane.uvs) lo = std::min(lo, uv.minCoeff()), hi = std::max(hi, uv.maxCoeff());
   CHECK(lo == Approx(0).margin(1e-5));
   CHECK(hi == Approx(1).margin(1e-5));
-  // Conformal on a flat square: a similarity, so every distance scales alike.
+  // As rigid as possible on a flat square: a similarity, so every distance scales alike.
   const float scale = (plane.uvs[1] - plane.uvs[0]).norm() /
                       (plane.positions[1] - plane.positions[0]).norm();
   for (std::size_t v = 2; v < plane.vertex_count(); ++v)
     CHECK((plane.uvs[v] - plane.uvs[0]).norm() ==
           Approx(scale * (plane.positions[v] - plane.positions[0]).norm()).margin(1e-4));
-  Mesh box = make_box(1.0f);
-  CHECK_THROWS_WITH(compute_atlas(box, "box.off"),
-                    Catch::Contains("box.off") && Catch::Contains("closed") &&
+  Mesh ball = make_sphere(1);
+  CHECK_THROWS_WITH(compute_atlas(ball, "ball.off"),
+                    Catch::Contains("ball.off") && Catch::Contains("closed") &&
                         Catch::Contains("OBJ vt"));
   Mesh open = make_open_box(2);
   CHECK_THROWS_WITH(compute_atlas(open, "open.off"),
@@ -224,14 +224,14 @@ bake = "texels.h5"
   for (std::size_t i = 0; i < rows; ++i) {
     const Eigen::Vector3f& p = baked.receivers.points.positions[i];
     if (p.y() > 1e-4f) continue;  // the wall
-    if (p.z() < -0.8f) near += radiance(Eigen::Index(i), 0), ++near_count;
+    if (p.z() < -0.85f) near += radiance(Eigen::Index(i), 0), ++near_count;
     if (p.z() > 0.7f) far += radiance(Eigen::Index(i), 0), ++far_count;
   }
   REQUIRE(near_count > 0);
   REQUIRE(far_count > 0);
   near /= near_count, far /= far_count;
   CHECK(far > 0.85);
-  CHECK(near < 0.8 * far);
+  CHECK(near < 0.85 * far);  // unshadowed (the texels' points as occluders) they would agree
 
   const BakeData read = read_bake(scene.bake_path());
   CHECK(read.format_version() == kReceiversFormatVersion);

@@ -26,6 +26,7 @@ struct TexelAtlas {
 struct TexelSamples {
   TexelAtlas atlas;
   Mesh points;
+  std::size_t border = 0;  // texels whose centre lies outside every chart
 };
 // Throws prt::Error naming `source` when the mesh has no uvs, uvs outside
 // [0, 1], or an atlas that overlaps itself (one texel inside two triangles
