@@ -46,8 +46,8 @@ void report(const prt::BakeData& data, const prt::StageTimes& times,
     received.push_back(p[1]);
   }
   if (comm.rank() != 0) return;
-  std::cout << "baked " << data.receiver_count()
-            << " " << (data.receivers.at_vertices() ? "vertices" : data.receivers.kind) << " x "
+  std::cout << "baked " << data.receiver_count() << " "
+            << (data.receivers.at_vertices() ? "vertices" : data.receivers.kind) << " x "
             << (data.streamed_transfer.rows ? data.streamed_transfer.cols
                                             : data.transfer.dimension())
             << " coefficients (" << data.basis.name << ", " << data.transport << ") on "

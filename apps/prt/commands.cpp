@@ -53,9 +53,8 @@ int bake(Context& context, const BakeArgs& args) {
   BakeData data = bake_to_file(scene, plan, target, options, times);
   const Eigen::Index columns =
       data.streamed_transfer.rows > 0 ? data.streamed_transfer.cols : data.transfer.dimension();
-  std::cout << "baked " << data.receiver_count()
-            << " " << (data.receivers.at_vertices() ? "vertices" : data.receivers.kind) << " x "
-            << columns
+  std::cout << "baked " << data.receiver_count() << " "
+            << (data.receivers.at_vertices() ? "vertices" : data.receivers.kind) << " x " << columns
             << " coefficients (" << data.basis.name << ", " << data.transport << ") -> "
             << target.file.path.string() << "\n"
             << "rays cast: " << static_cast<std::uint64_t>(data.metrics["rays_cast"]) << "\n";
@@ -191,8 +190,11 @@ int render(Context& context, const RenderArgs& args) {
                   "` measures the moving object "
                   "against its ground truth");
     if (args.compare && data.receivers.texels())
-      throw Error(bake_file.string() + ": --compare measures transfer at vertices; for texels, `prt texels " +
-                  args.scene + "` measures them and the mesh's vertices against the ground truth at points over the surface");
+      throw Error(bake_file.string() +
+                  ": --compare measures transfer at vertices; for texels, `prt texels " +
+                  args.scene +
+                  "` measures them and the mesh's vertices against the ground truth at points over "
+                  "the surface");
     result = render(scene, data, context.registry, times, {context.quiet});
     if (args.compare) compare_with_truth(context, args, scene, data, result, times, output);
   }
@@ -313,8 +315,9 @@ int info(Context& context, const std::string& file) {
                           std::to_string(grid.origin.x()) + ", " + std::to_string(grid.origin.y()) +
                           ", " + std::to_string(grid.origin.z()) + ")\n"
                 : data.receivers.texels()
-                    ? "receivers:    texels, " + std::to_string(data.receivers.atlas.texels.size()) +
-                          " of a " + std::to_string(data.receivers.atlas.width) + " x " +
+                    ? "receivers:    texels, " +
+                          std::to_string(data.receivers.atlas.texels.size()) + " of a " +
+                          std::to_string(data.receivers.atlas.width) + " x " +
                           std::to_string(data.receivers.atlas.height) + " atlas\n"
                     : std::string("receivers:    the mesh's vertices\n"))
             << "basis:        " << one_line(data.basis) << "\n"

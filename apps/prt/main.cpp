@@ -190,9 +190,10 @@ Command texels_command(CLI::App& app) {
       "the ground truth at points over the surface");
   command->add_option("scene", args->scene, "scene description with [receivers] kind = \"texels\"")
       ->required();
-  command->add_option("--resolution", args->resolutions,
-                      "atlas resolution to bake and measure (repeatable; default: the scene's "
-                      "[receivers] resolution)")
+  command
+      ->add_option("--resolution", args->resolutions,
+                   "atlas resolution to bake and measure (repeatable; default: the scene's "
+                   "[receivers] resolution)")
       ->check(CLI::Range(std::int64_t(1), std::int64_t(8192)));
   command->add_option("--points", args->points, "surface points the error is measured at")
       ->check(CLI::Range(std::int64_t(1), std::int64_t(10000000)));
@@ -311,9 +312,9 @@ int main(int argc, char** argv) {
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "no progress bars");
   const std::vector<Command> commands{
-      bake_command(app),  render_command(app),    compress_command(app),   analyze_command(app),
-      bench_command(app), stability_command(app), image_diff_command(app), compare_command(app),
-      info_command(app),  plugins_command(app),   subdivide_command(app),  demo_command(app),
+      bake_command(app),   render_command(app),    compress_command(app),   analyze_command(app),
+      bench_command(app),  stability_command(app), image_diff_command(app), compare_command(app),
+      info_command(app),   plugins_command(app),   subdivide_command(app),  demo_command(app),
       probes_command(app), texels_command(app)};
   CLI11_PARSE(app, argc, argv);
   prt::Progress::set_enabled(!quiet);

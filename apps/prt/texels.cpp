@@ -53,8 +53,8 @@ SurfacePoints surface_points(const Mesh& mesh, std::size_t count, std::uint64_t 
     float u = float(uniform(random)), v = float(uniform(random));
     if (u + v > 1) u = 1 - u, v = 1 - v;
     const auto& t = mesh.triangles[f];
-    out.points.positions.push_back((1 - u - v) * mesh.positions[t[0]] +
-                                   u * mesh.positions[t[1]] + v * mesh.positions[t[2]]);
+    out.points.positions.push_back((1 - u - v) * mesh.positions[t[0]] + u * mesh.positions[t[1]] +
+                                   v * mesh.positions[t[2]]);
     out.points.normals.push_back(
         ((1 - u - v) * mesh.normals[t[0]] + u * mesh.normals[t[1]] + v * mesh.normals[t[2]])
             .normalized());
@@ -72,8 +72,8 @@ Eigen::MatrixX3f from_vertices(const Mesh& mesh, const Eigen::MatrixX3f& radianc
   for (std::size_t i = 0; i < s.triangle.size(); ++i) {
     const auto& t = mesh.triangles[s.triangle[i]];
     const float u = s.weights[i].x(), v = s.weights[i].y();
-    out.row(Eigen::Index(i)) = (1 - u - v) * radiance.row(t[0]) + u * radiance.row(t[1]) +
-                               v * radiance.row(t[2]);
+    out.row(Eigen::Index(i)) =
+        (1 - u - v) * radiance.row(t[0]) + u * radiance.row(t[1]) + v * radiance.row(t[2]);
   }
   return out;
 }
@@ -86,7 +86,8 @@ Eigen::MatrixX3f from_texels(const Mesh& mesh, const RadianceTexture& texture,
   for (std::size_t i = 0; i < s.triangle.size(); ++i) {
     const auto& t = mesh.triangles[s.triangle[i]];
     const float u = s.weights[i].x(), v = s.weights[i].y();
-    const Eigen::Vector2f uv = (1 - u - v) * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]];
+    const Eigen::Vector2f uv =
+        (1 - u - v) * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]];
     out.row(Eigen::Index(i)) = texture.lookup(uv).transpose();
   }
   return out;
@@ -203,7 +204,8 @@ int texels(Context& context, const TexelsArgs& args) {
   if (!scene.texels())
     throw Error(scene.file.string() +
                 ": prt texels measures a scene with [receivers] kind = \"texels\"; this one "
-                "has " + keys::receivers::kind(scene.receivers));
+                "has " +
+                keys::receivers::kind(scene.receivers));
   apply_samples(args.reference, scene);
   if (!args.out.empty()) fs::create_directories(args.out);
   std::vector<std::int64_t> resolutions = args.resolutions;
@@ -213,32 +215,31 @@ int texels(Context& context, const TexelsArgs& args) {
   SceneSpec at_vertices = scene;
   at_vertices.receivers.set(keys::receivers::kind.name(), std::string("vertices"),
                             SourceLocation{"prt texels"});
-  const Baked vertices = bake_and_relight(at_vertices, context.registry, environment, context.quiet);
+  const Baked vertices =
+      bake_and_relight(at_vertices, context.registry, environment, context.quiet);
   const Mesh atlas_mesh = scene.load_mesh();
   const RayCaster occluders(atlas_mesh);
-  const SurfacePoints s = surface_points(
-      atlas_mesh, std::size_t(args.points),
-      std::uint64_t(keys::ground_truth::seed(scene.ground_truth)) ^ 0x7e8e15ULL);
+  const SurfacePoints s =
+      surface_points(atlas_mesh, std::size_t(args.points),
+                     std::uint64_t(keys::ground_truth::seed(scene.ground_truth)) ^ 0x7e8e15ULL);
   const auto [truth, noise] =
       truth_at(scene, s.points, occluders, environment, context.quiet, "ground truth");
-  std::vector<Row> rows{row_of("vertices", vertices,
-                               from_vertices(vertices.data.mesh, vertices.radiance, s), truth)};
+  std::vector<Row> rows{
+      row_of("vertices", vertices, from_vertices(vertices.data.mesh, vertices.radiance, s), truth)};
   for (std::size_t i = 0; i < resolutions.size(); ++i) {
     SceneSpec at_texels = scene;
     at_texels.receivers.set(keys::receivers::resolution.name(), resolutions[i],
                             SourceLocation{"--resolution"});
     const Baked texels = bake_and_relight(at_texels, context.registry, environment, context.quiet);
-    const RadianceTexture texture =
-        radiance_texture(texels.data.receivers.atlas, texels.radiance);
-    const std::string name = "texels " + std::to_string(resolutions[i]) + " x " +
-                             std::to_string(resolutions[i]);
+    const RadianceTexture texture = radiance_texture(texels.data.receivers.atlas, texels.radiance);
+    const std::string name =
+        "texels " + std::to_string(resolutions[i]) + " x " + std::to_string(resolutions[i]);
     rows.push_back(row_of(name, texels, from_texels(texels.data.mesh, texture, s), truth));
     if (i == 0 && !args.out.empty())
       write_images(texels, vertices, occluders, environment, context.registry, context.quiet,
                    args.out);
   }
-  print_table(rows, s.triangle.size(), int(keys::ground_truth::samples(scene.ground_truth)),
-              noise);
+  print_table(rows, s.triangle.size(), int(keys::ground_truth::samples(scene.ground_truth)), noise);
   return 0;
 }
 

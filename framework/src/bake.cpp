@@ -200,6 +200,18 @@ void say_probes(const RunOptions& options, BakeData& data) {
                   " inside geometry");
 }
 
+// The receivers a scene names other than the mesh's vertices (probes,
+// texels), made before any ray.
+void make_receivers(const SceneSpec& scene, const BakePlan& plan, const RunOptions& options,
+                    BakeData& data, std::map<std::string, double>& metrics) {
+  if ((plan.probes || plan.texels) && options.traced)
+    throw Error(scene.receivers.location(keys::receivers::kind.name()),
+                "section [receivers]: traced visibility serves transfer at vertices; a " +
+                    keys::receivers::kind(scene.receivers) + " scene traces its receivers itself");
+  if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, plan, data.mesh), {});
+  if (plan.texels) data.receivers = texel_receivers(scene, data.mesh, options, metrics);
+}
+
 // What a distributed bake cannot do yet, refused before any ray.
 void require_distributable(const SceneSpec& scene, const BakePlan& plan,
                            const RunOptions& options) {
@@ -245,6 +257,22 @@ TransferOutcome transfer_of(const BakePlan& plan, const Mesh& mesh, const Direct
                     : shard_transfer(plan, mesh, set, options, shard, comm, on_disk);
   }
   return checkpointed_transfer(plan, mesh, set, options, plan.bounces > 0, on_disk);
+}
+
+// Stages 1-2 at this rank's receivers: probes, or points traced against the
+// mesh (its vertices, or the texels' points toward it), in memory or on disk.
+TransferOutcome receiver_stage(const SceneSpec& scene, const BakePlan& plan,
+                               const DirectionSet& set, const RunOptions& options,
+                               const Shard& shard, bool distributed, BakeData& data) {
+  // A probe grid's rows fit in memory (12,288 probes x 900 floats: 44 MB).
+  if (plan.probes) return probe_stage(scene, plan, set, options, shard, data);
+  BakePlan traced = plan;
+  if (plan.texels) traced.occluders = &data.mesh;
+  const bool on_disk = transfer_on_disk(plan, data.row_mesh(), shard.rows(), options);
+  if (!distributed)
+    require_memory(scene, plan, data.row_mesh(), set, plan.keep_visibility || options.traced,
+                   on_disk);
+  return transfer_of(traced, data.row_mesh(), set, options, shard, on_disk);
 }
 
 // A distributed bake's file gets the other ranks' rows from their slabs as
@@ -308,30 +336,13 @@ BakeData bake(const SceneSpec& scene, const BakePlan& plan, const RunOptions& op
   const Communicator& comm = options.comm ? *options.comm : solo();
   const bool distributed = comm.size() > 1;
   if (distributed) require_distributable(scene, plan, options);
-  if ((plan.probes || plan.texels) && options.traced)
-    throw Error(scene.receivers.location(keys::receivers::kind.name()),
-                "section [receivers]: traced visibility serves transfer at vertices; a " +
-                    keys::receivers::kind(scene.receivers) + " scene traces its receivers itself");
-  if (plan.probes) data.receivers = Receivers::probes_on(probe_grid(scene, plan, data.mesh), {});
   std::map<std::string, double> receiver_metrics;
-  if (plan.texels) data.receivers = texel_receivers(scene, data.mesh, options, receiver_metrics);
-  // Texels trace from their points toward the scene's mesh.
-  BakePlan at_texels = plan;
-  at_texels.occluders = &data.mesh;
-  const BakePlan& traced = plan.texels ? at_texels : plan;
-  // One row per receiver: the mesh's vertices, or the probes.
+  make_receivers(scene, plan, options, data, receiver_metrics);
+  // One row per receiver: the mesh's vertices, the texels or the probes.
   const Distribution encode_where =
       encoding_parts(comm, Eigen::Index(data.receiver_count()), options);
   const Shard shard = encode_where.parts->shard();
-  // A probe grid's rows fit in memory (12,288 probes x 900 floats: 44 MB).
-  const bool on_disk =
-      !plan.probes && transfer_on_disk(plan, data.row_mesh(), shard.rows(), options);
-  if (!distributed && !plan.probes)
-    require_memory(scene, plan, data.row_mesh(), set, plan.keep_visibility || options.traced,
-                   on_disk);
-  TransferOutcome stage = plan.probes
-                              ? probe_stage(scene, plan, set, options, shard, data)
-                              : transfer_of(traced, data.row_mesh(), set, options, shard, on_disk);
+  TransferOutcome stage = receiver_stage(scene, plan, set, options, shard, distributed, data);
   times.append(stage.times);
   data.metrics = std::move(stage.metrics);
   data.direct = std::move(stage.direct);

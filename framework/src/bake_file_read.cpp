@@ -33,7 +33,8 @@ void read_header(const H5::H5File& h5, BakeData& data, int version) {
   if (read_number(root, "format_version") != version)
     throw Error("its header and its format_version attribute disagree");
   // Version 5 says the rows are at receivers (/receivers); 4 at the vertices.
-  data.receivers.kind = version == kReceiversFormatVersion ? "probes" : "vertices";  // or texels: /receivers says
+  data.receivers.kind =
+      version == kReceiversFormatVersion ? "probes" : "vertices";  // or texels: /receivers says
   data.scene_file = read_text(root, "scene_file");
   data.scene_text = read_bytes(root, "scene_text");
   data.transport = read_text(root, "transport");

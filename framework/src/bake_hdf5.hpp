@@ -323,7 +323,8 @@ inline std::vector<V> read_vectors(const H5::Group& group, const std::string& na
   hsize_t rows, cols;
   constexpr int n = components_of<V>();
   auto flat = read_array<T>(group, name, rows, cols);
-  if (cols != n) throw Error("dataset \"" + name + "\" must have " + std::to_string(n) + " columns");
+  if (cols != n)
+    throw Error("dataset \"" + name + "\" must have " + std::to_string(n) + " columns");
   std::vector<V> items(rows);
   for (hsize_t r = 0; r < rows; ++r)
     for (int c = 0; c < n; ++c) items[r][c] = flat[r * n + c];

@@ -194,8 +194,8 @@ void In::rows(TransferSignal& signal, bool direct) {
   const auto receivers = Eigen::Index(data_.receiver_count());
   if (rows != receivers && !(direct && rows == 0 && cols == 0))
     throw Error("the " + std::string(direct ? "direct transfer" : "transfer") + " has " +
-                std::to_string(rows) + " rows for " + std::to_string(receivers) +
-                " " + (data_.receivers.at_vertices() ? "vertices" : data_.receivers.kind));
+                std::to_string(rows) + " rows for " + std::to_string(receivers) + " " +
+                (data_.receivers.at_vertices() ? "vertices" : data_.receivers.kind));
   const double beside = kMeshBytesPerVertex * double(data_.mesh.vertex_count());
   std::shared_ptr<RowFile> file;
   if (!direct && reading_.memory_budget > 0 && shape.bytes() + beside > reading_.memory_budget)

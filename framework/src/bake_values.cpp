@@ -82,8 +82,8 @@ void check_transfer(BakeData& data) {
   const TransferSignal& transfer = data.transfer;
   if (transfer.vertices() != static_cast<Eigen::Index>(data.receiver_count()))
     throw Error("the transfer has " + std::to_string(transfer.vertices()) + " rows for " +
-                std::to_string(data.receiver_count()) +
-                " " + (data.receivers.at_vertices() ? "vertices" : data.receivers.kind));
+                std::to_string(data.receiver_count()) + " " +
+                (data.receivers.at_vertices() ? "vertices" : data.receivers.kind));
   if ((transfer.kind == "incident") != data.receivers.probes())
     throw Error("transfer kind \"" + transfer.kind + "\" at " + data.receivers.kind);
 
@@ -124,13 +124,12 @@ void check_texels(const BakeData& data) {
                 std::to_string(r.points.normals.size()) + " normals for " + std::to_string(n) +
                 " texels");
   for (std::size_t i = 0; i < n; ++i)
-    if (!r.points.positions[i].allFinite() ||
-        !(std::abs(r.points.normals[i].norm() - 1) < 1e-3f))
+    if (!r.points.positions[i].allFinite() || !(std::abs(r.points.normals[i].norm() - 1) < 1e-3f))
       throw Error("/receivers: texel " + std::to_string(i) +
                   " has a non-finite position or a normal that is not unit length");
   if (data.mesh.uvs.size() != data.mesh.vertex_count())
-    throw Error("/mesh has " + std::to_string(data.mesh.uvs.size()) +
-                " texture coordinates for " + std::to_string(data.mesh.vertex_count()) +
+    throw Error("/mesh has " + std::to_string(data.mesh.uvs.size()) + " texture coordinates for " +
+                std::to_string(data.mesh.vertex_count()) +
                 " vertices; texel receivers need one per vertex");
 }
 

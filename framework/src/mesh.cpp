@@ -139,8 +139,7 @@ void Mesh::validate(const std::string& source) const {
                   " has a NaN or infinite texture coordinate");
 }
 
-void split_at_uv_seams(Mesh& mesh,
-                       const std::vector<std::array<Eigen::Vector2f, 3>>& corner_uvs) {
+void split_at_uv_seams(Mesh& mesh, const std::vector<std::array<Eigen::Vector2f, 3>>& corner_uvs) {
   std::map<std::tuple<std::uint32_t, float, float>, std::uint32_t> index;
   Mesh split;
   split.skipped_degenerate_faces = mesh.skipped_degenerate_faces;
@@ -265,7 +264,7 @@ void add_triangles(const OMesh& om, Mesh& mesh, const OpenMesh::IO::Options& opt
       const auto vh = om.to_vertex_handle(hh);
       if (corner_uvs) {
         const auto& c = options.check(OpenMesh::IO::Options::FaceTexCoord) ? om.texcoord2D(hh)
-                                                                             : om.texcoord2D(vh);
+                                                                           : om.texcoord2D(vh);
         uv[std::size_t(k)] = {c[0], c[1]};
       }
       t[std::size_t(k++)] = static_cast<std::uint32_t>(vh.idx());

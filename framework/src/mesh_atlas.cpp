@@ -48,8 +48,8 @@ void require_disk(SurfaceMesh& sm, const std::string& source) {
   PMP::extract_boundary_cycles(sm, std::back_inserter(borders));
   const auto components = PMP::connected_components(
       sm, sm.add_property_map<SurfaceMesh::Face_index, std::size_t>("f:component", 0).first);
-  const long euler = long(sm.number_of_vertices()) - long(sm.number_of_edges()) +
-                     long(sm.number_of_faces());
+  const long euler =
+      long(sm.number_of_vertices()) - long(sm.number_of_edges()) + long(sm.number_of_faces());
   if (borders.empty()) throw Error(not_a_disk(source, "the mesh is closed (it has no border)"));
   if (components != 1 || borders.size() != 1 || euler != 1)
     throw Error(not_a_disk(source, "the mesh has " + std::to_string(components) +
@@ -81,7 +81,9 @@ void compute_atlas(Mesh& mesh, const std::string& source) {
   SurfaceMesh sm = surface_mesh(mesh, source);
   // Isolated vertices (used by no face) have no place in a chart.
   for (auto v : sm.vertices())
-    if (sm.is_isolated(v)) throw Error(not_a_disk(source, "vertex " + std::to_string(std::size_t(v)) + " lies on no face"));
+    if (sm.is_isolated(v))
+      throw Error(
+          not_a_disk(source, "vertex " + std::to_string(std::size_t(v)) + " lies on no face"));
   require_disk(sm, source);
   const auto border = PMP::longest_border(sm).first;
   auto uv = sm.add_property_map<SurfaceMesh::Vertex_index, Kernel::Point_2>("v:uv").first;

@@ -35,11 +35,10 @@ ParamSchema place_schema(const char* owner) {
                       keys::place::position, keys::place::size}};
 }
 const ParamSchema& receivers_schema() {
-  static const ParamSchema s{
-      "section [receivers]",
-      {keys::receivers::kind, keys::receivers::resolution, keys::receivers::spacing,
-       keys::receivers::interpolation,
-       keys::receivers::normal_bias, keys::receivers::invalid_fraction}};
+  static const ParamSchema s{"section [receivers]",
+                             {keys::receivers::kind, keys::receivers::resolution,
+                              keys::receivers::spacing, keys::receivers::interpolation,
+                              keys::receivers::normal_bias, keys::receivers::invalid_fraction}};
   return s;
 }
 const ParamSchema& material_schema() {
@@ -372,12 +371,15 @@ void check_placed(const Params& params, const char* where) {
 void check_texels(const SceneSpec& scene) {
   const SourceLocation where = scene.receivers.location(keys::receivers::kind.name());
   auto refuse = [&](const std::string& what) {
-    throw Error(where, "section [receivers]: texels receive distant light, shadowed by the "
-                       "mesh, at a diffuse surface; " + what);
+    throw Error(where,
+                "section [receivers]: texels receive distant light, shadowed by the "
+                "mesh, at a diffuse surface; " +
+                    what);
   };
   if (!scene.mesh_parts.empty())
-    refuse("[[mesh.add]] joins meshes without one atlas: join them in one file with texture "
-           "coordinates");
+    refuse(
+        "[[mesh.add]] joins meshes without one atlas: join them in one file with texture "
+        "coordinates");
   if (scene.glossy()) refuse("glossy transfer at texels is not built yet: use lambert");
   if (keys::transport::bounces(scene.transport) > 0)
     refuse("inter-reflected light at texels is not built yet: use bounces = 0");

@@ -77,9 +77,9 @@ Mesh SceneSpec::load_mesh() const {
   for (const Params& part : mesh_parts) append(loaded, load_placed(part, position_of(part)));
   // Texels need an atlas: the file's, else CGAL's as-rigid-as-possible map of a disk.
   if (texels() && loaded.uvs.empty())
-    compute_atlas(loaded, file_name.empty() ? "generated mesh \"" + keys::mesh::generate(mesh) +
-                                                  "\""
-                                            : file_name);
+    compute_atlas(loaded, file_name.empty()
+                              ? "generated mesh \"" + keys::mesh::generate(mesh) + "\""
+                              : file_name);
   return loaded;
 }
 

@@ -62,8 +62,8 @@ Eigen::Vector3f point_of(const Mesh& mesh, const Claim& c) {
 
 Eigen::Vector3f normal_of(const Mesh& mesh, const Claim& c) {
   const auto& t = mesh.triangles[c.triangle];
-  Eigen::Vector3f n = (1 - c.u - c.v) * mesh.normals[t[0]] + c.u * mesh.normals[t[1]] +
-                      c.v * mesh.normals[t[2]];
+  Eigen::Vector3f n =
+      (1 - c.u - c.v) * mesh.normals[t[0]] + c.u * mesh.normals[t[1]] + c.v * mesh.normals[t[2]];
   if (n.norm() < 1e-12f)  // opposite normals cancel: the face's own
     n = (mesh.positions[t[1]] - mesh.positions[t[0]])
             .cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
@@ -95,7 +95,8 @@ std::vector<Claim> claim_texels(const Mesh& mesh, int resolution, std::size_t& o
     const auto& t = mesh.triangles[f];
     const Eigen::Vector2f a = mesh.uvs[t[0]] * r, b = mesh.uvs[t[1]] * r, c = mesh.uvs[t[2]] * r;
     const Eigen::Vector2f lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-    const int x0 = std::max(0, int(std::floor(lo.x() - 1))), y0 = std::max(0, int(std::floor(lo.y() - 1)));
+    const int x0 = std::max(0, int(std::floor(lo.x() - 1))),
+              y0 = std::max(0, int(std::floor(lo.y() - 1)));
     const int x1 = std::min(resolution - 1, int(std::ceil(hi.x()))),
               y1 = std::min(resolution - 1, int(std::ceil(hi.y())));
     for (int y = y0; y <= y1; ++y)
@@ -152,8 +153,8 @@ void check_texel_atlas(const TexelAtlas& atlas, const std::string& source) {
   const std::size_t count = std::size_t(atlas.width) * atlas.height;
   for (std::size_t i = 0; i < atlas.texels.size(); ++i)
     if (atlas.texels[i] >= count || (i > 0 && atlas.texels[i] <= atlas.texels[i - 1]))
-      throw Error(source + ": texel " + std::to_string(i) + " (" +
-                  std::to_string(atlas.texels[i]) + ") is out of range or out of order");
+      throw Error(source + ": texel " + std::to_string(i) + " (" + std::to_string(atlas.texels[i]) +
+                  ") is out of range or out of order");
 }
 
 Eigen::Vector3f RadianceTexture::lookup(const Eigen::Vector2f& uv) const {

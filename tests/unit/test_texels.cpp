@@ -62,7 +62,8 @@ TEST_CASE("the texels of an atlas: every texel a chart covers, with its surface 
   REQUIRE(full.atlas.texels.size() == 64);
   CHECK(full.atlas.width == 8);
   for (std::size_t i = 0; i < 64; ++i) {
-    const float x = (full.atlas.texels[i] % 8 + 0.5f) / 8, z = (full.atlas.texels[i] / 8 + 0.5f) / 8;
+    const float x = (full.atlas.texels[i] % 8 + 0.5f) / 8,
+                z = (full.atlas.texels[i] / 8 + 0.5f) / 8;
     CHECK((full.points.positions[i] - Eigen::Vector3f(x, 0, z)).norm() < 1e-5f);
     CHECK((full.points.normals[i] - Eigen::Vector3f(0, 1, 0)).norm() < 1e-5f);
   }
@@ -77,8 +78,7 @@ TEST_CASE("the texels of an atlas: every texel a chart covers, with its surface 
     CHECK((p.x() <= 1 + 1e-6f && p.z() <= 1 + 1e-6f));
 }
 
-TEST_CASE("texel atlases that cannot hold transfer are refused, each with its reason",
-          "[texels]") {
+TEST_CASE("texel atlases that cannot hold transfer are refused, each with its reason", "[texels]") {
   Mesh none = square();
   none.uvs.clear();
   CHECK_THROWS_WITH(texel_samples(none, 8, "plain.off"),
@@ -112,11 +112,10 @@ TEST_CASE("the radiance texture looks linear light up exactly and dilates past i
     rows.row(Eigen::Index(i)).setConstant(linear(u, v));
   }
   const RadianceTexture texture = radiance_texture(quarter.atlas, rows);
-  for (const Eigen::Vector2f uv : {Eigen::Vector2f(0.1f, 0.2f), Eigen::Vector2f(0.49f, 0.49f),
-                                   Eigen::Vector2f(0.3f, 0.0f)})
-    CHECK(texture.lookup(uv).x() == Approx(linear(std::max(uv.x(), 0.0625f),
-                                                   std::max(uv.y(), 0.0625f)))
-                                        .epsilon(1e-5));
+  for (const Eigen::Vector2f uv :
+       {Eigen::Vector2f(0.1f, 0.2f), Eigen::Vector2f(0.49f, 0.49f), Eigen::Vector2f(0.3f, 0.0f)})
+    CHECK(texture.lookup(uv).x() ==
+          Approx(linear(std::max(uv.x(), 0.0625f), std::max(uv.y(), 0.0625f))).epsilon(1e-5));
   // Two passes of dilation: texels 1 and 2 past the ring are filled, 3 past is not.
   const auto at = [&](int x, int y) { return texture.texels[std::size_t(y) * 8 + x].x(); };
   CHECK(at(5, 2) > 0);
@@ -150,28 +149,27 @@ TEST_CASE("an OBJ's texture coordinates are read per corner and its vertices spl
   fs::remove(file);
 }
 
-TEST_CASE("CGAL's atlas maps a disk into the unit square and refuses other shapes",
-          "[texels]") {
+TEST_CASE("CGAL's atlas maps a disk into the unit square and refuses other shapes", "[texels]") {
   Mesh plane = make_plane(4);
   compute_atlas(plane, "plane");
   REQUIRE(plane.uvs.size() == plane.vertex_count());
   float lo = 1, hi = 0;
-  for (const auto& uv : plane.uvs) lo = std::min(lo, uv.minCoeff()), hi = std::max(hi, uv.maxCoeff());
+  for (const auto& uv : plane.uvs)
+    lo = std::min(lo, uv.minCoeff()), hi = std::max(hi, uv.maxCoeff());
   CHECK(lo == Approx(0).margin(1e-5));
   CHECK(hi == Approx(1).margin(1e-5));
   // As rigid as possible on a flat square: a similarity, so every distance scales alike.
-  const float scale = (plane.uvs[1] - plane.uvs[0]).norm() /
-                      (plane.positions[1] - plane.positions[0]).norm();
+  const float scale =
+      (plane.uvs[1] - plane.uvs[0]).norm() / (plane.positions[1] - plane.positions[0]).norm();
   for (std::size_t v = 2; v < plane.vertex_count(); ++v)
     CHECK((plane.uvs[v] - plane.uvs[0]).norm() ==
           Approx(scale * (plane.positions[v] - plane.positions[0]).norm()).margin(1e-4));
   Mesh ball = make_sphere(1);
-  CHECK_THROWS_WITH(compute_atlas(ball, "ball.off"),
-                    Catch::Contains("ball.off") && Catch::Contains("closed") &&
-                        Catch::Contains("OBJ vt"));
+  CHECK_THROWS_WITH(compute_atlas(ball, "ball.off"), Catch::Contains("ball.off") &&
+                                                         Catch::Contains("closed") &&
+                                                         Catch::Contains("OBJ vt"));
   Mesh open = make_open_box(2);
-  CHECK_THROWS_WITH(compute_atlas(open, "open.off"),
-                    Catch::Contains("5 connected part(s)"));
+  CHECK_THROWS_WITH(compute_atlas(open, "open.off"), Catch::Contains("5 connected part(s)"));
 }
 
 TEST_CASE("a texel scene bakes at its texels, shadowed by its mesh, and reads back", "[texels]") {
@@ -255,8 +253,9 @@ TEST_CASE("texel scenes refuse what texels do not receive yet, at the key", "[te
   const fs::path dir = fs::temp_directory_path() / "prt_texel_refusals";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const std::string head = "[mesh]\ngenerate = \"plane\"\n[receivers]\nkind = \"texels\"\n"
-                           "[lighting]\nconstant = [1, 1, 1]\n";
+  const std::string head =
+      "[mesh]\ngenerate = \"plane\"\n[receivers]\nkind = \"texels\"\n"
+      "[lighting]\nconstant = [1, 1, 1]\n";
   auto refused = [&](const std::string& extra, const char* expected) {
     std::ofstream(dir / "s.toml") << head << extra;
     CHECK_THROWS_WITH(SceneSpec::load(dir / "s.toml", registry()),

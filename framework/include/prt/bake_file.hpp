@@ -36,8 +36,9 @@ struct BakeData {
   PluginRecord basis, compressor;
   PluginRecord exit;      // glossy only: the hemisphere basis of exit radiance
   std::string transport;  // e.g. "fibonacci 1024 shadowed seed=1"
-  Mesh mesh;              // the scene's geometry (with its atlas at texels); at vertex receivers, one row per vertex
-  Receivers receivers;    // where the transfer's rows are (default: the mesh's vertices)
+  Mesh mesh;  // the scene's geometry (with its atlas at texels); at vertex receivers, one row per
+              // vertex
+  Receivers receivers;  // where the transfer's rows are (default: the mesh's vertices)
   Eigen::Vector3f albedo{1, 1, 1};
   std::string material = "lambert kd=1";  // the BRDF the transfer was baked for
   int bounces = 0;                        // inter-reflection bounces included

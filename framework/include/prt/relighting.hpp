@@ -37,7 +37,7 @@ struct Rendered {
 // of it) for a light vector and camera: the exit basis's values toward the
 // camera (glossy) and the radiance each vertex sends to it (albedo included).
 struct Relit {
-  MatrixXfRow exit_values;  // glossy only: v x N_r
+  MatrixXfRow exit_values;           // glossy only: v x N_r
   Eigen::MatrixX3f vertex_radiance;  // one row per transfer row (vertex or texel)
   // Point lights or per-channel transfers: the sums are made here, and
   // renderers draw vertex_radiance.
@@ -67,8 +67,7 @@ class Relighting {
   // renderer's constants-and-weights path.
   // Per-texel transfer is summed here too: renderers look its sums up as a texture.
   bool sums_here() const {
-    return data_.transfer.channel_groups > 1 || !point_lights_.empty() ||
-           data_.receivers.texels();
+    return data_.transfer.channel_groups > 1 || !point_lights_.empty() || data_.receivers.texels();
   }
   Relit relight(const CompressedTransfer& transfer, const Eigen::MatrixX3d& light,
                 const Camera& camera) const {

@@ -39,9 +39,8 @@ inline constexpr auto kind =
     param::choice("kind", "vertices", "vertices|texels|probes",
                   "where transfer is computed: the mesh's vertices, the texels of its atlas, "
                   "or probes on a grid");
-inline constexpr auto resolution =
-    param::integer("resolution", "64", 1, 8192,
-                   "texels: the atlas texture's width and height in texels");
+inline constexpr auto resolution = param::integer(
+    "resolution", "64", 1, 8192, "texels: the atlas texture's width and height in texels");
 inline constexpr auto spacing =
     param::real("spacing", "0.5", 1e-6, kBig, "probes: distance between neighbouring probes");
 inline constexpr auto interpolation = param::choice(
