@@ -217,6 +217,15 @@ for name in coupled_bounces coupled_glossy; do
   [ ! -e "$work/.$name.$np.h5.checkpoint" ] || { echo "FAIL: checkpoint left behind"; exit 1; }
   echo "$name: prt-mpi on $np ranks = prt bake, byte for byte"
 done
+# $work/NAME.toml on 3 ranks, in slabs of 256 rows, against prt bake: byte for byte.
+three_ranks_as_bake() {
+  "$prt" -q bake "$work/$1.toml" -o "$work/$1.serial.h5" >/dev/null
+  "${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/$1.toml" -o "$work/$1.3.h5" \
+    --slab-vertices 256 >/dev/null
+  cmp -s "$work/$1.serial.h5" "$work/$1.3.h5" ||
+    { echo "FAIL: $1 on 3 ranks differ from prt bake"; exit 1; }
+  echo "$1: prt-mpi on 3 ranks = prt bake, byte for byte"
+}
 # Probes (docs/receivers.md): the ranks take the grid's slabs as they come
 # free and compress their shards with CPCA; the file is prt bake's.
 cat >"$work/probes.toml" <<SCENE
@@ -245,12 +254,7 @@ components = 4
 [lighting]
 environment = "$src/data/hdri/courtyard.exr"
 SCENE
-"$prt" -q bake "$work/probes.toml" -o "$work/probes.serial.h5" >/dev/null
-"${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/probes.toml" -o "$work/probes.3.h5" \
-  --slab-vertices 256 >/dev/null
-cmp -s "$work/probes.serial.h5" "$work/probes.3.h5" ||
-  { echo "FAIL: probes on 3 ranks differ from prt bake"; exit 1; }
-echo "probes: prt-mpi on 3 ranks = prt bake, byte for byte"
+three_ranks_as_bake probes
 # Texels (docs/receivers.md): slabs of texels, traced against the mesh,
 # CPCA over the ranks' shards; the file is prt bake's.
 cat >"$work/texels.toml" <<SCENE
@@ -271,12 +275,7 @@ components = 4
 [lighting]
 environment = "$src/data/hdri/courtyard.exr"
 SCENE
-"$prt" -q bake "$work/texels.toml" -o "$work/texels.serial.h5" >/dev/null
-"${mpirun[@]}" -np 3 "$prt_mpi" -q bake "$work/texels.toml" -o "$work/texels.3.h5" \
-  --slab-vertices 256 >/dev/null
-cmp -s "$work/texels.serial.h5" "$work/texels.3.h5" ||
-  { echo "FAIL: texels on 3 ranks differ from prt bake"; exit 1; }
-echo "texels: prt-mpi on 3 ranks = prt bake, byte for byte"
+three_ranks_as_bake texels
 # Killed between bounces on 3 ranks, resumed on 2: the same file.
 # (The bunny, three bounces: bounce 1's state lives while bounce 2 runs.)
 sed -e 's/^bounces = 2/bounces = 3/' -e 's|ChineseDragon-10kv.off|bunny00.off|' \

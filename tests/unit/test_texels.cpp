@@ -147,6 +147,17 @@ TEST_CASE("an OBJ's texture coordinates are read per corner and its vertices spl
   CHECK(split.uvs[split.triangles[1][1]].isApprox(Eigen::Vector2f(0.6f, 1)));
   CHECK(texel_samples(split, 16, "seams").atlas.texels.size() > 40);
   fs::remove(file);
+  // PLY: u v per vertex (OpenMesh also reads s t).
+  const fs::path ply = fs::temp_directory_path() / "prt_uvs.ply";
+  std::ofstream(ply) << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty "
+                        "float y\nproperty float z\nproperty float u\nproperty float v\n"
+                        "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                        "0 0 0 0.1 0.1\n1 0 0 0.9 0.1\n1 0 1 0.9 0.9\n0 0 1 0.1 0.9\n"
+                        "3 0 2 1\n3 0 3 2\n";
+  const Mesh quad = load_mesh(ply, true);
+  REQUIRE(quad.uvs.size() == 4);
+  CHECK(quad.uvs[2].isApprox(Eigen::Vector2f(0.9f, 0.9f)));
+  fs::remove(ply);
 }
 
 TEST_CASE("CGAL's atlas maps a disk into the unit square and refuses other shapes", "[texels]") {
