@@ -156,7 +156,9 @@ TEST_CASE("an OBJ's texture coordinates are read per corner and its vertices spl
                         "3 0 2 1\n3 0 3 2\n";
   const Mesh quad = load_mesh(ply, true);
   REQUIRE(quad.uvs.size() == 4);
-  CHECK(quad.uvs[2].isApprox(Eigen::Vector2f(0.9f, 0.9f)));
+  for (std::size_t v = 0; v < 4; ++v)  // uv = (0.1 + 0.8 x, 0.1 + 0.8 z) at every corner
+    CHECK(quad.uvs[v].isApprox(Eigen::Vector2f(0.1f + 0.8f * quad.positions[v].x(),
+                                               0.1f + 0.8f * quad.positions[v].z())));
   fs::remove(ply);
 }
 
