@@ -385,7 +385,8 @@ constant = [1, 1, 1]
                     Catch::Contains("[[mesh.add]]: give exactly one of"));
   CHECK_THROWS_WITH(parse(base + "[[mesh.add]]\ngenerate = \"sphere\"\nsize = -1\n"),
                     Catch::Contains("size"));
-  CHECK_THROWS_WITH(parse(base + "[receivers]\nkind = \"texels\"\n"), Catch::Contains("kind"));
+  CHECK_THROWS_WITH(parse(base + "[receivers]\nkind = \"voxels\"\n"),
+                    Catch::Contains("kind") && Catch::Contains("vertices, texels, probes"));
   CHECK_THROWS_WITH(parse(base + "[receivers]\nkind = \"probes\"\nspacing = 0\n"),
                     Catch::Contains("spacing"));
 }
