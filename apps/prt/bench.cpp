@@ -424,6 +424,10 @@ int bench(Context& context, const BenchArgs& args) {
     throw Error(base.receivers.location(keys::receivers::kind.name()),
                 "prt bench measures transfer at vertices; a probe scene is measured by `prt "
                 "probes` and scripts/probe_sweep.sh (docs/receivers.md)");
+  if (base.texels())
+    throw Error(base.receivers.location(keys::receivers::kind.name()),
+                "prt bench measures transfer at vertices; a texel scene is measured by `prt "
+                "texels` and scripts/texel_sweep.sh (docs/receivers.md)");
   const fs::path out =
       args.out.empty() ? fs::path("bench_" + base.file.stem().string()) : fs::path(args.out);
   if (fs::exists(out) && !fs::is_directory(out))

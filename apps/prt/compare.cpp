@@ -211,10 +211,12 @@ void write_tables(const std::vector<Row>& rows, const CompareArgs& args) {
 
 int compare_bases(Context& context, const CompareArgs& args) {
   SceneSpec scene = SceneSpec::load(args.scene, context.registry);
-  if (scene.probes())  // it compares transfer at vertices
+  if (scene.probes() || scene.texels())  // it compares transfer at vertices
     throw Error(scene.receivers.location(keys::receivers::kind.name()),
-                "prt compare-bases compares transfer at vertices; for probes, `prt probes` "
-                "measures a scene baked with each basis (docs/receivers.md)");
+                "prt compare-bases compares transfer at vertices; for " +
+                    keys::receivers::kind(scene.receivers) + ", `prt " +
+                    keys::receivers::kind(scene.receivers) +
+                    "` measures a scene baked with each basis (docs/receivers.md)");
   apply_samples(args.reference, scene);
   if (!args.csv.empty())
     check_output({args.csv, report_kind(args.csv), "table"}, scene.input_files(), args.force);

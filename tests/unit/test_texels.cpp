@@ -157,8 +157,8 @@ TEST_CASE("an OBJ's texture coordinates are read per corner and its vertices spl
   const Mesh quad = load_mesh(ply, true);
   REQUIRE(quad.uvs.size() == 4);
   for (std::size_t v = 0; v < 4; ++v)  // uv = (0.1 + 0.8 x, 0.1 + 0.8 z) at every corner
-    CHECK(quad.uvs[v].isApprox(Eigen::Vector2f(0.1f + 0.8f * quad.positions[v].x(),
-                                               0.1f + 0.8f * quad.positions[v].z())));
+    CHECK(quad.uvs[v].isApprox(
+        Eigen::Vector2f(0.1f + 0.8f * quad.positions[v].x(), 0.1f + 0.8f * quad.positions[v].z())));
   fs::remove(ply);
 }
 
