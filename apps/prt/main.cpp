@@ -198,8 +198,8 @@ Command texels_command(CLI::App& app) {
   command->add_option("--points", args->points, "surface points the error is measured at")
       ->check(CLI::Range(std::int64_t(1), std::int64_t(10000000)));
   command->add_option("--out", args->out,
-                      "folder for images: per texel, per vertex, and the truth (at 4x the "
-                      "resolution's texels)");
+                      "folder for images at the last --resolution: per texel, per vertex, and "
+                      "the truth (at the texels of a 4x finer atlas)");
   command
       ->add_option("--samples", args->reference.samples,
                    "Monte Carlo samples per point of the ground truth (default: the scene's "

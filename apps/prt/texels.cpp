@@ -235,7 +235,7 @@ int texels(Context& context, const TexelsArgs& args) {
     const std::string name =
         "texels " + std::to_string(resolutions[i]) + " x " + std::to_string(resolutions[i]);
     rows.push_back(row_of(name, texels, from_texels(texels.data.mesh, texture, s), truth));
-    if (i == 0 && !args.out.empty())
+    if (i + 1 == resolutions.size() && !args.out.empty())
       write_images(texels, vertices, occluders, environment, context.registry, context.quiet,
                    args.out);
   }

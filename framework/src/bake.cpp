@@ -61,11 +61,11 @@ void require_memory(const SceneSpec& scene, const BakePlan& plan, const Mesh& me
   if (bytes > available) {
     char message[400];
     std::snprintf(message, sizeof message,
-                  "this bake needs about %.1f GB (%.0f vertices x %.0f coefficients%s, %.0f "
-                  "directions), but %.1f GB are available; lower the basis size, rays or mesh "
-                  "resolution",
-                  bytes / 1e9, v, dimension, rows > 1 ? " per glossy matrix" : "", d,
-                  available / 1e9);
+                  "this bake needs about %.1f GB (%.0f %s x %.0f coefficients%s, %.0f "
+                  "directions), but %.1f GB are available; lower the basis size, rays or %s",
+                  bytes / 1e9, v, scene.texels() ? "texels" : "vertices", dimension,
+                  rows > 1 ? " per glossy matrix" : "", d, available / 1e9,
+                  scene.texels() ? "[receivers] resolution" : "mesh resolution");
     throw Error(scene.basis.where, message);
   }
 }
@@ -78,13 +78,14 @@ namespace {
 // the transfer together would exceed the memory budget. Only a per-vertex
 // transfer can; another is held in memory with a warning.
 // rows: this process's (a rank's shard), beside the whole mesh.
+// points: bytes of the rows' own points when they are not the mesh's vertices.
 bool transfer_on_disk(const BakePlan& plan, const Mesh& mesh, Eigen::Index rows,
-                      const RunOptions& options) {
+                      const RunOptions& options, double points = 0) {
   const double v = double(mesh.vertex_count());
   const double groups = std::max<double>(1, double(plan.channels.groups.size()));
   const double transfer = double(rows) * double(plan.glossy ? plan.exit->size() : 1) *
                           double(plan.basis->size()) * groups * 4;
-  const double resident = kMeshBytesPerVertex * v, budget = options.budget();
+  const double resident = kMeshBytesPerVertex * v + points, budget = options.budget();
   if (resident + transfer <= budget) return false;
   // A fitted diffuse transfer projects its rows after the fit: they too can go to a file.
   if (!transfer_by_rows(plan) || !options.checkpoint || options.traced) {
@@ -268,7 +269,9 @@ TransferOutcome receiver_stage(const SceneSpec& scene, const BakePlan& plan,
   if (plan.probes) return probe_stage(scene, plan, set, options, shard, data);
   BakePlan traced = plan;
   if (plan.texels) traced.occluders = &data.mesh;
-  const bool on_disk = transfer_on_disk(plan, data.row_mesh(), shard.rows(), options);
+  // The scene's mesh stays resident beside the rows (at texels: their points too).
+  const double points = plan.texels ? 24.0 * double(data.receiver_count()) : 0;
+  const bool on_disk = transfer_on_disk(plan, data.mesh, shard.rows(), options, points);
   if (!distributed)
     require_memory(scene, plan, data.row_mesh(), set, plan.keep_visibility || options.traced,
                    on_disk);

@@ -28,7 +28,7 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 
 std::string not_a_disk(const std::string& source, const std::string& why) {
   return source + ": " + why +
-         ", so PRT cannot compute its atlas (CGAL's conformal map needs a topological disk); "
+         ", so PRT cannot compute its atlas (CGAL's parameterisation needs a topological disk); "
          "give the mesh file texture coordinates (OBJ vt, PLY u v) for texel receivers";
 }
 

@@ -90,6 +90,7 @@ std::vector<Claim> claim_texels(const Mesh& mesh, int resolution, std::size_t& o
   const float r = float(resolution), reach2 = 0.5f + 1e-4f;  // (sqrt(2) / 2)^2 texels^2
   const float apart = 1e-3f * (mesh.bounds_max() - mesh.bounds_min()).norm();
   std::vector<Claim> claims(std::size_t(resolution) * resolution);
+  std::vector<std::uint8_t> overlapped(claims.size(), 0);
   overlaps = 0;
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
     const auto& t = mesh.triangles[f];
@@ -105,9 +106,11 @@ std::vector<Claim> claim_texels(const Mesh& mesh, int resolution, std::size_t& o
         if (n.distance2 > reach2) continue;
         Claim& claim = claims[std::size_t(y) * resolution + x];
         const Claim mine{n.distance2, f, n.u, n.v};
-        if (n.distance2 == 0 && claim.distance2 == 0 &&
+        const std::size_t texel = std::size_t(y) * resolution + x;
+        if (n.distance2 == 0 && claim.distance2 == 0 && !overlapped[texel] &&
             (point_of(mesh, claim) - point_of(mesh, mine)).norm() > apart) {
-          if (overlaps++ == 0) first_overlap = std::size_t(y) * resolution + x;
+          if (overlaps++ == 0) first_overlap = texel;
+          overlapped[texel] = 1;
         }
         if (n.distance2 < claim.distance2) claim = mine;
       }
