@@ -126,10 +126,9 @@ struct Row {
 
 Row row_of(const std::string& name, const Baked& b, const Eigen::MatrixX3f& estimate,
            const Eigen::MatrixX3f& truth) {
-  const auto stored = b.data.metrics.find("stored_bytes");
   return {name,
           b.data.receiver_count(),
-          stored != b.data.metrics.end() ? stored->second : 4 * b.data.compressed.stored_floats(),
+          b.data.metrics.at("stored_bytes"),  // the bake's encoding report
           b.seconds,
           vertex_error(estimate, truth).relative_rms,
           far_off(estimate, truth)};
@@ -217,10 +216,12 @@ int texels(Context& context, const TexelsArgs& args) {
                             SourceLocation{"prt texels"});
   const Baked vertices =
       bake_and_relight(at_vertices, context.registry, environment, context.quiet);
-  const Mesh atlas_mesh = scene.load_mesh();
-  const RayCaster occluders(atlas_mesh);
+  // The vertex bake's mesh: the texel bakes' without the seams' split
+  // (same triangles in the same order, same positions and normals).
+  const Mesh& surface = vertices.data.mesh;
+  const RayCaster occluders(surface);
   const SurfacePoints s =
-      surface_points(atlas_mesh, std::size_t(args.points),
+      surface_points(surface, std::size_t(args.points),
                      std::uint64_t(keys::ground_truth::seed(scene.ground_truth)) ^ 0x7e8e15ULL);
   const auto [truth, noise] =
       truth_at(scene, s.points, occluders, environment, context.quiet, "ground truth");

@@ -33,8 +33,7 @@ void read_header(const H5::H5File& h5, BakeData& data, int version) {
   if (read_number(root, "format_version") != version)
     throw Error("its header and its format_version attribute disagree");
   // Version 5 says the rows are at receivers (/receivers); 4 at the vertices.
-  data.receivers.kind =
-      version == kReceiversFormatVersion ? "probes" : "vertices";  // or texels: /receivers says
+  data.receivers.kind = "vertices";  // version 5: /receivers says which (read_receivers)
   data.scene_file = read_text(root, "scene_file");
   data.scene_text = read_bytes(root, "scene_text");
   data.transport = read_text(root, "transport");
@@ -65,8 +64,8 @@ void read_texels(const H5::Group& receivers, BakeData& data) {
 }
 
 // The probe grid of a version 5 file (checked in bake_values.cpp).
-void read_receivers(const H5::H5File& h5, BakeData& data) {
-  if (data.receivers.at_vertices()) return;
+void read_receivers(const H5::H5File& h5, BakeData& data, int version) {
+  if (version != kReceiversFormatVersion) return;
   H5::Group receivers = open_group(h5, "receivers");
   data.receivers.kind = read_text(receivers, "kind");
   if (data.receivers.texels()) return read_texels(receivers, data);
@@ -177,7 +176,7 @@ void parse_and_send(const fs::path& file, int fd, int version) {
     BakeData data;
     read_header(h5, data, version);
     read_mesh(h5, data);
-    read_receivers(h5, data);
+    read_receivers(h5, data, version);
     read_transfer(h5, data, out);
     read_compressed(h5, data);
     read_states_and_metrics(h5, data);

@@ -4,7 +4,6 @@
 
 #include "prt/environment.hpp"
 #include "prt/plugin.hpp"
-#include "prt/relight.hpp"
 #include "prt/renderer.hpp"
 #include "prt/texel_render.hpp"
 #include "rasterizer.hpp"
@@ -28,17 +27,9 @@ class CpuRenderer final : public Renderer {
     Image image(camera.width, camera.height);
     if (background_ && in.background) draw_environment(*in.background, camera, image);
     if (in.texels) return draw_texels(in, image);
-    Eigen::MatrixX3f radiance;
-    if (in.vertex_radiance)
-      radiance = *in.vertex_radiance;
-    else if (in.transfer)
-      radiance = relight(*in.transfer, in.light, in.exit_values);
-    else
-      throw Error("cpu renderer: neither transfer nor vertex radiance given");
+    const Eigen::MatrixX3f radiance = input_radiance(in, "cpu");
     if (radiance.rows() != static_cast<Eigen::Index>(in.mesh->vertex_count()))
       throw Error("cpu renderer: radiance rows do not match the mesh's vertices");
-    for (int c = 0; c < 3; ++c) radiance.col(c) *= in.albedo[c];
-    radiance = radiance.cwiseMax(0.f);  // negative SH ringing is not light
     rasterize(*in.mesh, radiance, camera, image);
     return image;
   }
