@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# The runner of the documented long blocks can fail: on fake pages, a failing
+# long block, a missing stand-in, an interactive program that exits or prints
+# an error, and a block whose line moved are each refused; good blocks pass.
+#   documented_runner_fails.sh <documented_commands.py>
+set -euo pipefail
+runner="$1"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+src="$work/src" build="$work/build"
+mkdir -p "$src/docs" "$src/data" "$src/tests/integration/doc_standins/page" "$build"
+cat >"$src/README.md" <<'PAGE'
+<!-- tested: integration.documented_commands -->
+```sh
+echo first steps > first.txt
+```
+PAGE
+cat >"$src/docs/page.md" <<'PAGE'
+<!-- long: passes -->
+```sh
+grep -q "first steps" first.txt && test -f data/.keep
+```
+
+<!-- long: fails -->
+```sh
+false
+```
+
+<!-- template: mine.txt stands for a file of yours -->
+```sh
+grep -q stand-in mine.txt
+```
+
+<!-- interactive: stays open -->
+```sh
+sleep 60
+```
+
+<!-- interactive: exits at once -->
+```sh
+true
+```
+
+<!-- interactive: prints an error -->
+```sh
+echo "viewer: error: no such bake"; sleep 60
+```
+PAGE
+touch "$src/data/.keep"
+py() { PRT_DOCS_QUIET_SECONDS=2 DISPLAY=:fake /usr/bin/python3 "$runner" "$@"; }
+line() { awk -v m="$1" 'index($0, m) { f = 1 } f && /^```sh$/ { print NR; exit }' "$src/docs/page.md"; }
+py --list "$src" | tee "$work/list"
+[ "$(wc -l <"$work/list")" = 6 ] || { echo "FAIL: --list found $(wc -l <"$work/list") blocks, not 6"; exit 1; }
+py --setup true "$build" "$src" >/dev/null
+expect() {  # pass|fail WHY -> runs that block
+  local want=$1 block="docs/page.md:$(line "$2")"
+  if py --run "$block" true "$build" "$src" >"$work/out" 2>&1; then got=pass; else got=fail; fi
+  [ "$got" = "$want" ] || { cat "$work/out"; echo "FAIL: $block ($2) should $want"; exit 1; }
+  echo "$block ($2): ${got}ed, as it should"
+}
+expect pass "long: passes"
+expect fail "long: fails"
+expect fail "template: mine.txt"  # no stand-in yet
+echo "a stand-in" >"$src/tests/integration/doc_standins/page/mine.txt"
+expect pass "template: mine.txt"
+expect pass "interactive: stays open"
+expect fail "interactive: exits at once"
+expect fail "interactive: prints an error"
+if py --run docs/page.md:3 true "$build" "$src" >"$work/out" 2>&1 || ! grep -q "no long, template" "$work/out"; then
+  cat "$work/out"; echo "FAIL: a line where no block starts is not refused"; exit 1
+fi
+echo "documented blocks' runner: fails where it should"
