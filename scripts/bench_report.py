@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Plots and a Markdown report for `prt bench` results.
 
   scripts/bench_report.py <bench folder> [title] [--budget BYTES]

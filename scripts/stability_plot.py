@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Figure of SH ringing around a sun 1e5 times the sky, with and without windows.
 
   prt stability --figure-data out/ringing.csv

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Bakes the bunny once, compresses its transfer many ways (C++ plug-ins and
 the numpy k-means + SVD one), plots squared error against bytes, and shows
 the image of each compressor's best setting beside the exact one.
