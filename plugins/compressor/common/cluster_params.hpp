@@ -148,9 +148,10 @@ inline void report_budget_used(const std::string& name, const Params& p,
                                const CompressedTransfer& c) {
   const auto warn = [&](const std::string& key, std::int64_t asked, std::int64_t used,
                         const char* why) {
-    log_warning(p.location(key).str() + ": compressor \"" + name + "\": " + key + " = " +
-                std::to_string(asked) + " is more than " + why + "; " + std::to_string(used) +
-                " used");
+    const std::string where = p.location(key).str();  // empty for parameters made in code
+    log_warning((where.empty() ? "" : where + ": ") + "compressor \"" + name + "\": " + key +
+                " = " + std::to_string(asked) + " is more than " + why + "; " +
+                std::to_string(used) + " used");
   };
   if (kClusters.given(p) && c.clusters() < kClusters(p))
     warn(kClusters.name(), kClusters(p), c.clusters(),
