@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every stage benchmark of the performance issue (12) in one run, as one table:
 #   stage | time | bound (measured in the same run) | ratio | limit | PASS/FAIL
-# Benchmarks, not tests: ctest never runs this. Needs the build (it runs
+# Benchmarks, not tests: the suite never runs this (only the `long` ctest
+# entry of docs/performance.md's block does). Needs the build (it runs
 # scripts/build.sh when a benchmark is missing) and, for the OpenGL rows, a
 # display (it wraps itself in xvfb-run when DISPLAY is unset).
 #

@@ -104,7 +104,7 @@ def commands(text):
 
 def program_of(words):
     """The program a command runs, past VAR=value, env wrappers and shell words."""
-    skip = {"xvfb-run", "-a", "env", "bash", "time", "do", "then"}
+    skip = {"xvfb-run", "-a", "env", "time", "do", "then"}
     i = 0
     while i < len(words):
         w = words[i]
@@ -122,11 +122,15 @@ def program_of(words):
 def check_names(doc, line, text, prt, build, src, subcommands):
     problems = []
     shell_words = {"for", "done", "cd", "export", "mkdir", "sed", "cmake", "ctest", "echo",
-                   "/usr/bin/python3", "python3", "mpirun", "rm", "cp"}
+                   "mpirun", "rm", "cp"}
+    interpreters = {"/usr/bin/python3", "python3", "bash"}
     for command in commands(text):
         words = program_of(command)
         command = " ".join(command)
-        if not words or words[0] in shell_words or words[0].startswith("$"):
+        interpreted = bool(words) and words[0] in interpreters
+        if interpreted:  # the script it runs must exist, but need not be executable
+            words = words[1:]
+        if not words or words[0] in shell_words or words[0].startswith(("$", "-")):
             continue
         program = words[0].strip('"')
         if "$HOME/prt/bin/" in program:  # an install the block itself makes
@@ -140,11 +144,14 @@ def check_names(doc, line, text, prt, build, src, subcommands):
             where = os.path.join(src, program)
         if "/" in program and not os.path.exists(where):
             problems.append(f"{doc}:{line}: `{command}`: {program} does not exist")
+        elif "/" in program and not interpreted and not os.access(where, os.X_OK):
+            problems.append(f"{doc}:{line}: `{command}`: {program} is not executable")
         elif "/" not in program and not shutil.which(program):
             problems.append(f"{doc}:{line}: `{command}`: {program} is not installed")
-        if os.path.basename(program) == "prt" and len(words) > 1 and not words[1].startswith("-"):
-            if words[1] not in subcommands:
-                problems.append(f"{doc}:{line}: `{command}`: prt has no subcommand {words[1]}")
+        arguments = [w for w in words[1:] if w not in ("-q", "--quiet")]  # prt's flags
+        if os.path.basename(program) == "prt" and arguments and not arguments[0].startswith("-"):
+            if arguments[0] not in subcommands:
+                problems.append(f"{doc}:{line}: `{command}`: prt has no subcommand {arguments[0]}")
     return problems
 
 
@@ -155,11 +162,17 @@ def standins_of(src, doc):
 
 
 def tracked_copy(src, to):
-    """The source tree as a fresh clone has it: tracked files only."""
-    listed = subprocess.run(["git", "-C", src, "ls-files", "-z"], capture_output=True)
-    if listed.returncode != 0:
-        shutil.copytree(src, to, symlinks=True, ignore=shutil.ignore_patterns(
-            "build*", "out", "data", ".git"))
+    """The source tree as a fresh clone has it: tracked files only (without
+    git, or outside a checkout: everything but the top level's build folders,
+    out/, data/ and .git)."""
+    try:
+        listed = subprocess.run(["git", "-C", src, "ls-files", "-z"], capture_output=True)
+    except OSError:
+        listed = None
+    if listed is None or listed.returncode != 0:
+        skip = lambda folder, names: [n for n in names if folder == src and (
+            n.startswith("build") or n in ("out", "data", ".git"))]
+        shutil.copytree(src, to, symlinks=True, ignore=skip)
         return
     for name in listed.stdout.decode().split("\0"):
         if not name or not os.path.lexists(os.path.join(src, name)):
@@ -190,13 +203,20 @@ def run_here_blocks(src, doc):
 def run_blocks(to_run, checkout, work):
     for doc, line, text in to_run:
         print(f"--- {doc}:{line}\n{text}")
-        run = subprocess.run(["bash", "-euo", "pipefail", "-c", text], cwd=checkout,
-                             env=dict(os.environ, HOME=os.path.join(work, "home")),
-                             capture_output=True, text=True, timeout=600)
-        tail = (run.stdout + run.stderr).strip().split("\n")[-6:]
-        print("\n".join("    " + t for t in tail))
-        if run.returncode != 0:
-            print(f"FAIL {doc}:{line}: the block exited with {run.returncode}")
+        process = subprocess.Popen(["bash", "-euo", "pipefail", "-c", text], cwd=checkout,
+                                   env=dict(os.environ, HOME=os.path.join(work, "home")),
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                   start_new_session=True)
+        try:
+            output, _ = process.communicate(timeout=600)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)  # the block's programs too, not just bash
+            process.communicate()
+            print(f"FAIL {doc}:{line}: the block ran past 600 s")
+            return False
+        print("\n".join("    " + t for t in output.strip().split("\n")[-6:]))
+        if process.returncode != 0:
+            print(f"FAIL {doc}:{line}: the block exited with {process.returncode}")
             return False
     return True
 
@@ -339,6 +359,12 @@ def run_long(which, prt, build, src):
         if not os.path.isdir(standins):
             print(f"FAIL {which}: a template block needs stand-ins in {standins}")
             return 1
+        for name in os.listdir(standins):  # replaced, so a second run finds them as the first
+            target = os.path.join(checkout, name)
+            if os.path.islink(target) or os.path.isfile(target):
+                os.remove(target)
+            elif os.path.isdir(target):
+                shutil.rmtree(target)
         shutil.copytree(standins, checkout, symlinks=True, dirs_exist_ok=True)
     print(f"--- {which} ({kind}: {why}) in {checkout}\n{text}\n---", flush=True)
     start = time.time()
