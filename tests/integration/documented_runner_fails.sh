@@ -68,7 +68,9 @@ grep -q "needs stand-ins" "$work/out" || { cat "$work/out"; echo "FAIL: no stand
 mkdir -p "$src/tests/integration/doc_standins/page"
 expect fail "template: mine.txt"  # no mine.txt among them
 echo "a stand-in" >"$src/tests/integration/doc_standins/page/mine.txt"
+ln -s mine.txt "$src/tests/integration/doc_standins/page/link.txt"
 expect pass "template: mine.txt"
+expect pass "template: mine.txt"  # again, over the stand-ins (a link too) it copied
 expect pass "interactive: stays open"
 expect fail "interactive: exits at once"
 expect fail "interactive: prints an error"
