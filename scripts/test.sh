@@ -9,5 +9,5 @@ bash "$root/scripts/setup.sh"
 bash "$root/scripts/build.sh" -DPRT_REQUIRE_ALL=ON
 cd "$root/build"
 rm -rf Testing/reference-cache  # every reference traced anew (tests/CMakeLists.txt)
-# The documented long blocks (label `long`: hours) run with `ctest -L long`.
+# The documented long blocks (label `long`: 80 minutes) run with `ctest -L long`.
 ctest --output-on-failure --parallel "$(nproc)" --timeout 900 -LE long

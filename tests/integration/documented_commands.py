@@ -6,8 +6,8 @@ Each ```sh block follows a marker that says what checks it:
       per document, in a scratch checkout that shares this build;
   <!-- tested: OTHER TEST ... -->   run verbatim by that test (its own script),
       or by CI (`tested: CI ...`);
-  <!-- long: WHY -->                 minutes to hours of work (a benchmark, a
-      fresh build): the suite checks that every program it names exists and
+  <!-- long: WHY -->                 minutes of work (a benchmark, a fresh
+      build): the suite checks that every program it names exists and
       every `prt` subcommand is one `prt --help` lists; the ctest entry
       `docs.DOC:LINE` (label `long`, left out of scripts/test.sh) runs it;
   <!-- template: WHY -->             placeholders for the reader's own files:
@@ -200,11 +200,20 @@ def run_here_blocks(src, doc):
             if kind == "tested" and why.startswith(HERE)]
 
 
+def reader_env(work):
+    """A reader's environment: a home of its own in work/; as root, what
+    --allow-run-as-root says, for the docs' mpirun lines."""
+    env = dict(os.environ, HOME=os.path.join(work, "home"))
+    if os.getuid() == 0:
+        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    return env
+
+
 def run_blocks(to_run, checkout, work):
     for doc, line, text in to_run:
         print(f"--- {doc}:{line}\n{text}")
         process = subprocess.Popen(["bash", "-euo", "pipefail", "-c", text], cwd=checkout,
-                                   env=dict(os.environ, HOME=os.path.join(work, "home")),
+                                   env=reader_env(work),
                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                    start_new_session=True)
         try:
@@ -289,10 +298,10 @@ def catch_up(src, doc, line, checkout, work):
     return True
 
 
-def shell(text, display_needed=True):
+def shell(text):
     """bash running the block verbatim, under a virtual display when there is none."""
     command = ["bash", "-euo", "pipefail", "-c", text]
-    if display_needed and not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
+    if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
         command = ["xvfb-run", "-a"] + command
     return command
 
@@ -342,9 +351,7 @@ def run_long(which, prt, build, src):
     _, kind, why, text = found[0]
     work = long_work(build)
     checkout = os.path.join(work, "checkout")
-    env = dict(os.environ, HOME=os.path.join(work, "home"))
-    if os.getuid() == 0:  # what --allow-run-as-root says, for the docs' mpirun lines
-        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    env = reader_env(work)
     if BUILDS.search(text):  # a fresh tree of its own: the block builds
         checkout = os.path.join(work, "own-" + which.replace("/", "_").replace(":", "_"))
         shutil.rmtree(checkout, ignore_errors=True)
